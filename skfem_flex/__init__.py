@@ -1,0 +1,13 @@
+"""skfem_flex: planar flexible multibody dynamics on scikit-fem.
+
+Timoshenko beams (linear, floating frame of reference, geometrically exact),
+rigid bodies and point masses, joined by constraints and integrated in time
+by an energy-conserving scheme, the trapezoidal rule or generalized-α.
+"""
+from .bodies import Body, BodyGeometry, PointMass
+from .constraints import Constraint, Distance, UserConstraint
+from .forces import ForceElement, Gravity, NonlinearSpring
+from .motion import MotionLaw, Prescribed, spin_up_law
+from .scene import Scene
+
+__version__ = "0.1.0"

@@ -1,0 +1,199 @@
+"""The face every body shows the scene.
+
+A body owns a block of generalized coordinates q (length ``n_dofs``) with
+velocities v. The scene concatenates the blocks; integrators only ever talk
+to the scene, so a body knows nothing of integrators (DESIGN.md §2b).
+
+A body supplies
+
+* kinetic energy T(q, v) = ½ vᵀ M(q) v and momentum p = M(q) v;
+  constant-mass bodies set ``constant_mass = True`` and only implement
+  :meth:`Body.mass_matrix` (the scene then builds M once and skips the rest);
+* potential energy V(q) (strain energy; gravity comes through
+  :meth:`Body.gravity_potential`), its gradient and Hessian;
+* discrete gradients for the energy-conserving scheme: of V between q0 and
+  q1, and of G(q) = ½ v0ᵀ M(q) v1 (zero for constant M), each with its
+  derivative with respect to the end state;
+* linear and angular momentum (planar, about the global origin) where they
+  make sense, and geometry for output.
+
+Array conventions: vectors are 1-D float arrays of the body's own length;
+matrices are dense ``ndarray`` or ``scipy.sparse`` (the scene accepts both).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["Body", "BodyGeometry", "check_finite_vector"]
+
+
+def check_finite_vector(name, value, size=None):
+    """Return ``value`` as a finite 1-D float array or raise ``ValueError``.
+
+    Parameters
+    ----------
+    name : str
+        Name used in the error message.
+    value : array_like
+        The candidate vector.
+    size : int, optional
+        Required length.
+    """
+    arr = np.atleast_1d(np.asarray(value, dtype=float)).ravel()
+    if size is not None and arr.size != size:
+        raise ValueError(f"{name} must have {size} entries, got {arr.size}: {value!r}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+    return arr
+
+
+@dataclass
+class BodyGeometry:
+    """Geometry of one body at one instant, in the global frame, for output.
+
+    Attributes
+    ----------
+    points : ndarray, shape (n_points, 2)
+        Point coordinates in m.
+    cells : list of (str, ndarray)
+        meshio cell blocks, e.g. ``[("line", conn)]`` or ``[("vertex", ...)]``.
+    point_data : dict of str to ndarray
+        Arrays with first dimension n_points.
+    cell_data : dict of str to list of ndarray
+        One array per cell block.
+    """
+
+    points: np.ndarray
+    cells: list
+    point_data: dict = field(default_factory=dict)
+    cell_data: dict = field(default_factory=dict)
+
+
+class Body:
+    """Base class of all bodies.
+
+    Subclasses set ``n_dofs``, ``q0``, ``v0``, ``coordinate_names`` and
+    ``name`` and override the methods that apply to them. The defaults
+    describe a body with constant mass, no strain energy and positions that
+    are linear in q (so that gravity is linear too).
+    """
+
+    #: number of generalized coordinates
+    n_dofs: int = 0
+    #: True when M does not depend on q (the scene then skips all M(q) work)
+    constant_mass: bool = True
+    #: True when potential_energy is not identically zero
+    has_potential: bool = False
+    name: str = "body"
+
+    # ----------------------------------------------------------------- state
+    @property
+    def coordinate_names(self):
+        """Names of the coordinates, used by drivers and error messages."""
+        return tuple(f"q{i}" for i in range(self.n_dofs))
+
+    def coordinate_index(self, name_or_index):
+        """Local index of a coordinate given by name or integer.
+
+        Raises
+        ------
+        ValueError
+            If the name is unknown or the index out of range.
+        """
+        if isinstance(name_or_index, (int, np.integer)):
+            i = int(name_or_index)
+            if not 0 <= i < self.n_dofs:
+                raise ValueError(f"coordinate index {i} is outside 0..{self.n_dofs - 1} of body {self.name!r}")
+            return i
+        names = self.coordinate_names
+        if name_or_index not in names:
+            raise ValueError(f"body {self.name!r} has no coordinate {name_or_index!r}; it has {list(names)[:12]}")
+        return names.index(name_or_index)
+
+    # --------------------------------------------------------------- kinetic
+    def mass_matrix(self, q):
+        """M(q), kg (and kg m² for angles)."""
+        raise NotImplementedError
+
+    def kinetic_energy(self, q, v):
+        """T = ½ vᵀ M(q) v, J."""
+        return 0.5 * float(v @ (self.mass_matrix(q) @ v))
+
+    def momentum(self, q, v):
+        """Generalized momentum p = M(q) v."""
+        return self.mass_matrix(q) @ v
+
+    def momentum_jacobian(self, q, v):
+        """B(q, v) = ∂(M(q) v)/∂q (zero for constant mass)."""
+        raise NotImplementedError("only bodies with constant_mass = False provide momentum_jacobian")
+
+    def quadratic_velocity_force(self, q, v):
+        """Q_v = ∂T/∂q − Ṁ v with its derivatives (f, ∂f/∂q, ∂f/∂v).
+
+        Only bodies with ``constant_mass = False`` provide it.
+        """
+        raise NotImplementedError
+
+    def kinetic_discrete_gradient(self, q0, q1, v0, v1):
+        """Discrete gradient of G(q) = ½ v0ᵀ M(q) v1 between q0 and q1.
+
+        Returns (g, ∂g/∂q1, ∂g/∂v1) with g · (q1 − q0) = G(q1) − G(q0).
+        Only bodies with ``constant_mass = False`` provide it.
+        """
+        raise NotImplementedError
+
+    # ------------------------------------------------------------- potential
+    def potential_energy(self, q):
+        """Internal (strain) energy V(q), J."""
+        return 0.0
+
+    def potential_gradient(self, q):
+        """∇V(q)."""
+        return np.zeros(self.n_dofs)
+
+    def potential_hessian(self, q):
+        """∇²V(q)."""
+        return np.zeros((self.n_dofs, self.n_dofs))
+
+    def potential_discrete_gradient(self, q0, q1):
+        """(g, ∂g/∂q1) with g · (q1 − q0) = V(q1) − V(q0) exactly."""
+        return np.zeros(self.n_dofs), np.zeros((self.n_dofs, self.n_dofs))
+
+    # --------------------------------------------------------------- gravity
+    def mass_moment(self):
+        """(Γ, c) with ∫ r dm = Γ q + c for bodies whose positions are linear in q.
+
+        Γ has shape (2, n_dofs) in kg, c shape (2,) in kg m.
+        """
+        raise NotImplementedError
+
+    def gravity_potential(self, q, g):
+        """Potential of the uniform field g (m/s²): V = −g · ∫ r dm.
+
+        Returns (V, ∇V, ∇²V).
+        """
+        gam, c = self.mass_moment()
+        g = np.asarray(g, dtype=float)
+        grad = -(g @ gam)
+        return float(grad @ q - g @ c), grad, np.zeros((self.n_dofs, self.n_dofs))
+
+    def gravity_discrete_gradient(self, q0, q1, g):
+        """Discrete gradient of the gravity potential: (g, ∂g/∂q1)."""
+        _, grad, hess = self.gravity_potential(q0, g)
+        return grad, hess
+
+    # -------------------------------------------------------------- momenta
+    def linear_momentum(self, q, v):
+        """Total linear momentum (kg m/s), shape (2,), or None if not provided."""
+        return None
+
+    def angular_momentum(self, q, v):
+        """Angular momentum about the global origin (kg m²/s), or None."""
+        return None
+
+    # --------------------------------------------------------------- output
+    def geometry(self, q, v):
+        """A :class:`BodyGeometry` of the current configuration."""
+        raise NotImplementedError

@@ -1,0 +1,393 @@
+"""Scene: bodies, constraints, forces and prescribed motion on one coordinate layout.
+
+The scene concatenates the bodies' coordinate blocks into global vectors
+q and v and assembles the terms the integrators ask for. It only touches
+what it holds: no multipliers without constraints, no M(q) work when every
+body has constant mass, no external-force work without loads.
+Matrices are dense ``ndarray`` for small scenes and ``scipy.sparse.csr_matrix``
+for large ones (``Scene.dense``).
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sps
+
+from .forces import Gravity
+from .motion import Prescribed
+
+__all__ = ["Scene", "DENSE_LIMIT"]
+
+#: scenes with at most this many coordinates use dense matrices
+DENSE_LIMIT = 400
+
+
+class _Accumulator:
+    """Sum of blocks placed at index sets, dense or sparse."""
+
+    def __init__(self, shape, dense):
+        self.shape, self.dense = shape, dense
+        if dense:
+            self.a = np.zeros(shape)
+        else:
+            self.rows, self.cols, self.vals = [], [], []
+            self.extra = []
+
+    def add(self, block, rows, cols):
+        if self.dense:
+            if sps.issparse(block):
+                block = block.toarray()
+            self.a[np.ix_(rows, cols)] += block
+            return
+        if sps.issparse(block):
+            c = block.tocoo()
+            self.rows.append(rows[c.row])
+            self.cols.append(cols[c.col])
+            self.vals.append(c.data)
+        else:
+            block = np.asarray(block)
+            r, c = np.nonzero(block)
+            self.rows.append(rows[r])
+            self.cols.append(cols[c])
+            self.vals.append(block[r, c])
+
+    def result(self):
+        if self.dense:
+            return self.a
+        if not self.vals:
+            return sps.csr_matrix(self.shape)
+        return sps.csr_matrix((np.concatenate(self.vals), (np.concatenate(self.rows), np.concatenate(self.cols))),
+                              shape=self.shape)
+
+
+class Scene:
+    """A planar multibody system.
+
+    Parameters
+    ----------
+    bodies : sequence of Body
+        Every body once; its coordinates form one block of q in this order.
+    constraints : sequence of Constraint, optional
+    forces : sequence of ForceElement, optional
+        Gravity, springs, loads. ``Gravity(bodies=None)`` acts on all bodies.
+    prescribed : sequence of Prescribed, optional
+        Coordinates that follow a motion law; they are not unknowns.
+    probes : dict of str to callable, optional
+        ``probe(scene, t, q, v)`` returning a float or a small array, recorded
+        at every output step of a simulation.
+    name : str
+    parameters : dict, optional
+        The parameters the scene was built with (for summaries).
+
+    Raises
+    ------
+    ValueError
+        On a body listed twice, an element that refers to a body outside the
+        scene, a coordinate prescribed twice, or a non-callable probe.
+    """
+
+    def __init__(self, bodies, constraints=(), forces=(), prescribed=(), probes=None, name="scene",
+                 parameters=None):
+        self.bodies = tuple(bodies)
+        if not self.bodies:
+            raise ValueError("a scene needs at least one body")
+        ids = [id(b) for b in self.bodies]
+        if len(set(ids)) != len(ids):
+            raise ValueError("a body is listed twice in the scene")
+        self.name = name
+        self.parameters = dict(parameters or {})
+        self._offset = {}
+        start = 0
+        for b in self.bodies:
+            self._offset[id(b)] = start
+            start += b.n_dofs
+        self.n = start
+        self.dense = self.n <= DENSE_LIMIT
+
+        self.forces = tuple(f.on(self.bodies) if isinstance(f, Gravity) and f.bodies is None else f
+                            for f in forces)
+        self.constraints = tuple(constraints)
+        self._force_idx = [self._indices(f.bodies, f"force {getattr(f, 'name', f)!r}") for f in self.forces]
+        self._con_idx = [self._indices(c.bodies, f"constraint {c.name!r}") for c in self.constraints]
+        self._con_rows = []
+        row = 0
+        for c in self.constraints:
+            self._con_rows.append(np.arange(row, row + c.n_equations))
+            row += c.n_equations
+        self.n_constraints = row
+
+        self.prescribed = tuple(prescribed)
+        pres = []
+        for p in self.prescribed:
+            if not isinstance(p, Prescribed):
+                raise ValueError(f"prescribed entries must be Prescribed, got {p!r}")
+            pres.append(self.index(p.body, p.coordinate))
+        if len(set(pres)) != len(pres):
+            raise ValueError("a coordinate is prescribed twice")
+        self.prescribed_index = np.array(pres, dtype=int)
+        self.free_index = np.setdiff1d(np.arange(self.n), self.prescribed_index)
+
+        self.probes = dict(probes or {})
+        for k, fn in self.probes.items():
+            if not callable(fn):
+                raise ValueError(f"probe {k!r} is not callable")
+
+        self._body_idx = [np.arange(self._offset[id(b)], self._offset[id(b)] + b.n_dofs) for b in self.bodies]
+        self.variable_mass_bodies = [(b, i) for b, i in zip(self.bodies, self._body_idx) if not b.constant_mass]
+        acc = _Accumulator((self.n, self.n), self.dense)
+        for b, i in zip(self.bodies, self._body_idx):
+            if b.constant_mass:
+                acc.add(b.mass_matrix(b.q0), i, i)
+        self._constant_mass = acc.result()
+        self.potential_bodies = [(b, i) for b, i in zip(self.bodies, self._body_idx) if b.has_potential]
+        self.conservative_forces = [(f, i) for f, i in zip(self.forces, self._force_idx) if f.conservative]
+        self.loads = [(f, i) for f, i in zip(self.forces, self._force_idx) if not f.conservative]
+
+    # ---------------------------------------------------------------- layout
+    def _indices(self, bodies, what):
+        out = []
+        for b in bodies:
+            if id(b) not in self._offset:
+                raise ValueError(f"{what} refers to body {getattr(b, 'name', b)!r}, which is not in the scene")
+            o = self._offset[id(b)]
+            out.append(np.arange(o, o + b.n_dofs))
+        return np.concatenate(out) if out else np.zeros(0, dtype=int)
+
+    def slice(self, body):
+        """The slice of ``body``'s coordinates in the global vectors."""
+        if id(body) not in self._offset:
+            raise ValueError(f"body {getattr(body, 'name', body)!r} is not in the scene")
+        o = self._offset[id(body)]
+        return slice(o, o + body.n_dofs)
+
+    def index(self, body, coordinate):
+        """Global index of a body's coordinate (name or local index)."""
+        return self.slice(body).start + body.coordinate_index(coordinate)
+
+    def coordinates(self, body, x):
+        """The block of the global vector ``x`` that belongs to ``body``."""
+        return x[self.slice(body)]
+
+    def initial_state(self):
+        """(q0, v0) as global vectors, with prescribed coordinates set by their laws at t = 0."""
+        q = np.concatenate([b.q0 for b in self.bodies]).astype(float)
+        v = np.concatenate([b.v0 for b in self.bodies]).astype(float)
+        qp, vp, _ = self.prescribed_state(0.0)
+        q[self.prescribed_index] = qp
+        v[self.prescribed_index] = vp
+        return q, v
+
+    def prescribed_state(self, t):
+        """Values, rates and accelerations of the prescribed coordinates at t."""
+        if not self.prescribed:
+            z = np.zeros(0)
+            return z, z, z
+        vals = np.array([p.law(t) for p in self.prescribed], dtype=float)
+        return vals[:, 0], vals[:, 1], vals[:, 2]
+
+    def _zeros(self):
+        return _Accumulator((self.n, self.n), self.dense)
+
+    # --------------------------------------------------------------- kinetic
+    def kinetic_energy(self, q, v):
+        """T = ½ vᵀ M(q) v, J."""
+        t = 0.5 * float(v @ (self._constant_mass @ v))
+        for b, i in self.variable_mass_bodies:
+            t += b.kinetic_energy(q[i], v[i])
+        return t
+
+    def mass_matrix(self, q):
+        """M(q)."""
+        if not self.variable_mass_bodies:
+            return self._constant_mass
+        acc = self._zeros()
+        for b, i in self.variable_mass_bodies:
+            acc.add(b.mass_matrix(q[i]), i, i)
+        return self._constant_mass + acc.result()
+
+    def momentum(self, q, v):
+        """p = M(q) v."""
+        p = self._constant_mass @ v
+        for b, i in self.variable_mass_bodies:
+            p[i] += b.momentum(q[i], v[i])
+        return p
+
+    def momentum_jacobian(self, q, v):
+        """B(q, v) = ∂(M(q) v)/∂q, or None when all masses are constant."""
+        if not self.variable_mass_bodies:
+            return None
+        acc = self._zeros()
+        for b, i in self.variable_mass_bodies:
+            acc.add(b.momentum_jacobian(q[i], v[i]), i, i)
+        return acc.result()
+
+    def quadratic_velocity_force(self, q, v):
+        """(Q_v, ∂Q_v/∂q, ∂Q_v/∂v) with Q_v = ∂T/∂q − Ṁ v, or None when all masses are constant."""
+        if not self.variable_mass_bodies:
+            return None
+        f = np.zeros(self.n)
+        fq, fv = self._zeros(), self._zeros()
+        for b, i in self.variable_mass_bodies:
+            fb, fbq, fbv = b.quadratic_velocity_force(q[i], v[i])
+            f[i] += fb
+            fq.add(fbq, i, i)
+            fv.add(fbv, i, i)
+        return f, fq.result(), fv.result()
+
+    def kinetic_discrete_gradient(self, q0, q1, v0, v1):
+        """Discrete gradient of G(q) = ½ v0ᵀ M(q) v1: (g, ∂g/∂q1, ∂g/∂v1), or None."""
+        if not self.variable_mass_bodies:
+            return None
+        g = np.zeros(self.n)
+        gq, gv = self._zeros(), self._zeros()
+        for b, i in self.variable_mass_bodies:
+            gb, gbq, gbv = b.kinetic_discrete_gradient(q0[i], q1[i], v0[i], v1[i])
+            g[i] += gb
+            gq.add(gbq, i, i)
+            gv.add(gbv, i, i)
+        return g, gq.result(), gv.result()
+
+    # ------------------------------------------------------------- potential
+    def potential_energy(self, q):
+        """V(q): strain energy of bodies plus conservative force elements, J."""
+        e = 0.0
+        for b, i in self.potential_bodies:
+            e += b.potential_energy(q[i])
+        for f, i in self.conservative_forces:
+            e += f.potential_energy(q[i])
+        return e
+
+    def potential_gradient(self, q):
+        """∇V(q)."""
+        g = np.zeros(self.n)
+        for b, i in self.potential_bodies:
+            g[i] += b.potential_gradient(q[i])
+        for f, i in self.conservative_forces:
+            g[i] += f.potential_gradient(q[i])
+        return g
+
+    def potential_hessian(self, q):
+        """∇²V(q)."""
+        acc = self._zeros()
+        for b, i in self.potential_bodies:
+            acc.add(b.potential_hessian(q[i]), i, i)
+        for f, i in self.conservative_forces:
+            acc.add(f.potential_hessian(q[i]), i, i)
+        return acc.result()
+
+    def potential_discrete_gradient(self, q0, q1):
+        """(g, ∂g/∂q1) with g · (q1 − q0) = V(q1) − V(q0)."""
+        g = np.zeros(self.n)
+        acc = self._zeros()
+        for b, i in self.potential_bodies:
+            gb, hb = b.potential_discrete_gradient(q0[i], q1[i])
+            g[i] += gb
+            acc.add(hb, i, i)
+        for f, i in self.conservative_forces:
+            gb, hb = f.potential_discrete_gradient(q0[i], q1[i])
+            g[i] += gb
+            acc.add(hb, i, i)
+        return g, acc.result()
+
+    # ------------------------------------------------------------------ loads
+    def external_force(self, q, v, t):
+        """(Q, ∂Q/∂q, ∂Q/∂v) of the non-conservative loads, or None without loads."""
+        if not self.loads:
+            return None
+        f = np.zeros(self.n)
+        fq, fv = self._zeros(), self._zeros()
+        for e, i in self.loads:
+            fe, feq, fev = e.generalized_force(q[i], v[i], t)
+            f[i] += fe
+            if feq is not None:
+                fq.add(feq, i, i)
+            if fev is not None:
+                fv.add(fev, i, i)
+        return f, fq.result(), fv.result()
+
+    # ------------------------------------------------------------ constraints
+    def _con_matrix(self):
+        if self.dense:
+            return np.zeros((self.n_constraints, self.n))
+        return _Accumulator((self.n_constraints, self.n), False)
+
+    def constraint_value(self, q, t):
+        """Φ(q, t), shape (n_constraints,)."""
+        phi = np.zeros(self.n_constraints)
+        for c, i, r in zip(self.constraints, self._con_idx, self._con_rows):
+            phi[r] = c.value(q[i], t)
+        return phi
+
+    def _assemble_rows(self, blocks):
+        if self.dense:
+            out = np.zeros((self.n_constraints, self.n))
+            for blk, i, r in blocks:
+                out[np.ix_(r, i)] += blk
+            return out
+        acc = _Accumulator((self.n_constraints, self.n), False)
+        for blk, i, r in blocks:
+            acc.add(blk, r, i)
+        return acc.result()
+
+    def constraint_jacobian(self, q, t):
+        """Φ_q(q, t), shape (n_constraints, n)."""
+        return self._assemble_rows([(c.jacobian(q[i], t), i, r)
+                                    for c, i, r in zip(self.constraints, self._con_idx, self._con_rows)])
+
+    def constraint_time_derivative(self, q, t):
+        """Φ_t(q, t)."""
+        out = np.zeros(self.n_constraints)
+        for c, i, r in zip(self.constraints, self._con_idx, self._con_rows):
+            if c.rheonomic:
+                out[r] = c.time_derivative(q[i], t)
+        return out
+
+    def constraint_acceleration_rhs(self, q, v, t):
+        """γ with Φ_q q̈ = γ."""
+        out = np.zeros(self.n_constraints)
+        for c, i, r in zip(self.constraints, self._con_idx, self._con_rows):
+            out[r] = c.acceleration_rhs(q[i], v[i], t)
+        return out
+
+    def constraint_hessian_product(self, q, mu, t):
+        """∂(Φ_qᵀ μ)/∂q, shape (n, n)."""
+        acc = self._zeros()
+        for c, i, r in zip(self.constraints, self._con_idx, self._con_rows):
+            acc.add(c.hessian_product(q[i], mu[r], t), i, i)
+        return acc.result()
+
+    def constraint_discrete_gradient(self, q0, q1, t):
+        """D with D (q1 − q0) = Φ(q1, t) − Φ(q0, t)."""
+        return self._assemble_rows([(c.discrete_gradient(q0[i], q1[i], t), i, r)
+                                    for c, i, r in zip(self.constraints, self._con_idx, self._con_rows)])
+
+    def constraint_discrete_gradient_jacobian(self, q0, q1, mu, t):
+        """∂(Dᵀ μ)/∂q1."""
+        acc = self._zeros()
+        for c, i, r in zip(self.constraints, self._con_idx, self._con_rows):
+            acc.add(c.discrete_gradient_jacobian(q0[i], q1[i], mu[r], t), i, i)
+        return acc.result()
+
+    # ---------------------------------------------------------------- momenta
+    def linear_momentum(self, q, v):
+        """Total linear momentum (2,), or None if a body does not provide it."""
+        total = np.zeros(2)
+        for b, i in zip(self.bodies, self._body_idx):
+            p = b.linear_momentum(q[i], v[i])
+            if p is None:
+                return None
+            total += p
+        return total
+
+    def angular_momentum(self, q, v):
+        """Total angular momentum about the origin, or None if a body does not provide it."""
+        total = 0.0
+        for b, i in zip(self.bodies, self._body_idx):
+            h = b.angular_momentum(q[i], v[i])
+            if h is None:
+                return None
+            total += h
+        return total
+
+    def evaluate_probes(self, t, q, v):
+        """{name: value} of every probe."""
+        return {k: np.asarray(fn(self, t, q, v), dtype=float) for k, fn in self.probes.items()}
