@@ -11,3 +11,8 @@ from .motion import MotionLaw, Prescribed, spin_up_law
 from .scene import Scene
 
 __version__ = "0.1.0"
+from .integrators import (ConvergenceError, EnergyMomentum, GeneralizedAlpha, NewtonSettings, SimulationError,
+                          Trapezoidal)
+from .result import Result
+from .simulate import simulate
+from . import scenes

@@ -65,7 +65,8 @@ class Gravity(ForceElement):
     Notes
     -----
     V = −g · ∫ r dm, summed over the bodies; each body supplies its own
-    :meth:`~skfem_flex.bodies.base.Body.gravity_potential`.
+    :meth:`~skfem_flex.bodies.base.Body.gravity_potential`. For bodies whose
+    positions are linear in q the gradient is constant and is built once.
     """
 
     conservative = True
@@ -74,29 +75,55 @@ class Gravity(ForceElement):
     def __init__(self, g=(0.0, -9.81), bodies=None):
         self.g = check_finite_vector("g", g, 2)
         self.bodies = None if bodies is None else tuple(bodies)
+        if self.bodies is None:
+            return
+        self._slices, self._const_grad, start = [], [], 0
+        for b in self.bodies:
+            self._slices.append(slice(start, start + b.n_dofs))
+            start += b.n_dofs
+            try:
+                gam, _ = b.mass_moment()
+                self._const_grad.append(-(self.g @ gam))
+            except NotImplementedError:
+                self._const_grad.append(None)
+        self._n = start
+        self._linear = all(c is not None for c in self._const_grad)
 
     def on(self, bodies):
         """The same field acting on ``bodies`` (used by the scene for ``bodies=None``)."""
         return Gravity(self.g, bodies)
 
-    def _blocks(self, q):
-        return zip(self.bodies, split_blocks(self.bodies, q))
-
     def potential_energy(self, q):
-        return sum(b.gravity_potential(qb, self.g)[0] for b, qb in self._blocks(q))
+        return sum(b.gravity_potential(q[s], self.g)[0] for b, s in zip(self.bodies, self._slices))
 
     def potential_gradient(self, q):
-        return np.concatenate([b.gravity_potential(qb, self.g)[1] for b, qb in self._blocks(q)])
+        out = np.empty(self._n)
+        for b, s, c in zip(self.bodies, self._slices, self._const_grad):
+            out[s] = c if c is not None else b.gravity_potential(q[s], self.g)[1]
+        return out
 
     def potential_hessian(self, q):
-        from scipy.linalg import block_diag
-        return block_diag(*[np.asarray(_dense(b.gravity_potential(qb, self.g)[2])) for b, qb in self._blocks(q)])
+        if self._linear:
+            return None
+        out = np.zeros((self._n, self._n))
+        for b, s, c in zip(self.bodies, self._slices, self._const_grad):
+            if c is None:
+                out[s, s] = _dense(b.gravity_potential(q[s], self.g)[2])
+        return out
 
     def potential_discrete_gradient(self, q0, q1):
-        from scipy.linalg import block_diag
-        parts = [b.gravity_discrete_gradient(a, c, self.g)
-                 for b, a, c in zip(self.bodies, split_blocks(self.bodies, q0), split_blocks(self.bodies, q1))]
-        return np.concatenate([p[0] for p in parts]), block_diag(*[_dense(p[1]) for p in parts])
+        if self._linear:
+            return self.potential_gradient(q0), None
+        g = np.empty(self._n)
+        h = np.zeros((self._n, self._n))
+        for b, s, c in zip(self.bodies, self._slices, self._const_grad):
+            if c is not None:
+                g[s] = c
+            else:
+                gb, hb = b.gravity_discrete_gradient(q0[s], q1[s], self.g)
+                g[s] = gb
+                h[s, s] = _dense(hb)
+        return g, h
 
 
 def _dense(a):

@@ -32,11 +32,14 @@ class _Accumulator:
             self.rows, self.cols, self.vals = [], [], []
             self.extra = []
 
-    def add(self, block, rows, cols):
+    def add(self, block, rows, cols, ix=None):
+        """Add ``block`` at (rows, cols); ``None`` is a zero block; ``ix`` a precomputed ``np.ix_``."""
+        if block is None:
+            return
         if self.dense:
             if sps.issparse(block):
                 block = block.toarray()
-            self.a[np.ix_(rows, cols)] += block
+            self.a[np.ix_(rows, cols) if ix is None else ix] += block
             return
         if sps.issparse(block):
             c = block.tocoo()
@@ -132,11 +135,12 @@ class Scene:
                 raise ValueError(f"probe {k!r} is not callable")
 
         self._body_idx = [np.arange(self._offset[id(b)], self._offset[id(b)] + b.n_dofs) for b in self.bodies]
+        self._ix = {}
         self.variable_mass_bodies = [(b, i) for b, i in zip(self.bodies, self._body_idx) if not b.constant_mass]
         acc = _Accumulator((self.n, self.n), self.dense)
         for b, i in zip(self.bodies, self._body_idx):
             if b.constant_mass:
-                acc.add(b.mass_matrix(b.q0), i, i)
+                self._add(acc, b.mass_matrix(b.q0), i)
         self._constant_mass = acc.result()
         self.potential_bodies = [(b, i) for b, i in zip(self.bodies, self._body_idx) if b.has_potential]
         self.conservative_forces = [(f, i) for f, i in zip(self.forces, self._force_idx) if f.conservative]
@@ -187,6 +191,13 @@ class Scene:
     def _zeros(self):
         return _Accumulator((self.n, self.n), self.dense)
 
+    def _add(self, acc, block, idx):
+        """acc += block at (idx, idx), with the index mesh built once per index set."""
+        key = id(idx)
+        if key not in self._ix:
+            self._ix[key] = np.ix_(idx, idx)
+        acc.add(block, idx, idx, self._ix[key])
+
     # --------------------------------------------------------------- kinetic
     def kinetic_energy(self, q, v):
         """T = ½ vᵀ M(q) v, J."""
@@ -201,7 +212,7 @@ class Scene:
             return self._constant_mass
         acc = self._zeros()
         for b, i in self.variable_mass_bodies:
-            acc.add(b.mass_matrix(q[i]), i, i)
+            self._add(acc, b.mass_matrix(q[i]), i)
         return self._constant_mass + acc.result()
 
     def momentum(self, q, v):
@@ -217,7 +228,7 @@ class Scene:
             return None
         acc = self._zeros()
         for b, i in self.variable_mass_bodies:
-            acc.add(b.momentum_jacobian(q[i], v[i]), i, i)
+            self._add(acc, b.momentum_jacobian(q[i], v[i]), i)
         return acc.result()
 
     def quadratic_velocity_force(self, q, v):
@@ -229,8 +240,8 @@ class Scene:
         for b, i in self.variable_mass_bodies:
             fb, fbq, fbv = b.quadratic_velocity_force(q[i], v[i])
             f[i] += fb
-            fq.add(fbq, i, i)
-            fv.add(fbv, i, i)
+            self._add(fq, fbq, i)
+            self._add(fv, fbv, i)
         return f, fq.result(), fv.result()
 
     def kinetic_discrete_gradient(self, q0, q1, v0, v1):
@@ -242,8 +253,8 @@ class Scene:
         for b, i in self.variable_mass_bodies:
             gb, gbq, gbv = b.kinetic_discrete_gradient(q0[i], q1[i], v0[i], v1[i])
             g[i] += gb
-            gq.add(gbq, i, i)
-            gv.add(gbv, i, i)
+            self._add(gq, gbq, i)
+            self._add(gv, gbv, i)
         return g, gq.result(), gv.result()
 
     # ------------------------------------------------------------- potential
@@ -269,9 +280,9 @@ class Scene:
         """∇²V(q)."""
         acc = self._zeros()
         for b, i in self.potential_bodies:
-            acc.add(b.potential_hessian(q[i]), i, i)
+            self._add(acc, b.potential_hessian(q[i]), i)
         for f, i in self.conservative_forces:
-            acc.add(f.potential_hessian(q[i]), i, i)
+            self._add(acc, f.potential_hessian(q[i]), i)
         return acc.result()
 
     def potential_discrete_gradient(self, q0, q1):
@@ -281,11 +292,11 @@ class Scene:
         for b, i in self.potential_bodies:
             gb, hb = b.potential_discrete_gradient(q0[i], q1[i])
             g[i] += gb
-            acc.add(hb, i, i)
+            self._add(acc, hb, i)
         for f, i in self.conservative_forces:
             gb, hb = f.potential_discrete_gradient(q0[i], q1[i])
             g[i] += gb
-            acc.add(hb, i, i)
+            self._add(acc, hb, i)
         return g, acc.result()
 
     # ------------------------------------------------------------------ loads
@@ -299,9 +310,9 @@ class Scene:
             fe, feq, fev = e.generalized_force(q[i], v[i], t)
             f[i] += fe
             if feq is not None:
-                fq.add(feq, i, i)
+                self._add(fq, feq, i)
             if fev is not None:
-                fv.add(fev, i, i)
+                self._add(fv, fev, i)
         return f, fq.result(), fv.result()
 
     # ------------------------------------------------------------ constraints
@@ -352,7 +363,7 @@ class Scene:
         """∂(Φ_qᵀ μ)/∂q, shape (n, n)."""
         acc = self._zeros()
         for c, i, r in zip(self.constraints, self._con_idx, self._con_rows):
-            acc.add(c.hessian_product(q[i], mu[r], t), i, i)
+            self._add(acc, c.hessian_product(q[i], mu[r], t), i)
         return acc.result()
 
     def constraint_discrete_gradient(self, q0, q1, t):
@@ -364,7 +375,7 @@ class Scene:
         """∂(Dᵀ μ)/∂q1."""
         acc = self._zeros()
         for c, i, r in zip(self.constraints, self._con_idx, self._con_rows):
-            acc.add(c.discrete_gradient_jacobian(q0[i], q1[i], mu[r], t), i, i)
+            self._add(acc, c.discrete_gradient_jacobian(q0[i], q1[i], mu[r], t), i)
         return acc.result()
 
     # ---------------------------------------------------------------- momenta

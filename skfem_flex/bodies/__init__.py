@@ -1,5 +1,5 @@
 """Bodies: point masses, rigid bodies, floating-frame beams and geometrically exact beams."""
-from .base import Body, BodyGeometry
+from .base import Body, BodyGeometry, BodyPoint
 from .particle import PointMass
 
-__all__ = ["Body", "BodyGeometry", "PointMass"]
+__all__ = ["Body", "BodyGeometry", "BodyPoint", "PointMass"]

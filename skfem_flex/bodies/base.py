@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Body", "BodyGeometry", "check_finite_vector"]
+__all__ = ["Body", "BodyGeometry", "BodyPoint", "check_finite_vector"]
 
 
 def check_finite_vector(name, value, size=None):
@@ -69,6 +69,58 @@ class BodyGeometry:
     cells: list
     point_data: dict = field(default_factory=dict)
     cell_data: dict = field(default_factory=dict)
+
+
+class BodyPoint:
+    """A material point of a body, for joints, point loads and probes.
+
+    Made by ``body.point(locator)`` (the locator is body-specific: the axial
+    coordinate x for beams, body-frame coordinates for a rigid body, nothing
+    for a point mass). All methods take the body's own coordinate block q.
+    Positions are in the global frame (m); the angle is that of the body
+    frame or beam cross-section at the point (rad), which every body here
+    makes linear in q.
+
+    Subclasses implement the position methods; the angle methods default to
+    "no angle" (a point mass).
+    """
+
+    body = None
+    #: True when the angle of the point is defined (rigid bodies, beams)
+    has_angle = False
+
+    def position(self, q):
+        """r(q), shape (2,)."""
+        raise NotImplementedError
+
+    def position_jacobian(self, q):
+        """∂r/∂q, shape (2, n)."""
+        raise NotImplementedError
+
+    def position_hessian_product(self, q, f):
+        """∂(r_qᵀ f)/∂q for a fixed vector f (2,), shape (n, n)."""
+        raise NotImplementedError
+
+    def position_discrete_gradient(self, q0, q1):
+        """D (2, n) with D (q1 − q0) = r(q1) − r(q0) exactly."""
+        raise NotImplementedError
+
+    def position_discrete_gradient_jacobian(self, q0, q1, f):
+        """∂(Dᵀ f)/∂q1, shape (n, n)."""
+        raise NotImplementedError
+
+    def velocity(self, q, v):
+        """ṙ = r_q v."""
+        return self.position_jacobian(q) @ v
+
+    def angle(self, q):
+        """Angle of the frame attached at the point, rad."""
+        raise ValueError(f"a point of body {self.body.name!r} has no angle (a point mass cannot be welded "
+                         f"or carry a moment)")
+
+    def angle_jacobian(self, q):
+        """∂ϑ/∂q, shape (n,) (constant: ϑ is linear in q)."""
+        raise ValueError(f"a point of body {self.body.name!r} has no angle")
 
 
 class Body:
@@ -192,6 +244,11 @@ class Body:
     def angular_momentum(self, q, v):
         """Angular momentum about the global origin (kg m²/s), or None."""
         return None
+
+    # ---------------------------------------------------------- body points
+    def point(self, locator=None):
+        """A :class:`BodyPoint` at ``locator``; ``ValueError`` if it lies outside the body."""
+        raise NotImplementedError
 
     # --------------------------------------------------------------- output
     def geometry(self, q, v):

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Body, BodyGeometry, check_finite_vector
+from .base import Body, BodyGeometry, BodyPoint, check_finite_vector
 
 __all__ = ["PointMass"]
 
@@ -71,9 +71,39 @@ class PointMass(Body):
             return 0.0
         return self.mass * float(q[0] * v[1] - q[1] * v[0])
 
+    def point(self, locator=None):
+        """The mass itself (a point mass has one point; ``locator`` must be None)."""
+        if locator is not None:
+            raise ValueError(f"a point mass has a single point; got locator {locator!r}")
+        if self.n_dofs != 2:
+            raise ValueError(f"body points need a planar point mass; {self.name!r} has {self.n_dofs} coordinate")
+        return _MassPoint(self)
+
     def geometry(self, q, v):
         pts = np.zeros((1, 2))
         pts[0, : self.n_dofs] = q
         vel = np.zeros((1, 2))
         vel[0, : self.n_dofs] = v
         return BodyGeometry(pts, [("vertex", np.array([[0]]))], {"velocity": vel})
+
+
+class _MassPoint(BodyPoint):
+    """The point of a planar point mass: r = q, linear."""
+
+    def __init__(self, body):
+        self.body = body
+
+    def position(self, q):
+        return np.array(q[:2], dtype=float)
+
+    def position_jacobian(self, q):
+        return np.eye(2)
+
+    def position_hessian_product(self, q, f):
+        return np.zeros((2, 2))
+
+    def position_discrete_gradient(self, q0, q1):
+        return np.eye(2)
+
+    def position_discrete_gradient_jacobian(self, q0, q1, f):
+        return np.zeros((2, 2))

@@ -1,0 +1,541 @@
+"""Implicit time integrators on one Newton–Raphson core.
+
+Systems::
+
+    d/dt (M(q) q̇) − ∂T/∂q + ∇V(q) + Φ_qᵀ λ = Q(q, q̇, t),     Φ(q, t) = 0
+
+Schemes (all solve for the increment Δq = q_{n+1} − q_n, never for q_{n+1}
+itself, so that v_{n+1} keeps its digits as q grows; see
+``shared/notes/ENERGY_SCHEME.md``, pitfall 5):
+
+``energy-momentum``
+    Discrete-gradient midpoint scheme (second seed paper, eqs. 3, 22, 25–26)
+    in Lagrangian form::
+
+        q1 = q0 + Δq,  v1 = 2Δq/Δt − v0
+        p(q1, v1) − p(q0, v0) − Δt [D_G − D_V + Q(q_m, Δq/Δt, t_m)] + D_Φᵀ μ = 0
+        Φ(q1, t1) = 0
+
+    with D_V a discrete gradient of V (stress at the mean strain), D_G one of
+    G(q) = ½ v0ᵀ M(q) v1 (zero for constant mass) and D_Φ one of Φ; μ = Δt λ̄.
+    Then E1 − E0 = Δq·Q − μ·(Φ(q1) − Φ(q0)) + v̄·r exactly, where r is the
+    Newton residual: the energy balance holds to the Newton tolerance for
+    nonlinear, constrained systems.
+``trapezoidal``
+    Average-acceleration Newmark (β = ¼, γ = ½), equilibrium at t_{n+1}.
+``generalized-alpha``
+    Chung–Hulbert with spectral radius ρ∞, constraints at position level in
+    the form of Arnold & Brüls (2007); the velocity-level residual
+    Φ_q v + Φ_t is reported.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sps
+import scipy.sparse.linalg as spla
+
+__all__ = ["SimulationError", "ConvergenceError", "NewtonSettings", "State", "Integrator",
+           "EnergyMomentum", "Newmark", "Trapezoidal", "GeneralizedAlpha", "make_integrator", "INTEGRATORS"]
+
+_EPS = np.finfo(float).eps
+_TINY = 1e-300
+
+
+class SimulationError(RuntimeError):
+    """A run that could not go on. ``result`` holds the steps done so far (set by ``simulate``)."""
+
+    def __init__(self, message, **info):
+        super().__init__(message)
+        self.info = info
+        self.result = None
+
+
+class ConvergenceError(SimulationError):
+    """Newton–Raphson failed: the message names scheme, time, step, residual and iterations."""
+
+
+@dataclass(frozen=True)
+class NewtonSettings:
+    """Convergence control of the Newton–Raphson core.
+
+    A step is converged when every scaled measure is at most one:
+    ‖r‖∞ ≤ ``rtol`` · (largest term of the balance it checks), ‖Φ‖∞ ≤
+    ``ctol`` · (scale of Φ), and for the energy-conserving scheme
+    |v̄ · r| ≤ ``etol`` · (energy scale). The scales come from the terms
+    themselves, so the defaults work for a 1 kg oscillator and for a steel
+    beam with forces of 10⁷ N alike. An update below round-off of the state
+    also ends the iteration (the residual is then as small as floating
+    point allows).
+
+    Attributes
+    ----------
+    rtol, ctol, etol : float
+        Relative tolerances (dimensionless).
+    max_iterations : int
+        Cap on Newton iterations per step.
+    line_search : bool
+        Halve the update (up to 6 times) when the residual grows.
+    """
+
+    rtol: float = 1e-12
+    ctol: float = 1e-12
+    etol: float = 1e-14
+    max_iterations: int = 25
+    line_search: bool = True
+
+    def __post_init__(self):
+        for name in ("rtol", "ctol", "etol"):
+            val = getattr(self, name)
+            if not (np.isfinite(val) and 0 < val < 1):
+                raise ValueError(f"NewtonSettings.{name} must be in (0, 1), got {val!r}")
+        if int(self.max_iterations) < 1:
+            raise ValueError(f"NewtonSettings.max_iterations must be >= 1, got {self.max_iterations!r}")
+
+
+@dataclass
+class State:
+    """Integrator state at one instant.
+
+    Attributes
+    ----------
+    t : float
+        Time, s.
+    q, v : ndarray
+        Coordinates and velocities (global vectors).
+    acc : ndarray
+        Acceleration q̈ (Newmark schemes; computed once at the start).
+    pseudo : ndarray
+        Generalized-α's algorithmic acceleration a.
+    lam : ndarray
+        Lagrange multipliers λ (for the energy scheme the mean over the last step).
+    prescribed_force : ndarray
+        Generalized force the prescribed coordinates' laws exert (mean over the last step).
+    """
+
+    t: float
+    q: np.ndarray
+    v: np.ndarray
+    acc: np.ndarray = None
+    pseudo: np.ndarray = None
+    lam: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    prescribed_force: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+
+@dataclass
+class StepInfo:
+    """What one step reports: Newton iterations, work of external forces and drivers, residuals."""
+
+    iterations: int
+    work: float
+    velocity_residual: float = 0.0
+
+
+def _add(a, b):
+    """a + b for dense/sparse mixtures (None counts as zero)."""
+    if b is None:
+        return a
+    if a is None:
+        return b
+    if sps.issparse(a) and not sps.issparse(b):
+        return a.toarray() + b
+    return a + b
+
+
+def _sub_block(mat, rows, cols):
+    if rows.size == mat.shape[0] and cols.size == mat.shape[1]:
+        return mat                      # rows and cols are sorted index sets: all of them
+    if sps.issparse(mat):
+        return mat.tocsr()[rows][:, cols]
+    return mat[np.ix_(rows, cols)]
+
+
+def _bordered(jff, d_t, c_q, dense):
+    """[[J, Dᵀ], [C, 0]] in dense or sparse form."""
+    m = c_q.shape[0]
+    if m == 0:
+        return jff
+    if dense:
+        jff = jff.toarray() if sps.issparse(jff) else jff
+        d_t = d_t.toarray() if sps.issparse(d_t) else d_t
+        c_q = c_q.toarray() if sps.issparse(c_q) else c_q
+        n = jff.shape[0]
+        out = np.zeros((n + m, n + m))
+        out[:n, :n] = jff
+        out[:n, n:] = d_t
+        out[n:, :n] = c_q
+        return out
+    return sps.bmat([[sps.csr_matrix(jff), sps.csr_matrix(d_t)], [sps.csr_matrix(c_q), None]], format="csc")
+
+
+def _solve(a, b):
+    if sps.issparse(a):
+        x = spla.spsolve(a.tocsc(), b)
+        if not np.all(np.isfinite(x)):
+            raise np.linalg.LinAlgError("singular sparse matrix")
+        return x
+    return np.linalg.solve(a, b)
+
+
+def _inf(x):
+    return float(np.abs(x).max()) if np.size(x) else 0.0
+
+
+class Integrator:
+    """Base class: a named scheme that advances a :class:`State` by one step."""
+
+    name = "integrator"
+
+    def __init__(self, newton=None):
+        self.newton = NewtonSettings() if newton is None else newton
+        if not isinstance(self.newton, NewtonSettings):
+            raise ValueError(f"newton must be NewtonSettings, got {self.newton!r}")
+
+    # ----------------------------------------------------------- start state
+    def start(self, scene, state):
+        """Complete the initial state: consistent accelerations and multipliers.
+
+        Solves M q̈ + Φ_qᵀ λ = F, Φ_q q̈ = γ for the free coordinates, the
+        prescribed ones taking their laws' accelerations.
+        """
+        q, v, t = state.q, state.v, state.t
+        free, pres = scene.free_index, scene.prescribed_index
+        _, _, acc_p = scene.prescribed_state(t)
+        force = -scene.potential_gradient(q)
+        qv = scene.quadratic_velocity_force(q, v)
+        if qv is not None:
+            force = force + qv[0]
+        ext = scene.external_force(q, v, t)
+        if ext is not None:
+            force = force + ext[0]
+        mass = scene.mass_matrix(q)
+        acc = np.zeros(scene.n)
+        acc[pres] = acc_p
+        rhs = force[free] - (_sub_block(mass, free, pres) @ acc_p if pres.size else 0.0)
+        m = scene.n_constraints
+        if m:
+            cq = scene.constraint_jacobian(q, t)
+            gamma = scene.constraint_acceleration_rhs(q, v, t)
+            cq_f = _sub_block(cq, np.arange(m), free)
+            g_rhs = gamma - (_sub_block(cq, np.arange(m), pres) @ acc_p if pres.size else 0.0)
+            a = _bordered(_sub_block(mass, free, free), cq_f.T, cq_f, scene.dense)
+            b = np.concatenate([rhs, g_rhs])
+        else:
+            a, b = _sub_block(mass, free, free), rhs
+        try:
+            x = _solve(a, b)
+        except np.linalg.LinAlgError as exc:
+            raise ValueError("the initial mass/constraint matrix is singular: a coordinate has no inertia, or "
+                             "constraints are redundant") from exc
+        acc[free] = x[:free.size]
+        lam = x[free.size:]
+        reaction = np.zeros(0)
+        if pres.size:
+            full = mass @ acc - force
+            if m:
+                full = full + (cq.T @ lam if not sps.issparse(cq) else cq.T @ lam)
+            reaction = full[pres]
+        return replace(state, acc=acc, pseudo=acc.copy(), lam=lam, prescribed_force=reaction)
+
+    # ---------------------------------------------------------------- Newton
+    def _newton(self, fun, x0, where):
+        """Solve fun(x) = 0; ``fun`` returns (r, J, err) with err ≤ 1 meaning converged."""
+        s = self.newton
+        x = x0.copy()
+        r, jac, err = fun(x)
+        for it in range(s.max_iterations + 1):
+            if not (np.all(np.isfinite(r)) and np.isfinite(err)):
+                raise ConvergenceError(f"{self.name}: residual is not finite at {where} after {it} iterations "
+                                       f"(the solution escaped or the step is far too large)",
+                                       iterations=it, residual=float("nan"))
+            if err <= 1.0:
+                return x, r, it
+            if it == s.max_iterations:
+                break
+            try:
+                dx = -_solve(jac, r)
+            except np.linalg.LinAlgError:
+                raise ConvergenceError(f"{self.name}: singular Newton matrix at {where}, iteration {it} "
+                                       f"(redundant constraints or a coordinate without inertia or stiffness)",
+                                       iterations=it, residual=err) from None
+            if not np.all(np.isfinite(dx)):
+                raise ConvergenceError(f"{self.name}: Newton update is not finite at {where}, iteration {it}",
+                                       iterations=it, residual=err)
+            if _inf(dx) <= 8 * _EPS * max(_inf(x), _TINY) and err < 1e6:
+                return x, r, it + 1          # update below round-off: as converged as floating point allows
+            step = 1.0
+            for _ in range(7 if s.line_search else 1):
+                x_try = x + step * dx
+                r_try, jac_try, err_try = fun(x_try)
+                if (np.isfinite(err_try) and err_try < max(err, 1.0)) or not s.line_search:
+                    break
+                step *= 0.5
+            x, r, jac, err = x_try, r_try, jac_try, err_try
+        raise ConvergenceError(f"{self.name}: Newton did not converge at {where}: scaled residual {err:.3g} "
+                               f"after {s.max_iterations} iterations", iterations=s.max_iterations, residual=err)
+
+    def step(self, scene, state, dt):
+        """Advance ``state`` by ``dt``; returns (new State, StepInfo)."""
+        raise NotImplementedError
+
+
+class EnergyMomentum(Integrator):
+    """Energy-conserving discrete-gradient midpoint scheme (``"energy-momentum"``).
+
+    See the module docstring for the equations. Prescribed coordinates take
+    q1 from their law and v1 = 2Δq/Δt − v0 (so that v̄ Δt = Δq holds for
+    every coordinate, which the exact energy identity needs); their residual
+    rows are the impulse the law exerts, and its work v̄_P · r_P enters the
+    external work.
+    """
+
+    name = "energy-momentum"
+
+    def step(self, scene, state, dt):
+        q0, v0, t0 = state.q, state.v, state.t
+        t1, tm = t0 + dt, t0 + 0.5 * dt
+        free, pres = scene.free_index, scene.prescribed_index
+        nf, m = free.size, scene.n_constraints
+        dq_base = np.zeros(scene.n)
+        if pres.size:
+            dq_base[pres] = scene.prescribed_state(t1)[0] - q0[pres]
+        p0 = scene.momentum(q0, v0)
+        variable = bool(scene.variable_mass_bodies)
+        e_scale0 = abs(scene.kinetic_energy(q0, v0))
+        rows_c = np.arange(m)
+        s = self.newton
+        cache = {}
+
+        def fun(x):
+            dq = dq_base.copy()
+            dq[free] = x[:nf]
+            mu = x[nf:]
+            q1 = q0 + dq
+            v1 = (2.0 / dt) * dq - v0
+            p1 = scene.momentum(q1, v1)
+            r = p1 - p0
+            jac = scene.mass_matrix(q1) * (2.0 / dt)
+            scale = max(_inf(p1), _inf(p0))
+            if variable:
+                jac = _add(jac, scene.momentum_jacobian(q1, v1))
+                g, g_q, g_v = scene.kinetic_discrete_gradient(q0, q1, v0, v1)
+                r -= dt * g
+                jac = _add(jac, -(dt * g_q + 2.0 * g_v))
+                scale = max(scale, dt * _inf(g))
+            g, g_q = scene.potential_discrete_gradient(q0, q1)
+            r += dt * g
+            jac = _add(jac, dt * g_q)
+            scale = max(scale, dt * _inf(g))
+            ext = scene.external_force(q0 + 0.5 * dq, dq / dt, tm) if scene.loads else None
+            if ext is not None:
+                r -= dt * ext[0]
+                jac = _add(jac, -(0.5 * dt * ext[1] + ext[2]))
+                scale = max(scale, dt * _inf(ext[0]))
+            if m:
+                d = scene.constraint_discrete_gradient(q0, q1, tm)
+                dtmu = d.T @ mu
+                r += dtmu
+                scale = max(scale, _inf(dtmu))
+                jac = _add(jac, scene.constraint_discrete_gradient_jacobian(q0, q1, mu, tm))
+                c = scene.constraint_value(q1, t1)
+                cq = scene.constraint_jacobian(q1, t1)
+                c_scale = max(_inf(abs(cq) @ np.abs(q1)), _TINY)
+                full = _bordered(_sub_block(jac, free, free), _sub_block(d, rows_c, free).T,
+                                 _sub_block(cq, rows_c, free), scene.dense)
+                res = np.concatenate([r[free], c])
+                err_c = _inf(c) / (s.ctol * c_scale)
+            else:
+                full, res, err_c = _sub_block(jac, free, free), r[free], 0.0
+                d = None
+            vbar = dq / dt
+            e_scale = max(e_scale0, abs(scene.kinetic_energy(q1, v1)), abs(float(dq @ g)), _TINY)
+            err = max(_inf(r[free]) / (s.rtol * max(scale, _TINY)), err_c,
+                      abs(float(vbar[free] @ r[free])) / (s.etol * e_scale))
+            cache.update(dq=dq, mu=mu, q1=q1, v1=v1, r=r, d=d, ext=ext)
+            return res, full, err
+
+        x0 = np.concatenate([dt * v0[free], state.lam * dt if state.lam.size == m else np.zeros(m)])
+        x, _, its = self._newton(fun, x0, f"t = {t1:.6g} s (dt = {dt:.3g} s)")
+        dq, mu, q1, v1, r, d, ext = (cache[k] for k in ("dq", "mu", "q1", "v1", "r", "d", "ext"))
+        work = 0.0
+        if ext is not None:
+            work += float(dq @ ext[0])
+        if m:
+            work -= float(mu @ (d @ dq))
+        reaction = np.zeros(0)
+        if pres.size:
+            reaction = r[pres] / dt
+            work += float(dq[pres] @ reaction)
+        new = State(t1, q1, v1, lam=mu / dt, prescribed_force=reaction)
+        vres = 0.0
+        if m:
+            vres = _inf(scene.constraint_jacobian(q1, t1) @ v1 + scene.constraint_time_derivative(q1, t1))
+        return new, StepInfo(its, work, vres)
+
+
+class Newmark(Integrator):
+    """Newmark family in generalized-α form (Chung & Hulbert 1993; Arnold & Brüls 2007).
+
+    Parameters
+    ----------
+    alpha_m, alpha_f, beta, gamma : float
+        Algorithmic parameters.
+    newton : NewtonSettings, optional
+    """
+
+    name = "newmark"
+
+    def __init__(self, alpha_m=0.0, alpha_f=0.0, beta=0.25, gamma=0.5, newton=None):
+        super().__init__(newton)
+        self.alpha_m, self.alpha_f, self.beta, self.gamma = map(float, (alpha_m, alpha_f, beta, gamma))
+
+    def step(self, scene, state, dt):
+        am, af, beta, gamma = self.alpha_m, self.alpha_f, self.beta, self.gamma
+        q0, v0, t0 = state.q, state.v, state.t
+        a0, x0acc = state.pseudo, state.acc
+        t1 = t0 + dt
+        free, pres = scene.free_index, scene.prescribed_index
+        nf, m = free.size, scene.n_constraints
+        qp, vp, ap = scene.prescribed_state(t1)
+        c_a = (1.0 - am) / ((1.0 - af) * beta * dt * dt)
+        c_v = gamma / (beta * dt)
+        rows_c = np.arange(m)
+        s = self.newton
+        cache = {}
+
+        def fun(x):
+            dq = np.zeros(scene.n)
+            dq[free] = x[:nf]
+            if pres.size:
+                dq[pres] = qp - q0[pres]
+            mu = x[nf:]
+            q1 = q0 + dq
+            a1 = (dq - dt * v0 - dt * dt * (0.5 - beta) * a0) / (beta * dt * dt)
+            v1 = v0 + dt * ((1.0 - gamma) * a0 + gamma * a1)
+            acc1 = ((1.0 - am) * a1 + am * a0 - af * x0acc) / (1.0 - af)
+            if pres.size:
+                v1[pres], acc1[pres], a1[pres] = vp, ap, ap
+            mass = scene.mass_matrix(q1)
+            inertia = mass @ acc1
+            grad = scene.potential_gradient(q1)
+            r = dt * (inertia + grad)
+            jac = _add(mass * (dt * c_a), dt * scene.potential_hessian(q1))
+            scale = max(_inf(inertia), _inf(grad))
+            qv = scene.quadratic_velocity_force(q1, v1)
+            if qv is not None:
+                r -= dt * qv[0]
+                jac = _add(jac, dt * scene.momentum_jacobian(q1, acc1))
+                jac = _add(jac, -dt * (qv[1] + c_v * qv[2]))
+                scale = max(scale, _inf(qv[0]))
+            ext = scene.external_force(q1, v1, t1) if scene.loads else None
+            if ext is not None:
+                r -= dt * ext[0]
+                jac = _add(jac, -dt * (ext[1] + c_v * ext[2]))
+                scale = max(scale, _inf(ext[0]))
+            scale *= dt
+            if m:
+                cq = scene.constraint_jacobian(q1, t1)
+                ctmu = cq.T @ mu
+                r += ctmu
+                scale = max(scale, _inf(ctmu))
+                jac = _add(jac, scene.constraint_hessian_product(q1, mu, t1))
+                c = scene.constraint_value(q1, t1)
+                c_scale = max(_inf(abs(cq) @ np.abs(q1)), _TINY)
+                cq_f = _sub_block(cq, rows_c, free)
+                full = _bordered(_sub_block(jac, free, free), cq_f.T, cq_f, scene.dense)
+                res = np.concatenate([r[free], c])
+                err_c = _inf(c) / (s.ctol * c_scale)
+            else:
+                full, res, err_c, cq = _sub_block(jac, free, free), r[free], 0.0, None
+            err = max(_inf(r[free]) / (s.rtol * max(scale, _TINY)), err_c)
+            cache.update(dq=dq, mu=mu, q1=q1, v1=v1, a1=a1, acc1=acc1, r=r, ext=ext, cq=cq)
+            return res, full, err
+
+        lam0 = state.lam if state.lam.size == m else np.zeros(m)
+        x0 = np.concatenate([dt * v0[free] + 0.5 * dt * dt * x0acc[free], dt * lam0])
+        x, _, its = self._newton(fun, x0, f"t = {t1:.6g} s (dt = {dt:.3g} s)")
+        dq, mu, q1, v1, a1, acc1, r, ext, cq = (cache[k] for k in
+                                                ("dq", "mu", "q1", "v1", "a1", "acc1", "r", "ext", "cq"))
+        lam1 = mu / dt
+        work = 0.0
+        if ext is not None:
+            ext0 = scene.external_force(q0, v0, t0)[0]
+            work += float(dq @ (0.5 * (ext0 + ext[0])))
+        reaction = np.zeros(0)
+        if pres.size:
+            reaction = r[pres] / dt
+            prev = state.prescribed_force if state.prescribed_force.size == pres.size else reaction
+            work += float(dq[pres] @ (0.5 * (prev + reaction)))
+        vres = 0.0
+        if m:
+            phit1 = scene.constraint_time_derivative(q1, t1)
+            vres = _inf(cq @ v1 + phit1)
+            if any(c.rheonomic for c in scene.constraints):
+                phit0 = scene.constraint_time_derivative(q0, t0)
+                lam_prev = state.lam if state.lam.size == m else lam1
+                work += 0.5 * dt * float(lam_prev @ phit0 + lam1 @ phit1)
+        new = State(t1, q1, v1, acc=acc1, pseudo=a1, lam=lam1, prescribed_force=reaction)
+        return new, StepInfo(its, work, vres)
+
+
+class Trapezoidal(Newmark):
+    """Average-acceleration Newmark (β = ¼, γ = ½), ``"trapezoidal"``."""
+
+    name = "trapezoidal"
+
+    def __init__(self, newton=None):
+        super().__init__(0.0, 0.0, 0.25, 0.5, newton)
+
+
+class GeneralizedAlpha(Newmark):
+    """Chung–Hulbert generalized-α with spectral radius ρ∞ at infinite frequency.
+
+    α_m = (2ρ∞ − 1)/(ρ∞ + 1), α_f = ρ∞/(ρ∞ + 1), γ = ½ − α_m + α_f,
+    β = ¼ (γ + ½)².
+
+    Parameters
+    ----------
+    rho_inf : float
+        ρ∞ in [0, 1]; 1 keeps every frequency, 0 annihilates the highest.
+    """
+
+    name = "generalized-alpha"
+
+    def __init__(self, rho_inf=0.9, newton=None):
+        rho = float(rho_inf)
+        if not (np.isfinite(rho) and 0.0 <= rho <= 1.0):
+            raise ValueError(f"rho_inf must be in [0, 1], got {rho_inf!r}")
+        am = (2.0 * rho - 1.0) / (rho + 1.0)
+        af = rho / (rho + 1.0)
+        gamma = 0.5 - am + af
+        super().__init__(am, af, 0.25 * (gamma + 0.5) ** 2, gamma, newton)
+        self.rho_inf = rho
+
+
+INTEGRATORS = {
+    "energy-momentum": EnergyMomentum,
+    "trapezoidal": Trapezoidal,
+    "generalized-alpha": GeneralizedAlpha,
+}
+
+
+def make_integrator(integrator, rho_inf=None, newton=None):
+    """An :class:`Integrator` from a name or an instance.
+
+    Raises
+    ------
+    ValueError
+        For an unknown name (the message lists the known ones) or ρ∞ given
+        to a scheme that has none.
+    """
+    if isinstance(integrator, Integrator):
+        return integrator
+    if not isinstance(integrator, str) or integrator not in INTEGRATORS:
+        raise ValueError(f"unknown integrator {integrator!r}; choose one of {sorted(INTEGRATORS)}")
+    if integrator == "generalized-alpha":
+        return GeneralizedAlpha(0.9 if rho_inf is None else rho_inf, newton=newton)
+    if rho_inf is not None:
+        raise ValueError(f"rho_inf applies to generalized-alpha only, not to {integrator!r}")
+    return INTEGRATORS[integrator](newton=newton)

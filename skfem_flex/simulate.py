@@ -1,0 +1,195 @@
+"""simulate(scene, t_end, dt, integrator=...) -> Result."""
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from .integrators import ConvergenceError, SimulationError, State, make_integrator
+from .result import Result
+
+__all__ = ["simulate", "check_initial_state"]
+
+
+def check_initial_state(scene, q, v, tol=1e-8):
+    """Raise ``ValueError`` if (q, v) violates a constraint at t = 0.
+
+    Position level |Φ| and velocity level |Φ_q v + Φ_t| are compared with
+    ``tol`` times the constraint's own scale (|Φ_q| |q| and |Φ_q| |v|).
+    """
+    if not np.all(np.isfinite(q)) or not np.all(np.isfinite(v)):
+        raise ValueError("initial state is not finite (NaN or inf in q0 or v0)")
+    if not scene.n_constraints:
+        return
+    phi = scene.constraint_value(q, 0.0)
+    cq = scene.constraint_jacobian(q, 0.0)
+    vel = cq @ v + scene.constraint_time_derivative(q, 0.0)
+    acq = abs(cq)
+    pos_scale = np.maximum(acq @ np.abs(q), 1e-12)
+    vel_scale = np.maximum(acq @ np.abs(v), 1e-12)
+    for c, rows in zip(scene.constraints, scene._con_rows):
+        bad_p = np.abs(phi[rows]) > tol * np.maximum(pos_scale[rows], 1.0)
+        if np.any(bad_p):
+            raise ValueError(f"inconsistent initial conditions: constraint {c.name!r} has |Φ| = "
+                             f"{np.max(np.abs(phi[rows])):.3g} at t = 0")
+        bad_v = np.abs(vel[rows]) > tol * np.maximum(vel_scale[rows], 1.0)
+        if np.any(bad_v):
+            raise ValueError(f"inconsistent initial velocities: constraint {c.name!r} has |Φ_q v + Φ_t| = "
+                             f"{np.max(np.abs(vel[rows])):.3g} at t = 0")
+
+
+class _Recorder:
+    """Collects histories step by step; builds a Result at any time."""
+
+    def __init__(self, scene):
+        self.scene = scene
+        self.rows = {k: [] for k in ("t", "q", "v", "lam", "kinetic", "potential", "external_work",
+                                     "constraint_residual", "velocity_constraint_residual",
+                                     "newton_iterations", "prescribed_force", "linear_momentum",
+                                     "angular_momentum")}
+        self.probes = {k: [] for k in scene.probes}
+        self.with_momentum = None
+
+    def record(self, state, work, iterations, vres):
+        s = self.scene
+        q, v, t = state.q, state.v, state.t
+        r = self.rows
+        r["t"].append(t)
+        r["q"].append(q.copy())
+        r["v"].append(v.copy())
+        r["lam"].append(np.array(state.lam, dtype=float))
+        r["kinetic"].append(s.kinetic_energy(q, v))
+        r["potential"].append(s.potential_energy(q))
+        r["external_work"].append(work)
+        r["constraint_residual"].append(float(np.max(np.abs(s.constraint_value(q, t)))) if s.n_constraints else 0.0)
+        r["velocity_constraint_residual"].append(vres)
+        r["newton_iterations"].append(iterations)
+        r["prescribed_force"].append(np.array(state.prescribed_force, dtype=float))
+        if self.with_momentum is None:
+            self.with_momentum = s.linear_momentum(q, v) is not None
+        if self.with_momentum:
+            r["linear_momentum"].append(s.linear_momentum(q, v))
+            r["angular_momentum"].append(s.angular_momentum(q, v))
+        for k, val in s.evaluate_probes(t, q, v).items():
+            self.probes[k].append(val)
+
+    def result(self, **meta):
+        r = {k: np.asarray(val, dtype=float) for k, val in self.rows.items()}
+        r["newton_iterations"] = np.asarray(self.rows["newton_iterations"], dtype=int)
+        kin, pot = r["kinetic"], r["potential"]
+        if not self.with_momentum:
+            r["linear_momentum"] = None
+            r["angular_momentum"] = None
+        return Result(total_energy=kin + pot, probes={k: np.asarray(v) for k, v in self.probes.items()},
+                      **r, **meta)
+
+
+def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newton=None, record_every=1,
+             output=(), progress=False, max_halvings=8):
+    """Integrate a scene in time.
+
+    Parameters
+    ----------
+    scene : Scene
+    t_end : float
+        End time, s (≥ 0).
+    dt : float
+        Step, s (> 0). The last step is shortened to land on t_end.
+    integrator : str or Integrator
+        ``"energy-momentum"`` (default), ``"trapezoidal"`` or ``"generalized-alpha"``.
+    rho_inf : float, optional
+        Spectral radius for generalized-α (default 0.9).
+    newton : NewtonSettings, optional
+    record_every : int
+        Record every n-th step (the first and last are always recorded).
+    output : sequence
+        Sinks with ``write(scene, t, q, v)`` and ``close()``, called at the
+        recorded steps (e.g. :class:`skfem_flex.output.VTKSeries`).
+    progress : bool
+        Show a tqdm progress bar on stderr.
+    max_halvings : int
+        A step whose Newton iteration fails is split in two, recursively,
+        at most this deep, before the run is given up.
+
+    Returns
+    -------
+    Result
+
+    Raises
+    ------
+    ValueError
+        On bad arguments or inconsistent initial conditions.
+    ConvergenceError
+        When a step fails even after halving; ``exc.result`` holds the
+        history up to the last good step, and output sinks keep what they
+        wrote.
+    """
+    t_end, dt = float(t_end), float(dt)
+    if not math.isfinite(dt) or dt <= 0:
+        raise ValueError(f"dt must be finite and positive, got {dt!r}")
+    if not math.isfinite(t_end) or t_end < 0:
+        raise ValueError(f"t_end must be finite and >= 0, got {t_end!r}")
+    if int(record_every) < 1:
+        raise ValueError(f"record_every must be >= 1, got {record_every!r}")
+    scheme = make_integrator(integrator, rho_inf=rho_inf, newton=newton)
+    q, v = scene.initial_state()
+    check_initial_state(scene, q, v)
+    state = scheme.start(scene, State(0.0, q, v))
+    n_steps = int(math.ceil(t_end / dt - 1e-9)) if t_end > 0 else 0
+    rec = _Recorder(scene)
+    sinks = list(output)
+    rec.record(state, 0.0, 0, 0.0)
+    for s in sinks:
+        s.write(scene, state.t, state.q, state.v)
+    work, halvings = 0.0, 0
+    bar = None
+    if progress:
+        from tqdm import tqdm
+        bar = tqdm(total=n_steps, unit="step", desc=f"{scene.name} [{scheme.name}]", leave=False)
+    start = time.perf_counter()
+    meta = dict(scheme=scheme.name, dt=dt)
+    step = 0
+    try:
+        for step in range(1, n_steps + 1):
+            h = min(dt, t_end - state.t) if step == n_steps else dt
+            state, w, its, vres, nh = _advance(scheme, scene, state, h, max_halvings)
+            work += w
+            halvings += nh
+            if step % record_every == 0 or step == n_steps:
+                rec.record(state, work, its, vres)
+                for s in sinks:
+                    s.write(scene, state.t, state.q, state.v)
+            if bar is not None:
+                bar.update(1)
+                if step % 50 == 0:
+                    bar.set_postfix(t=f"{state.t:.3g}", newton=its)
+    except SimulationError as exc:
+        exc.args = (f"{exc.args[0]} [step {step} of {n_steps}]",) + exc.args[1:]
+        exc.info.update(step=step, time=state.t)
+        res = rec.result(wall_time=time.perf_counter() - start, steps=step - 1, halvings=halvings,
+                         completed=False, **meta)
+        exc.result = res
+        raise
+    finally:
+        if bar is not None:
+            bar.close()
+        for s in sinks:
+            s.close()
+    return rec.result(wall_time=time.perf_counter() - start, steps=n_steps, halvings=halvings, **meta)
+
+
+def _advance(scheme, scene, state, dt, depth):
+    """One step of size dt, split in halves (recursively) when Newton fails."""
+    try:
+        new, info = scheme.step(scene, state, dt)
+        if not (np.all(np.isfinite(new.q)) and np.all(np.isfinite(new.v))):
+            raise ConvergenceError(f"{scheme.name}: state is not finite at t = {state.t + dt:.6g} s")
+        return new, info.work, info.iterations, info.velocity_residual, 0
+    except ConvergenceError as exc:
+        if depth <= 0:
+            raise ConvergenceError(f"{exc} — gave up at t = {state.t:.6g} s after halving the step "
+                                   f"down to {dt:.3g} s", **exc.info) from None
+        mid, w1, i1, _, n1 = _advance(scheme, scene, state, 0.5 * dt, depth - 1)
+        end, w2, i2, vres, n2 = _advance(scheme, scene, mid, 0.5 * dt, depth - 1)
+        return end, w1 + w2, i1 + i2, vres, 1 + n1 + n2

@@ -1,0 +1,166 @@
+"""Time integration (issue 3): oscillators and the pendulum against exact periods and conservation laws."""
+import math
+
+import numpy as np
+import pytest
+from scipy.special import ellipk, gamma
+
+import skfem_flex as sf
+
+
+def quartic_period(m=1.0, k=1.0, u0=1.0):
+    """Exact period of m ü + 2 k u³ = 0 from rest at u0: T = 4 ∫ du / sqrt(2(E − V)/m), V = ½ k u⁴.
+
+    With s = u/u0: T = 4 sqrt(m/k)/u0 · ∫₀¹ (1 − s⁴)^(−1/2) ds = sqrt(m/k)/u0 · Γ(1/4) √π / Γ(3/4).
+    """
+    return math.sqrt(m / k) / u0 * gamma(0.25) * math.sqrt(math.pi) / gamma(0.75)
+
+
+def pendulum_period(length, v0, g):
+    """Exact large-amplitude period 4 sqrt(l/g) K(sin²(θ0/2)) with 1 − cos θ0 = v0²/(2 g l)."""
+    cos0 = 1.0 - v0 ** 2 / (2.0 * g * length)
+    k2 = (1.0 - cos0) / 2.0          # sin²(θ0/2)
+    return 4.0 * math.sqrt(length / g) * ellipk(k2)
+
+
+def crossing_times(t, x, xdot):
+    """Times where x crosses 0 upwards, located by cubic Hermite interpolation on each step (O(dt⁴))."""
+    out = []
+    for i in np.nonzero((x[:-1] < 0) & (x[1:] >= 0))[0]:
+        h = t[i + 1] - t[i]
+        p0, p1, m0, m1 = x[i], x[i + 1], xdot[i] * h, xdot[i + 1] * h
+
+        def herm(s):
+            return ((2 * s ** 3 - 3 * s ** 2 + 1) * p0 + (s ** 3 - 2 * s ** 2 + s) * m0
+                    + (-2 * s ** 3 + 3 * s ** 2) * p1 + (s ** 3 - s ** 2) * m1)
+        lo, hi = 0.0, 1.0
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            if herm(mid) < 0:
+                lo = mid
+            else:
+                hi = mid
+        out.append(t[i] + 0.5 * (lo + hi) * h)
+    return np.array(out)
+
+
+def measured_period(res, coordinate=0):
+    tc = crossing_times(res.t, res.q[:, coordinate], res.v[:, coordinate])
+    return (tc[-1] - tc[0]) / (len(tc) - 1)
+
+
+@pytest.mark.parametrize("fraction", [20, 4])
+def test_quartic_energy_conserved_over_10000_steps(fraction):
+    period = quartic_period()
+    dt = period / fraction
+    res = sf.simulate(sf.scenes.spring_mass(exponent=2), t_end=10000 * dt, dt=dt)
+    assert res.steps == 10000
+    e0 = res.total_energy[0]
+    assert e0 == pytest.approx(0.5)
+    assert np.max(np.abs(res.total_energy - e0)) / e0 < 1e-10
+
+
+def test_quartic_period_converges_at_order_two():
+    period = quartic_period()
+    errors = []
+    fractions = [20, 40, 80, 160]
+    for f in fractions:
+        dt = period / f
+        res = sf.simulate(sf.scenes.spring_mass(exponent=2), t_end=6 * period, dt=dt)
+        errors.append(abs(measured_period(res) - period))
+    rates = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all(np.abs(rates - 2.0) < 0.1), rates
+
+
+def test_linear_oscillator_trapezoidal_equals_energy_scheme():
+    scene = sf.scenes.spring_mass(exponent=1)
+    dt = 0.3
+    em = sf.simulate(scene, t_end=60, dt=dt, integrator="energy-momentum")
+    tr = sf.simulate(scene, t_end=60, dt=dt, integrator="trapezoidal")
+    np.testing.assert_allclose(em.q, tr.q, atol=1e-12)
+    np.testing.assert_allclose(em.v, tr.v, atol=1e-12)
+    for res in (em, tr):
+        assert np.max(np.abs(res.total_energy - 0.5)) < 1e-12
+
+
+def test_generalized_alpha_dissipates_linear_oscillator():
+    scene = sf.scenes.spring_mass(exponent=1)
+    # a coarse step (ω Δt = 2) sits where ρ∞ < 1 damps noticeably
+    res = sf.simulate(scene, t_end=200, dt=2.0, integrator="generalized-alpha", rho_inf=0.5)
+    e = res.total_energy
+    assert e[-1] < 0.5 * e[0]
+    # the algorithmic energy of the linear scheme never grows (stable, dissipative)
+    assert np.all(np.diff(e[::2]) <= 1e-12)
+    undamped = sf.simulate(scene, t_end=200, dt=2.0, integrator="generalized-alpha", rho_inf=1.0)
+    assert undamped.total_energy[-1] > e[-1]
+
+
+@pytest.mark.parametrize("dt", [0.01, 0.05])
+def test_pendulum_constraint_and_energy(dt):
+    res = sf.simulate(sf.scenes.pendulum(), t_end=10.0, dt=dt)
+    assert np.max(res.constraint_residual) <= 1e-10
+    e0 = res.total_energy[0]
+    scale = res.kinetic[0]               # m v0²/2, the energy that moves
+    assert np.max(np.abs(res.total_energy - e0)) / scale <= 1e-10
+    # the rod is always in tension: λ never vanishes
+    assert np.min(np.abs(res.lam[:, 0])) > 1.0
+
+
+def test_pendulum_period_converges_to_elliptic_integral():
+    length, v0, g = 0.5, 1.695, 9.81
+    period = pendulum_period(length, v0, g)
+    errors = []
+    for dt in [0.02, 0.01, 0.005]:
+        res = sf.simulate(sf.scenes.pendulum(length, 1.0, v0, g), t_end=5 * period, dt=dt)
+        errors.append(abs(measured_period(res) - period))
+    rates = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all(np.abs(rates - 2.0) < 0.15), (errors, rates)
+    assert errors[-1] / period < 1e-3
+
+
+def test_pendulum_generalized_alpha_reports_velocity_residual():
+    res = sf.simulate(sf.scenes.pendulum(), t_end=1.0, dt=0.01, integrator="generalized-alpha")
+    assert np.max(res.constraint_residual) <= 1e-10
+    # position-level constraints leave a small, nonzero velocity-level residual
+    assert 0.0 < np.max(res.velocity_constraint_residual[1:]) < 1e-2
+
+
+def test_escaping_motion_is_reported_not_nan():
+    """Exponent 1.5: V = ½ k u³ is unbounded below; the motion escapes to −∞ in finite time."""
+    with pytest.raises(sf.ConvergenceError) as info:
+        sf.simulate(sf.scenes.spring_mass(exponent=1.5), t_end=20.0, dt=0.05)
+    msg = str(info.value)
+    assert "energy-momentum" in msg and "t = " in msg and "step" in msg and "iterations" in msg
+    res = info.value.result
+    assert res is not None and not res.completed
+    assert np.all(np.isfinite(res.q)) and np.all(np.isfinite(res.total_energy))
+    assert res.q[-1, 0] < -100.0                      # it did escape
+    # energy held while escaping (relative to the kinetic energy reached)
+    assert abs(res.total_energy[-1] - 0.5) / res.kinetic[-1] < 1e-10
+
+
+@pytest.mark.parametrize("kwargs, word", [
+    (dict(dt=0.0), "dt"), (dict(dt=-1.0), "dt"), (dict(dt=float("nan")), "dt"),
+    (dict(t_end=-1.0), "t_end"), (dict(integrator="euler"), "euler"),
+    (dict(integrator="generalized-alpha", rho_inf=1.5), "rho_inf"),
+    (dict(integrator="generalized-alpha", rho_inf=-0.1), "rho_inf"),
+])
+def test_bad_simulation_arguments(kwargs, word):
+    args = dict(t_end=1.0, dt=0.1)
+    args.update(kwargs)
+    with pytest.raises(ValueError, match=word):
+        sf.simulate(sf.scenes.spring_mass(), **args)
+
+
+def test_nan_initial_state_rejected():
+    with pytest.raises(ValueError, match="finite"):
+        sf.scenes.spring_mass(u0=float("nan"))
+    with pytest.raises(ValueError, match="finite"):
+        sf.scenes.pendulum(v0=float("nan"))
+
+
+def test_inconsistent_initial_state_rejected():
+    body = sf.PointMass(1.0, [0.0, -0.6], [1.0, 0.0])
+    scene = sf.Scene([body], constraints=[sf.Distance(body, (0, 0), 0.5)])
+    with pytest.raises(ValueError, match="inconsistent"):
+        sf.simulate(scene, 1.0, 0.01)
