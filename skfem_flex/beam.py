@@ -21,6 +21,7 @@ point moment M act through the shape functions evaluated at their point.
 """
 from __future__ import annotations
 
+import numbers
 import warnings
 from dataclasses import dataclass
 
@@ -100,11 +101,20 @@ class ElementQuadrature:
     def from_basis(cls, basis):
         """Read the arrays off a scalar scikit-fem ``CellBasis``."""
         return cls(
-            x=np.array(basis.global_coordinates().value[0]),
+            x=np.array(basis.global_coordinates()[0]),
             dx=np.array(basis.dx),
-            N=np.array([phi[0].value for phi in basis.basis]),
+            N=np.array([np.asarray(phi[0]) for phi in basis.basis]),
             dNdx=np.array([phi[0].grad[0] for phi in basis.basis]),
         )
+
+
+def _coordinate(x, what):
+    """Return ``x`` as a finite float or raise ``ValueError`` naming it."""
+    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (numbers.Real, np.floating, np.integer)):
+        raise ValueError(f"{what}: x must be a real number, got {x!r}")
+    if not np.isfinite(x):
+        raise ValueError(f"{what}: x must be finite, got {x!r}")
+    return float(x)
 
 
 def _check_mesh(mesh):
@@ -315,8 +325,7 @@ class TimoshenkoBeam:
 
     def _point_x(self, x, what):
         """Validate a point coordinate and bring it inside the mesh."""
-        if isinstance(x, bool) or not np.isscalar(x) or not np.isfinite(x):
-            raise ValueError(f"{what}: x must be a finite number, got {x!r}")
+        x = _coordinate(x, what)
         x_min, x_max = self.x_nodes[0], self.x_nodes[-1]
         tol = 1e-9 * self.length
         if not x_min - tol <= x <= x_max + tol:
@@ -428,8 +437,7 @@ class TimoshenkoBeam:
         ValueError
             If no node lies at x (within 1e-9 of the beam length).
         """
-        if isinstance(x, bool) or not np.isscalar(x) or not np.isfinite(x):
-            raise ValueError(f"x must be a finite number, got {x!r}")
+        x = _coordinate(x, "dofs_at")
         nearest = int(np.argmin(np.abs(self.x_nodes - x)))
         if abs(self.x_nodes[nearest] - x) > 1e-9 * self.length:
             raise ValueError(f"no node at x = {x!r}; the nearest is at x = {self.x_nodes[nearest]}")
