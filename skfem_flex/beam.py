@@ -31,15 +31,7 @@ import scipy.sparse.linalg
 import skfem
 from skfem import Basis, ElementLineP1, ElementLineP2, asm, condense, solve
 
-from .forms import (
-    axial,
-    axial_load,
-    bending,
-    rotary_mass,
-    shear,
-    translational_mass,
-    transverse_load,
-)
+from . import forms
 from .section import Section
 
 __all__ = ["TimoshenkoBeam", "ElementQuadrature", "gauss_line"]
@@ -294,9 +286,9 @@ class TimoshenkoBeam:
         if self._stiffness is None:
             s = self.section
             K = (
-                asm(axial, self.basis, EA=s.EA)
-                + asm(bending, self.basis, EI=s.EI)
-                + asm(shear, self.shear_basis, kGA=s.kGA)
+                asm(forms.axial, self.basis, EA=s.EA)
+                + asm(forms.bending, self.basis, EI=s.EI)
+                + asm(forms.shear, self.shear_basis, kGA=s.kGA)
             )
             self._stiffness = K.tocsr()
         return self._stiffness
@@ -314,8 +306,8 @@ class TimoshenkoBeam:
         """
         if self._mass is None:
             s = self.section
-            M = asm(translational_mass, self.basis, rhoA=s.rhoA) + asm(
-                rotary_mass, self.basis, rhoI=s.rhoI
+            M = asm(forms.translational_mass, self.basis, rhoA=s.rhoA) + asm(
+                forms.rotary_mass, self.basis, rhoI=s.rhoI
             )
             self._mass = M.tocsr()
         return self._mass
@@ -409,9 +401,9 @@ class TimoshenkoBeam:
         """
         vector = np.zeros(self.n_dofs)
         if f is not None:
-            vector += asm(axial_load(f), self.basis)
+            vector += asm(forms.axial_load(f), self.basis)
         if p is not None:
-            vector += asm(transverse_load(p), self.basis)
+            vector += asm(forms.transverse_load(p), self.basis)
         for name, spec in (("h", h), ("Q", Q), ("M", M)):
             for x, value in self._pairs(name, spec):
                 vector += self.point_load(x, **{name: value})

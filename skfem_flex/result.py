@@ -1,7 +1,10 @@
 """Result of a simulation: time histories as arrays."""
 from __future__ import annotations
 
+import json
+import os
 from dataclasses import dataclass, field, fields
+from pathlib import Path
 
 import numpy as np
 
@@ -87,3 +90,136 @@ class Result:
     def array_fields(self):
         """Names of the array-valued attributes."""
         return [f.name for f in fields(self) if isinstance(getattr(self, f.name), np.ndarray)]
+
+    # ----------------------------------------------------------- persistence
+    def save(self, path):
+        """Write every field to a NumPy ``.npz`` archive (written to a temporary file, then renamed).
+
+        Arrays are stored as they are (exact round trip, dtype kept); scalars,
+        strings, None and the layout of dicts (``probes`` and any other
+        dict-of-arrays field) go into a JSON header. Generic over the
+        dataclass fields, so fields added later are saved too.
+
+        Parameters
+        ----------
+        path : str or Path
+            ``.npz`` is appended when the name has another suffix.
+
+        Returns
+        -------
+        Path
+            The file written.
+
+        Raises
+        ------
+        TypeError
+            If a field holds a value that is neither an array, a number, a
+            string, None, nor a dict/list/tuple of those.
+        """
+        path = Path(path)
+        if path.suffix != ".npz":
+            path = path.with_name(path.name + ".npz")
+        arrays = {}
+        spec = {"format": _RESULT_FORMAT,
+                "fields": {f.name: _encode(getattr(self, f.name), arrays, f.name) for f in fields(self)}}
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        with open(tmp, "wb") as fh:
+            np.savez(fh, __result__=np.array(json.dumps(spec)), **arrays)
+        os.replace(tmp, path)
+        return path
+
+    @classmethod
+    def load(cls, path):
+        """Read a :class:`Result` written by :meth:`save`.
+
+        Fields missing from the file take their defaults; fields the file has
+        but this class does not know are ignored.
+
+        Raises
+        ------
+        ValueError
+            If the file is not a saved Result or lacks a required field.
+        """
+        with np.load(path, allow_pickle=False) as z:
+            if "__result__" not in z.files:
+                raise ValueError(f"{path!s} is not a saved skfem_flex Result (no __result__ header)")
+            spec = json.loads(str(z["__result__"]))
+            stored = spec.get("fields", {})
+            kwargs = {}
+            for f in fields(cls):
+                if f.name in stored:
+                    kwargs[f.name] = _decode(stored[f.name], z)
+            try:
+                return cls(**kwargs)
+            except TypeError as exc:
+                raise ValueError(f"{path!s} does not hold a complete Result: {exc}") from None
+
+    def probes_to_csv(self, path):
+        """Write the probe histories as CSV: a column ``t`` (s), then one per probe component.
+
+        A scalar probe gives a column named after it, a vector probe columns
+        ``name[0]``, ``name[1]``, ... (higher dimensions flattened in C order).
+        Numbers are written with 17 significant digits.
+
+        Returns
+        -------
+        Path
+        """
+        path = Path(path)
+        names, cols = ["t"], [np.asarray(self.t, dtype=float)[:, None]]
+        for k, val in self.probes.items():
+            a = np.asarray(val, dtype=float).reshape(len(self.t), -1)
+            if np.ndim(val) == 1:
+                names.append(str(k))
+            else:
+                names.extend(f"{k}[{i}]" for i in range(a.shape[1]))
+            cols.append(a)
+        np.savetxt(path, np.hstack(cols), delimiter=",", header=",".join(names), comments="", fmt="%.17g")
+        return path
+
+
+_RESULT_FORMAT = "skfem_flex.Result/1"
+
+
+def _encode(value, arrays, where):
+    """JSON description of ``value``; arrays go into ``arrays`` under generated keys."""
+    if value is None:
+        return {"kind": "none"}
+    if isinstance(value, np.ndarray):
+        if value.dtype.hasobject:
+            raise TypeError(f"Result field {where!r} is an object array, which cannot be saved")
+        key = f"a{len(arrays)}"
+        arrays[key] = value
+        return {"kind": "array", "key": key}
+    if isinstance(value, dict):
+        items = []
+        for k, v in value.items():
+            if isinstance(k, (bool, np.bool_)) or not isinstance(k, (str, int, np.integer)):
+                raise TypeError(f"Result field {where!r} has a dict key {k!r}; only str and int keys can be saved")
+            k = k if isinstance(k, str) else int(k)
+            items.append([k, _encode(v, arrays, f"{where}[{k!r}]")])
+        return {"kind": "dict", "items": items}
+    if isinstance(value, (list, tuple)):
+        return {"kind": type(value).__name__, "items": [_encode(v, arrays, f"{where}[{i}]")
+                                                      for i, v in enumerate(value)]}
+    if isinstance(value, np.generic):
+        return {"kind": "scalar", "dtype": value.dtype.str, "value": value.item()}
+    if isinstance(value, (bool, int, float, str)):
+        return {"kind": "value", "value": value}
+    raise TypeError(f"Result field {where!r} holds a {type(value).__name__}, which cannot be saved")
+
+
+def _decode(spec, z):
+    kind = spec["kind"]
+    if kind == "none":
+        return None
+    if kind == "array":
+        return z[spec["key"]]
+    if kind == "dict":
+        return {k: _decode(v, z) for k, v in spec["items"]}
+    if kind in ("list", "tuple"):
+        items = [_decode(v, z) for v in spec["items"]]
+        return items if kind == "list" else tuple(items)
+    if kind == "scalar":
+        return np.dtype(spec["dtype"]).type(spec["value"])
+    return spec["value"]

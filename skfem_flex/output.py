@@ -1,0 +1,345 @@
+"""Output sinks: the deformed system as a VTK time series, written during the run.
+
+:class:`VTKSeries` is what :func:`skfem_flex.simulate` calls at every recorded
+step (``simulate(scene, ..., output=[VTKSeries(out_dir, name, every=10)])``).
+It merges every body's :class:`~skfem_flex.bodies.base.BodyGeometry` into one
+unstructured grid per output step (points in 3-D with z = 0), writes it as a
+``.vtu`` with meshio, and rewrites two collection files that list every step
+written so far with its time:
+
+* ``NAME.pvd``, the ParaView collection (``<DataSet timestep=.. file=../>``);
+* ``NAME.vtu.series``, the JSON series ParaView also opens directly.
+
+"Nothing lost" (DESIGN.md §6): each ``.vtu`` and each collection file is first
+written to a temporary name in the same directory and then renamed over its
+final name (``os.replace``, atomic on POSIX), and a step enters the collection
+only after its ``.vtu`` is in place. A run killed at any moment therefore
+leaves collection files that parse and name only complete ``.vtu`` files.
+
+Arrays in every file (the same set at every step, so ParaView can colour by
+them throughout):
+
+point data
+    ``displacement`` (global, m; a body that gives none gets the motion of its
+    geometry points from the scene's initial state), ``velocity`` (m/s),
+    ``angle`` (cross-section or body angle, rad), plus any other point array a
+    body supplies. Vectors have three components (z = 0).
+cell data
+    ``body_id`` (index of the body in ``scene.bodies``), ``axial_force`` N (N),
+    ``shear_force`` Q (N), ``bending_moment`` M (N m),
+    ``strain_energy_density`` (J/m), plus any other cell array a body supplies.
+
+A body that does not provide an array (a point mass has no bending moment)
+gets zeros there, never NaN.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+from pathlib import Path
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+
+__all__ = ["VTKSeries", "merge_geometry", "read_pvd", "POINT_ARRAYS", "CELL_ARRAYS"]
+
+#: point arrays every written file carries (name -> number of components; 3 = vector)
+POINT_ARRAYS = {"displacement": 3, "velocity": 3, "angle": 1}
+#: cell arrays every written file carries (besides ``body_id``)
+CELL_ARRAYS = {"axial_force": 1, "shear_force": 1, "bending_moment": 1, "strain_energy_density": 1}
+
+
+def _as_components(arr, n_rows, what):
+    """``arr`` as float (n_rows,) or (n_rows, k); 2-component vectors get z = 0."""
+    a = np.asarray(arr, dtype=float)
+    if a.ndim == 0:
+        a = np.full(n_rows, float(a))
+    if a.shape[0] != n_rows:
+        raise ValueError(f"{what} has {a.shape[0]} rows, expected {n_rows}")
+    if a.ndim == 2 and a.shape[1] == 1:
+        a = a[:, 0]
+    if a.ndim == 2 and a.shape[1] == 2:
+        a = np.column_stack([a, np.zeros(n_rows)])
+    return a.reshape(n_rows, -1) if a.ndim > 2 else a
+
+
+def _trailing(a):
+    return a.shape[1:]
+
+
+def merge_geometry(geometries, point_names=None, cell_names=None):
+    """Merge several bodies' geometries into one meshio mesh.
+
+    Parameters
+    ----------
+    geometries : sequence of BodyGeometry
+        One per body, in body order; the body id is the position in this sequence.
+    point_names, cell_names : dict of str to tuple, optional
+        Array names with their trailing shapes that must be present (filled
+        with zeros where a body gives none). Arrays some body supplies are
+        added to these dicts in place, so passing the same dicts on every
+        step keeps the array set stable over a series.
+
+    Returns
+    -------
+    meshio.Mesh
+        Points (n, 3) with z = 0, one cell block per (cell type, nodes per
+        cell) over all bodies, cell data ``body_id`` and the union of the
+        bodies' arrays.
+
+    Raises
+    ------
+    ValueError
+        If a body's arrays do not match its point or cell counts, or two bodies
+        give the same array with different shapes.
+    """
+    import meshio
+
+    point_names = {k: ((3,) if n == 3 else ()) for k, n in POINT_ARRAYS.items()} if point_names is None \
+        else point_names
+    cell_names = {k: ((3,) if n == 3 else ()) for k, n in CELL_ARRAYS.items()} if cell_names is None \
+        else cell_names
+    # normalise every body's arrays and learn the union of names and shapes
+    bodies = []
+    for bid, g in enumerate(geometries):
+        pts = np.asarray(g.points, dtype=float)
+        if pts.ndim != 2 or pts.shape[1] not in (1, 2, 3):
+            raise ValueError(f"body {bid}: geometry points must have shape (n, 2), got {pts.shape}")
+        p3 = np.zeros((pts.shape[0], 3))
+        p3[:, : pts.shape[1]] = pts
+        pdata = {k: _as_components(v, len(p3), f"body {bid}: point array {k!r}") for k, v in g.point_data.items()}
+        blocks = []
+        for j, (ctype, conn) in enumerate(g.cells):
+            conn = np.asarray(conn, dtype=np.int64)
+            if conn.ndim == 1:
+                conn = conn[:, None]
+            cd = {}
+            for k, per_block in g.cell_data.items():
+                cd[k] = _as_components(per_block[j], len(conn), f"body {bid}: cell array {k!r}")
+            blocks.append((str(ctype), conn, cd))
+        for names, arrays in [(point_names, pdata.items())] + [(cell_names, b[2].items()) for b in blocks]:
+            for k, a in arrays:
+                if k not in names:
+                    names[k] = _trailing(a)
+                elif names[k] != _trailing(a):
+                    raise ValueError(f"body {bid}: array {k!r} has shape {_trailing(a)} per entry, "
+                                     f"another body gives {names[k]}")
+        bodies.append((p3, pdata, blocks))
+
+    points, point_data = [], {k: [] for k in point_names}
+    grouped = {}                       # (type, nodes per cell) -> [conn], {name: [arrays]}
+    offset = 0
+    for bid, (p3, pdata, blocks) in enumerate(bodies):
+        points.append(p3)
+        for k, shape in point_names.items():
+            point_data[k].append(pdata[k] if k in pdata else np.zeros((len(p3),) + shape))
+        for ctype, conn, cd in blocks:
+            key = (ctype, conn.shape[1])
+            if key not in grouped:
+                grouped[key] = ([], {k: [] for k in cell_names}, [])
+            conns, cdata, ids = grouped[key]
+            conns.append(conn + offset)
+            ids.append(np.full(len(conn), bid, dtype=np.int32))
+            for k, shape in cell_names.items():
+                cdata[k].append(cd[k] if k in cd else np.zeros((len(conn),) + shape))
+        offset += len(p3)
+
+    cells, cell_data = [], {"body_id": []}
+    cell_data.update({k: [] for k in cell_names})
+    for (ctype, _), (conns, cdata, ids) in grouped.items():
+        cells.append((ctype, np.concatenate(conns)))
+        cell_data["body_id"].append(np.concatenate(ids))
+        for k in cell_names:
+            cell_data[k].append(np.concatenate(cdata[k]))
+    return meshio.Mesh(np.concatenate(points) if points else np.zeros((0, 3)), cells,
+                       point_data={k: np.concatenate(v) for k, v in point_data.items()},
+                       cell_data=cell_data)
+
+
+def _atomic_write_text(path, text):
+    """Write ``text`` to ``path`` through a temporary file and a rename."""
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    with open(tmp, "w", encoding="utf-8") as fh:
+        fh.write(text)
+    os.replace(tmp, path)
+
+
+def read_pvd(path):
+    """[(time, file path)] listed by a ``.pvd`` collection, paths resolved next to it."""
+    import xml.etree.ElementTree as ET
+
+    path = Path(path)
+    root = ET.parse(path).getroot()
+    return [(float(d.get("timestep")), path.parent / d.get("file")) for d in root.iter("DataSet")]
+
+
+class VTKSeries:
+    """Output sink writing the deformed system as a VTK time series.
+
+    Parameters
+    ----------
+    directory : str or Path
+        Created if missing. Files: ``NAME_000000.vtu``, ``NAME_000001.vtu``,
+        ... (numbered in the order written), ``NAME.pvd`` and ``NAME.vtu.series``.
+    name : str, optional
+        Base name of the files; default ``scene.name`` at the first write.
+    every : int, optional
+        Write every n-th call of :meth:`write` (the first call, i.e. the
+        initial state, is always written). Default 1 when ``times`` is not given.
+    times : sequence of float, optional
+        Output times, s: each is written at the first call with t ≥ time
+        (to a relative tolerance of 1e-9 of the step). Not together with ``every``.
+    clean : bool
+        Remove ``NAME_*.vtu`` files (and temporary files) of an earlier series
+        of the same name in ``directory`` before the first write (default True),
+        so the directory holds exactly the series its ``.pvd`` lists.
+
+    Notes
+    -----
+    With ``every``, the state of the last call is written by :meth:`close`
+    if the selection skipped it, so the series ends at the last recorded
+    state (also when a run stops on a ConvergenceError). With ``times``,
+    exactly the requested times are written (those the run reaches).
+    ``simulate`` calls :meth:`write` at every recorded step and :meth:`close`
+    at the end. One sink serves one run.
+
+    Attributes
+    ----------
+    written : list of (float, Path)
+        (time, file) of every step written so far.
+    """
+
+    def __init__(self, directory, name=None, every=None, times=None, clean=True):
+        if every is not None and times is not None:
+            raise ValueError("give either every or times to VTKSeries, not both")
+        if every is None and times is None:
+            every = 1
+        if every is not None:
+            if isinstance(every, bool) or int(every) != every or int(every) < 1:
+                raise ValueError(f"every must be an integer >= 1, got {every!r}")
+            every = int(every)
+        if times is not None:
+            times = np.sort(np.asarray(times, dtype=float).ravel())
+            if not np.all(np.isfinite(times)):
+                raise ValueError(f"output times must be finite, got {times!r}")
+        if name is not None and (not isinstance(name, str) or not re.fullmatch(r"[\w.+-]+", name)):
+            raise ValueError(f"name must be a plain file name (letters, digits, _ . + -), got {name!r}")
+        self.directory = Path(directory)
+        self.name = name
+        self.every = every
+        self.times = times
+        self.clean = clean
+        self.written = []
+        self._calls = 0
+        self._next_time = 0
+        self._pending = None
+        self._closed = False
+        self._reference = None
+        self._point_names = None
+        self._cell_names = None
+
+    # ----------------------------------------------------------------- paths
+    @property
+    def pvd_path(self):
+        """Path of the ``.pvd`` collection (None before the first write when no name was given)."""
+        return None if self.name is None else self.directory / f"{self.name}.pvd"
+
+    @property
+    def series_path(self):
+        """Path of the ``.vtu.series`` JSON file."""
+        return None if self.name is None else self.directory / f"{self.name}.vtu.series"
+
+    def _start(self, scene):
+        if self.name is None:
+            self.name = re.sub(r"[^\w.+-]", "_", str(scene.name)) or "scene"
+        self.directory.mkdir(parents=True, exist_ok=True)
+        if self.clean:
+            # an empty collection first, so that no collection ever names a removed file
+            self._write_collections()
+            name = re.escape(self.name)
+            pattern = re.compile(rf"^(\.?{name}_\d+\.vtu|\.{name}_\d+\.vtu\.\d+\.tmp"
+                                 rf"|\.{name}\.(pvd|vtu\.series)\.\d+\.tmp)$")
+            for p in self.directory.iterdir():
+                if pattern.match(p.name):
+                    p.unlink()
+        q0, v0 = scene.initial_state()
+        self._reference = [np.asarray(b.geometry(q0[scene.slice(b)], v0[scene.slice(b)]).points, dtype=float)
+                           for b in scene.bodies]
+        self._point_names = {k: ((3,) if n == 3 else ()) for k, n in POINT_ARRAYS.items()}
+        self._cell_names = {k: ((3,) if n == 3 else ()) for k, n in CELL_ARRAYS.items()}
+
+    # ------------------------------------------------------------------ sink
+    def _selected(self, t):
+        if self.every is not None:
+            return (self._calls - 1) % self.every == 0
+        tol = 1e-9 * max(1.0, abs(t))
+        hit = False
+        while self._next_time < len(self.times) and t >= self.times[self._next_time] - tol:
+            hit = True
+            self._next_time += 1
+        return hit
+
+    def write(self, scene, t, q, v):
+        """Called by ``simulate`` at every recorded step; writes the ones selected by ``every``/``times``."""
+        if self._closed:
+            raise RuntimeError("this VTKSeries is closed; make a new sink for each run")
+        if self._reference is None:
+            self._start(scene)
+        self._calls += 1
+        if self._selected(t):
+            self._write_step(scene, t, q, v)
+            self._pending = None
+        else:
+            self._pending = (scene, float(t), np.array(q, dtype=float), np.array(v, dtype=float))
+
+    def close(self):
+        """Write the last state if it was skipped, and finish. Safe to call twice."""
+        if self._closed:
+            return
+        if self._pending is not None and self.every is not None:
+            self._write_step(*self._pending)
+            self._pending = None
+        self._closed = True
+
+    def mesh(self, scene, q, v):
+        """The merged meshio mesh of the scene at (q, v), as it would be written."""
+        if self._reference is None:
+            self._start(scene)
+        geoms = []
+        for b, ref in zip(scene.bodies, self._reference):
+            sl = scene.slice(b)
+            g = b.geometry(q[sl], v[sl])
+            if "displacement" not in g.point_data:
+                pts = np.asarray(g.points, dtype=float)
+                disp = pts - ref if ref.shape == pts.shape else np.zeros_like(pts)
+                g = type(g)(g.points, g.cells, dict(g.point_data, displacement=disp), g.cell_data)
+            geoms.append(g)
+        return merge_geometry(geoms, self._point_names, self._cell_names)
+
+    def _write_step(self, scene, t, q, v):
+        import meshio
+
+        mesh = self.mesh(scene, np.asarray(q, dtype=float), np.asarray(v, dtype=float))
+        index = len(self.written)
+        final = self.directory / f"{self.name}_{index:06d}.vtu"
+        tmp = self.directory / f".{final.name}.{os.getpid()}.tmp"
+        meshio.write(tmp, mesh, file_format="vtu")
+        os.replace(tmp, final)
+        self.written.append((float(t), final))
+        self._write_collections()
+
+    def _write_collections(self):
+        lines = ['<?xml version="1.0"?>',
+                 '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
+                 "  <Collection>"]
+        for t, p in self.written:
+            lines.append(f'    <DataSet timestep="{t!r}" group="" part="0" file={quoteattr(p.name)}/>')
+        lines += ["  </Collection>", "</VTKFile>", ""]
+        _atomic_write_text(self.pvd_path, "\n".join(lines))
+        entries = ",\n".join(f"    {json.dumps({'name': p.name, 'time': t if math.isfinite(t) else 0.0})}"
+                              for t, p in self.written)
+        _atomic_write_text(self.series_path,
+                           '{\n  "file-series-version": "1.0",\n  "files": [\n' + entries + "\n  ]\n}\n")

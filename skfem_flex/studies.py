@@ -1,0 +1,362 @@
+"""Studies: error against run time (work–precision) and stability on stiff and extreme cases.
+
+Both studies run catalogue scenes through :func:`~skfem_flex.simulate.simulate`,
+catch every failure (a failed run is a row with its message and the time it
+happened, never a crash) and return plain tables that the command line
+writes as Markdown, CSV and PNG.
+"""
+from __future__ import annotations
+
+import csv
+import math
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+from scipy.special import ellipk, gamma
+
+from .integrators import SimulationError
+from .simulate import simulate
+
+__all__ = ["WorkPrecisionRow", "StabilityRow", "work_precision", "stability", "write_table",
+           "plot_work_precision", "WORK_PRECISION_CASES", "STABILITY_CASES", "oscillator_period",
+           "pendulum_period", "upward_crossings", "period_error", "history_error"]
+
+SCHEMES = ("energy-momentum", "trapezoidal", "generalized-alpha")
+
+
+# --------------------------------------------------------------- references
+def oscillator_period(exponent=2.0, m=1.0, k=1.0, u0=1.0):
+    """Exact period of m ü + n k u^(2n−1) = 0 from rest at u0 > 0 (V = ½ k u^(2n), 2n even).
+
+    T = 4 ∫₀^u0 du / sqrt(2 (V(u0) − V(u))/m) = 4 sqrt(m/k) u0^(1−n) ∫₀¹ (1 − s^(2n))^(−1/2) ds,
+    and ∫₀¹ (1 − s^p)^(−1/2) ds = Γ(1/p) Γ(1/2) / (p Γ(1/p + 1/2)).
+    """
+    p = 2.0 * exponent
+    if abs(p - round(p)) > 1e-12 or round(p) % 2:
+        raise ValueError(f"oscillator_period needs an even power 2n (bounded potential), got exponent {exponent!r}")
+    integral = gamma(1.0 / p) * math.sqrt(math.pi) / (p * gamma(1.0 / p + 0.5))
+    return 4.0 * math.sqrt(m / k) * u0 ** (1.0 - exponent) * integral
+
+
+def pendulum_period(length=0.5, v0=1.695, g=9.81):
+    """Exact period of a pendulum started at the bottom with speed v0: 4 sqrt(l/g) K(sin²(θ0/2))."""
+    k2 = v0 ** 2 / (4.0 * g * length)          # sin²(θ0/2) = (1 − cos θ0)/2
+    if k2 >= 1.0:
+        raise ValueError(f"v0 = {v0} makes the pendulum go over the top: no period")
+    return 4.0 * math.sqrt(length / g) * ellipk(k2)
+
+
+def upward_crossings(t, x, xdot):
+    """Times at which x crosses zero upwards, by cubic Hermite interpolation within each step."""
+    out = []
+    for i in np.nonzero((x[:-1] < 0) & (x[1:] >= 0))[0]:
+        h = t[i + 1] - t[i]
+        c = [x[i], xdot[i] * h, x[i + 1], xdot[i + 1] * h]
+        # Hermite cubic in s ∈ [0, 1] written as a polynomial, roots by numpy
+        poly = np.array([2 * c[0] + c[1] - 2 * c[2] + c[3], -3 * c[0] - 2 * c[1] + 3 * c[2] - c[3], c[1], c[0]])
+        roots = [r.real for r in np.roots(poly) if abs(r.imag) < 1e-9 and -1e-9 <= r.real <= 1 + 1e-9]
+        if roots:
+            out.append(t[i] + min(roots) * h)
+    return np.array(out)
+
+
+def period_error(exact, coordinate=0):
+    """An error function: |measured mean period − exact| / exact from upward zero crossings."""
+    def err(result):
+        tc = upward_crossings(result.t, result.q[:, coordinate], result.v[:, coordinate])
+        if tc.size < 2:
+            return float("nan")
+        return abs((tc[-1] - tc[0]) / (tc.size - 1) - exact) / exact
+    return err
+
+
+def history_error(reference, probe):
+    """An error function: max over time of |probe − reference| / max |reference|.
+
+    ``reference`` is a Result (interpolated with cubic splines onto the
+    run's times) or a callable t -> value.
+    """
+    if callable(reference):
+        ref_fn = reference
+    else:
+        ref_fn = CubicSpline(reference.t, reference.probes[probe], axis=0)
+
+    def err(result):
+        ref = np.asarray(ref_fn(result.t))
+        val = result.probes[probe]
+        return float(np.max(np.abs(val - ref)) / max(np.max(np.abs(ref)), 1e-300))
+    return err
+
+
+# --------------------------------------------------------------- work–precision
+@dataclass
+class WorkPrecisionRow:
+    """One run of a work–precision study."""
+
+    case: str
+    scheme: str
+    dt: float
+    steps: int
+    wall_time: float
+    error: float
+    newton_per_step: float
+    message: str = ""
+
+
+@dataclass
+class WorkPrecisionCase:
+    """A scene factory with a run length and a way to measure the error of a run.
+
+    ``error`` is either a callable(result) -> float, or None: then a
+    reference run at ``reference_dt`` with the energy-momentum scheme is
+    made (and saved when the study has an output folder) and the error is
+    the history error of ``probe`` against it.
+    """
+
+    scene: Callable
+    t_end: float
+    dts: tuple
+    error: Callable = None
+    probe: str = ""
+    reference_dt: float = 0.0
+    description: str = ""
+
+
+def _pendulum_case():
+    from .scenes import pendulum
+    return WorkPrecisionCase(pendulum, 5 * pendulum_period(), (0.05, 0.02, 0.01, 0.005, 0.002),
+                             error=period_error(pendulum_period()),
+                             description="period error against 4 sqrt(l/g) K(k²)")
+
+
+def _quartic_case():
+    from .scenes import spring_mass
+    period = oscillator_period(2.0)
+    return WorkPrecisionCase(spring_mass, 10 * period, tuple(period / f for f in (10, 20, 40, 80, 160)),
+                             error=period_error(period),
+                             description="period error against the Gamma-function period")
+
+
+#: name -> callable returning a WorkPrecisionCase (built lazily so that imports stay light)
+WORK_PRECISION_CASES = {"spring_mass": _quartic_case, "pendulum": _pendulum_case}
+
+
+def work_precision(case, schemes=SCHEMES, dts=None, out_dir=None, name="case", progress=None):
+    """Error against run time for every scheme and step.
+
+    Parameters
+    ----------
+    case : WorkPrecisionCase or str
+        A case or the name of one in ``WORK_PRECISION_CASES``.
+    schemes : sequence of str
+    dts : sequence of float, optional
+        Steps (s); default the case's.
+    out_dir : path, optional
+        Where a reference run is saved (``reference_<name>.npz``) and reused.
+    progress : callable(str), optional
+        Called with a line per run.
+
+    Returns
+    -------
+    list of WorkPrecisionRow
+        Failed runs have ``error = nan`` and their message.
+    """
+    if isinstance(case, str):
+        if case not in WORK_PRECISION_CASES:
+            raise ValueError(f"no work-precision case {case!r}; known: {sorted(WORK_PRECISION_CASES)}")
+        name, case = case, WORK_PRECISION_CASES[case]()
+    dts = tuple(case.dts if dts is None else dts)
+    if not dts or any((not np.isfinite(d)) or d <= 0 for d in dts):
+        raise ValueError(f"dts must be positive steps, got {dts!r}")
+    error_fn = case.error
+    if error_fn is None:
+        ref = _reference(case, out_dir, name)
+        error_fn = history_error(ref, case.probe)
+    rows = []
+    for scheme in schemes:
+        for dt in dts:
+            scene = case.scene()
+            try:
+                res = simulate(scene, case.t_end, dt, integrator=scheme)
+                err, msg = float(error_fn(res)), ""
+                if not np.isfinite(err):
+                    msg = "error not measurable (no full period)"
+            except SimulationError as exc:
+                res, err, msg = exc.result, float("nan"), str(exc)
+            steps = max(int(res.steps), 1)
+            rows.append(WorkPrecisionRow(name, scheme, float(dt), int(res.steps), float(res.wall_time), err,
+                                         float(np.sum(res.newton_iterations)) / steps, msg))
+            if progress:
+                progress(f"{name} {scheme} dt={dt:.3g}: error {err:.3g}, {res.wall_time:.3g} s")
+    return rows
+
+
+def _reference(case, out_dir, name):
+    """A fine energy-momentum run (loaded from out_dir if saved there before)."""
+    from .result import Result
+    path = Path(out_dir) / f"reference_{name}.npz" if out_dir else None
+    if path is not None and path.exists() and hasattr(Result, "load"):
+        return Result.load(path)
+    dt = case.reference_dt or min(case.dts) / 8.0
+    ref = simulate(case.scene(), case.t_end, dt, integrator="energy-momentum")
+    if path is not None and hasattr(ref, "save"):
+        path.parent.mkdir(parents=True, exist_ok=True)
+        ref.save(path)
+    return ref
+
+
+def plot_work_precision(rows, path, title="work–precision"):
+    """Log–log plot of error against wall time, one line per (case, scheme); returns the path."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6.5, 4.5), constrained_layout=True)
+    keys = sorted({(r.case, r.scheme) for r in rows})
+    for case, scheme in keys:
+        sel = [r for r in rows if r.case == case and r.scheme == scheme and np.isfinite(r.error) and r.error > 0]
+        if sel:
+            ax.loglog([r.wall_time for r in sel], [r.error for r in sel], "o-",
+                      label=f"{case}: {scheme}" if len({k[0] for k in keys}) > 1 else scheme)
+    ax.set_xlabel("wall time (s)")
+    ax.set_ylabel("relative error")
+    ax.set_title(title)
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+# --------------------------------------------------------------- stability
+@dataclass
+class StabilityRow:
+    """One case × scheme cell of the stability matrix."""
+
+    case: str
+    scheme: str
+    bounded: bool
+    completed: bool
+    t_reached: float
+    max_energy_error: float
+    max_constraint_residual: float
+    newton_per_step: float
+    wall_time: float
+    message: str = ""
+
+
+@dataclass
+class StabilityCase:
+    """A scene factory run to t_end with step dt; ``energy_scale`` callable(result) -> J (default max T+|V|)."""
+
+    scene: Callable
+    t_end: float
+    dt: float
+    description: str = ""
+    energy_scale: Callable = None
+    bound: float = 10.0
+
+
+def _quartic_stability(fraction):
+    from .scenes import spring_mass
+    period = oscillator_period(2.0)
+    return StabilityCase(spring_mass, 50 * period, period / fraction, f"quartic oscillator, Δt = T/{fraction}")
+
+
+def _upright_pendulum():
+    from .scenes import pendulum
+    # v0 just below the speed that reaches the top (2 sqrt(g l)): released near the upright position
+    v0 = 0.9999 * 2.0 * math.sqrt(9.81 * 0.5)
+    return StabilityCase(lambda: pendulum(v0=v0), 10.0, 0.02, "pendulum reaching 179° (near upright), Δt = 0.02 s")
+
+
+def _long_pendulum():
+    from .scenes import pendulum
+    return StabilityCase(pendulum, 1000.0, 0.01, "pendulum, 10⁵ steps, Δt = 0.01 s")
+
+
+#: name -> callable returning a StabilityCase
+STABILITY_CASES = {
+    "quartic T/2": lambda: _quartic_stability(2),
+    "quartic T/4": lambda: _quartic_stability(4),
+    "quartic T/10": lambda: _quartic_stability(10),
+    "quartic T/50": lambda: _quartic_stability(50),
+    "pendulum near upright": _upright_pendulum,
+    "pendulum 1e5 steps": _long_pendulum,
+}
+
+
+def stability(cases=None, schemes=SCHEMES, progress=None, quick=False):
+    """The stability matrix: every case under every scheme.
+
+    Parameters
+    ----------
+    cases : sequence of str, optional
+        Names in ``STABILITY_CASES`` (default: all).
+    schemes : sequence of str
+    progress : callable(str), optional
+    quick : bool
+        Shorten every run to 1/20 of its length (for tests and smoke runs).
+
+    Returns
+    -------
+    list of StabilityRow
+        A run is *bounded* when it completed, its state stayed finite and its
+        energy error stayed below ``bound`` times the energy scale. A failure
+        is a row with ``completed = False``, the time reached and the message.
+    """
+    names = list(STABILITY_CASES) if cases is None else list(cases)
+    for n in names:
+        if n not in STABILITY_CASES:
+            raise ValueError(f"no stability case {n!r}; known: {sorted(STABILITY_CASES)}")
+    rows = []
+    for n in names:
+        case = STABILITY_CASES[n]()
+        t_end = case.t_end / 20.0 if quick else case.t_end
+        for scheme in schemes:
+            start = time.perf_counter()
+            try:
+                res, msg = simulate(case.scene(), t_end, case.dt, integrator=scheme), ""
+            except SimulationError as exc:
+                res, msg = exc.result, str(exc)
+            wall = time.perf_counter() - start
+            scale = case.energy_scale(res) if case.energy_scale else float(
+                np.max(np.abs(res.kinetic) + np.abs(res.potential)))
+            e_err = float(np.max(np.abs(res.energy_balance_error))) / max(scale, 1e-300)
+            finite = bool(np.all(np.isfinite(res.q)))
+            bounded = bool(res.completed and finite and e_err < case.bound)
+            steps = max(int(res.steps), 1)
+            rows.append(StabilityRow(n, scheme, bounded, bool(res.completed), float(res.t[-1]), e_err,
+                                     float(np.max(res.constraint_residual)),
+                                     float(np.sum(res.newton_iterations)) / steps, wall, msg))
+            if progress:
+                progress(f"{n} / {scheme}: {'bounded' if bounded else 'NOT bounded'}, energy error {e_err:.2g}")
+    return rows
+
+
+# ---------------------------------------------------------------- tables
+def write_table(rows, stem):
+    """Write rows (dataclasses) as ``stem.csv`` and ``stem.md``; returns the two paths."""
+    stem = Path(stem)
+    stem.parent.mkdir(parents=True, exist_ok=True)
+    dicts = [asdict(r) for r in rows]
+    cols = list(dicts[0]) if dicts else []
+    with open(stem.with_suffix(".csv"), "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=cols)
+        w.writeheader()
+        w.writerows(dicts)
+
+    def fmt(v):
+        if isinstance(v, float):
+            return f"{v:.3g}"
+        return str(v).replace("|", "/").replace("\n", " ")
+    lines = ["| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+    lines += ["| " + " | ".join(fmt(d[c]) for c in cols) + " |" for d in dicts]
+    stem.with_suffix(".md").write_text("\n".join(lines) + "\n")
+    return stem.with_suffix(".csv"), stem.with_suffix(".md")

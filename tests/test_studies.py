@@ -1,0 +1,66 @@
+"""Studies (issue 8) on tiny settings: references, work–precision rows, stability matrix, tables."""
+import math
+
+import numpy as np
+import pytest
+
+import skfem_flex as sf
+from skfem_flex import studies
+
+
+def test_oscillator_period_references():
+    # linear: 2π sqrt(m/k); quartic: Γ(1/4)√π / Γ(3/4) (issue 3's formula) for m = k = u0 = 1
+    assert studies.oscillator_period(1.0, m=2.0, k=8.0) == pytest.approx(2 * math.pi * 0.5, rel=1e-14)
+    assert studies.oscillator_period(2.0) == pytest.approx(
+        math.gamma(0.25) * math.sqrt(math.pi) / math.gamma(0.75), rel=1e-12)
+    # direct quadrature of T = 4 ∫ du / sqrt(1 − u⁴) for the quartic case
+    from scipy.integrate import quad
+    val, _ = quad(lambda s: 1.0 / math.sqrt(1.0 - s ** 4), 0.0, 1.0, limit=200)
+    assert studies.oscillator_period(2.0) == pytest.approx(4.0 * val, rel=1e-8)
+    with pytest.raises(ValueError, match="even"):
+        studies.oscillator_period(1.5)
+
+
+def test_pendulum_period_small_amplitude_limit():
+    assert studies.pendulum_period(1.0, 1e-4, 9.81) == pytest.approx(2 * math.pi * math.sqrt(1 / 9.81), rel=1e-8)
+    with pytest.raises(ValueError, match="over the top"):
+        studies.pendulum_period(0.5, 5.0, 9.81)
+
+
+def test_upward_crossings_of_a_sine():
+    t = np.linspace(0, 10, 101)
+    tc = studies.upward_crossings(t, np.sin(2 * t - 0.3), 2 * np.cos(2 * t - 0.3))
+    exact = (0.3 + 2 * np.pi * np.arange(4)) / 2
+    np.testing.assert_allclose(tc, exact[: tc.size], atol=1e-5)
+
+
+def test_work_precision_rows_and_rate(tmp_path):
+    case = studies.WORK_PRECISION_CASES["spring_mass"]()
+    period = studies.oscillator_period(2.0)
+    rows = studies.work_precision(case, schemes=["energy-momentum"], dts=[period / 20, period / 40])
+    assert [r.scheme for r in rows] == ["energy-momentum"] * 2
+    assert all(r.wall_time > 0 and r.steps > 0 and r.message == "" for r in rows)
+    rate = math.log2(rows[0].error / rows[1].error)
+    assert abs(rate - 2.0) < 0.15
+    png = studies.plot_work_precision(rows, tmp_path / "wp.png")
+    assert png.stat().st_size > 1000
+    csv_path, md_path = studies.write_table(rows, tmp_path / "wp")
+    assert md_path.read_text().count("\n") == 4
+    assert "energy-momentum" in csv_path.read_text()
+
+
+def test_stability_matrix_reports_failures_as_rows(monkeypatch):
+    monkeypatch.setitem(studies.STABILITY_CASES, "escaping cubic",
+                        lambda: studies.StabilityCase(lambda: sf.scenes.spring_mass(exponent=1.5), 100.0, 0.05))
+    rows = studies.stability(cases=["quartic T/4", "escaping cubic"], schemes=["energy-momentum", "trapezoidal"],
+                             quick=True)
+    assert len(rows) == 4
+    quartic = [r for r in rows if r.case == "quartic T/4"]
+    em = [r for r in quartic if r.scheme == "energy-momentum"][0]
+    assert em.bounded and em.max_energy_error < 1e-12
+    escaping = [r for r in rows if r.case == "escaping cubic"]
+    for r in escaping:
+        assert not r.completed and not r.bounded
+        assert "t = " in r.message and np.isfinite(r.t_reached) and r.t_reached > 1.0
+    with pytest.raises(ValueError, match="no stability case"):
+        studies.stability(cases=["nope"])
