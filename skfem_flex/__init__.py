@@ -4,15 +4,17 @@ Timoshenko beams (linear, floating frame of reference, geometrically exact),
 rigid bodies and point masses, joined by constraints and integrated in time
 by an energy-conserving scheme, the trapezoidal rule or generalized-α.
 """
-from .bodies import Body, BodyGeometry, PointMass
+from .section import Section
+from .beam import TimoshenkoBeam
+from .bodies import Body, BodyGeometry, BodyPoint, PointMass
 from .constraints import Constraint, Distance, UserConstraint
 from .forces import ForceElement, Gravity, NonlinearSpring
 from .motion import MotionLaw, Prescribed, spin_up_law
 from .scene import Scene
-
-__version__ = "0.1.0"
 from .integrators import (ConvergenceError, EnergyMomentum, GeneralizedAlpha, NewtonSettings, SimulationError,
                           Trapezoidal)
 from .result import Result
 from .simulate import simulate
 from . import scenes
+
+__version__ = "0.1.0"

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+import sys
 import time
 
 import numpy as np
@@ -146,7 +147,10 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
     bar = None
     if progress:
         from tqdm import tqdm
-        bar = tqdm(total=n_steps, unit="step", desc=f"{scene.name} [{scheme.name}]", leave=False)
+        # shown only for runs longer than a second (delay); steps/s is tqdm's rate
+        bar = tqdm(total=n_steps, unit="step", desc=f"{scene.name} [{scheme.name}]", leave=False,
+                   file=sys.stderr, delay=1.0, mininterval=0.25, dynamic_ncols=True)
+        bar_its = bar_steps = 0
     start = time.perf_counter()
     meta = dict(scheme=scheme.name, dt=dt)
     step = 0
@@ -162,8 +166,12 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
                     s.write(scene, state.t, state.q, state.v)
             if bar is not None:
                 bar.update(1)
+                bar_its += its
+                bar_steps += 1
                 if step % 50 == 0:
-                    bar.set_postfix(t=f"{state.t:.3g}", newton=its)
+                    bar.set_postfix_str(f"t={state.t:.4g}/{t_end:.4g} s, Newton {bar_its / bar_steps:.1f}/step",
+                                        refresh=False)
+                    bar_its = bar_steps = 0
     except SimulationError as exc:
         exc.args = (f"{exc.args[0]} [step {step} of {n_steps}]",) + exc.args[1:]
         exc.info.update(step=step, time=state.t)
