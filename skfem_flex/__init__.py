@@ -7,7 +7,14 @@ by an energy-conserving scheme, the trapezoidal rule or generalized-α.
 from .section import Section
 from .beam import TimoshenkoBeam
 from .bodies import Body, BodyGeometry, BodyPoint, PointMass
+from .bodies.floating import DistributedLoad, FloatingBeam
+from .bodies.exact import ElementInversionError, ExactBeam, ExactDistributedLoad, NodalLoad
 from .constraints import Constraint, Distance, UserConstraint
+from .bodies.rigid import RigidBody
+from .constraints import Driver, Pin, Prismatic, Revolute, Slider, Weld
+from .forces import LinearDamper, LinearSpring, PointForce, PointMoment, RotationalDamper, RotationalSpring
+from .initial_conditions import (InconsistentInitialConditionsError, RedundantConstraintsError,
+                                 consistent_initial_state)
 from .forces import ForceElement, Gravity, NonlinearSpring
 from .motion import MotionLaw, Prescribed, spin_up_law
 from .scene import Scene
@@ -15,6 +22,7 @@ from .integrators import (ConvergenceError, EnergyMomentum, GeneralizedAlpha, Ne
                           Trapezoidal)
 from .result import Result
 from .simulate import simulate
+from .output import VTKSeries
 from . import scenes
 
 __version__ = "0.1.0"

@@ -1,24 +1,343 @@
-"""Algebraic constraints Φ(q, t) = 0 adjoined with Lagrange multipliers.
+r"""Algebraic constraints Φ(q, t) = 0 adjoined with Lagrange multipliers.
 
 Sign convention of the equations of motion::
 
     M(q) q̈ + ∇V(q) + Φ_q(q, t)ᵀ λ = Q(q, q̇, t),     Φ(q, t) = 0
 
-A constraint names the ``bodies`` it reads; the scene hands it the
-concatenated coordinates of those bodies. Besides Φ, Φ_q and Φ_t each
-constraint provides a *discrete gradient* D(q0, q1) with
-D (q1 − q0) = Φ(q1) − Φ(q0) exactly, which the energy-conserving scheme uses
-so that constraint forces do no work (second seed paper, §3.1).
+so the generalized force a constraint exerts is −Φ_qᵀ λ. A constraint names
+the ``bodies`` it reads; the scene hands it the concatenated coordinates of
+those bodies. Besides Φ, Φ_q and Φ_t each constraint provides a *discrete
+gradient* D(q0, q1) with D (q1 − q0) = Φ(q1) − Φ(q0) exactly, which the
+energy-conserving scheme uses so that constraint forces do no work (second
+seed paper, §3.1: the constraint is enforced at the end of each step,
+Φ(q_{n+1}) = 0, and the discrete constraint work (Φ_f − Φ_i) λ_m vanishes).
+
+Joints (:class:`Pin`, :class:`Revolute`, :class:`Slider`,
+:class:`Prismatic`, :class:`Weld`, :class:`Driver`) are built from body
+points (``body.point(locator)``, :class:`~skfem_flex.bodies.base.BodyPoint`)
+through a few small *terms* — the difference of two points' positions (or
+of a point and a ground point), a point's angle or a coordinate (linear), a
+constant, a vector turned with a body and a dot product — each with its
+value, Jacobian, Hessian product and an exact discrete gradient. Products
+use Δ(f·g) = Δf·ḡ + f̄·Δg with f̄ the mean of the end values, rotations
+use A(ϑ1) − A(ϑ0) = sinc(Δϑ/2) Δϑ A(ϑ_m) E, so every joint's discrete
+gradient is exact to round-off, whatever the step.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from .bodies.base import check_finite_vector
+from .bodies.base import BodyPoint, check_finite_vector
+from .bodies.rigid import E_MATRIX, dsinc, rotation, sinc
+from .motion import MotionLaw
 
-__all__ = ["Constraint", "Distance", "UserConstraint"]
+__all__ = ["Constraint", "Distance", "UserConstraint", "Pin", "Revolute", "Slider", "Prismatic", "Weld",
+           "Driver", "PointLayout"]
 
 
+def _dense(a):
+    return a.toarray() if hasattr(a, "toarray") else np.asarray(a, dtype=float)
+
+
+# ============================================================== point layout
+class PointLayout:
+    """Bodies touched by a list of body points, each body once, and each point's slice of the local vector.
+
+    Parameters
+    ----------
+    points : sequence of BodyPoint or None
+        ``None`` stands for the ground (no coordinates).
+
+    Attributes
+    ----------
+    bodies : tuple of Body
+        The distinct bodies in order of first appearance.
+    slices : list of slice or None
+        Where each point's body block sits in the concatenated local vector.
+    n : int
+        Length of the local vector.
+    """
+
+    def __init__(self, points):
+        self.bodies, self.slices = [], []
+        offsets, start = [], 0
+        for p in points:
+            if p is None:
+                self.slices.append(None)
+                continue
+            if not isinstance(p, BodyPoint):
+                raise ValueError(f"expected a body point (body.point(...)) or None for the ground, got {p!r}")
+            for b, o in zip(self.bodies, offsets):
+                if b is p.body:
+                    self.slices.append(slice(o, o + b.n_dofs))
+                    break
+            else:
+                self.bodies.append(p.body)
+                offsets.append(start)
+                self.slices.append(slice(start, start + p.body.n_dofs))
+                start += p.body.n_dofs
+        self.bodies = tuple(self.bodies)
+        self.n = start
+
+    @classmethod
+    def of_bodies(cls, bodies):
+        """A layout over whole bodies (no points)."""
+        out = cls([])
+        out.bodies = tuple(bodies)
+        out.slices, start = [], 0
+        for b in out.bodies:
+            out.slices.append(slice(start, start + b.n_dofs))
+            start += b.n_dofs
+        out.n = start
+        return out
+
+    def initial(self):
+        """The concatenated initial coordinates q0 of the bodies."""
+        if not self.bodies:
+            return np.zeros(0)
+        return np.concatenate([np.asarray(b.q0, dtype=float) for b in self.bodies])
+
+
+# ===================================================================== terms
+class _Term:
+    """A vector- (size 2) or scalar-valued (size 1) function of the local coordinates.
+
+    ``hessian(q, f)`` is ∂(Jᵀ f)/∂q; ``dgrad(q0, q1)`` is an exact discrete
+    gradient D with D (q1 − q0) = value(q1) − value(q0); ``dgrad_jacobian(q0,
+    q1, f)`` is ∂(Dᵀ f)/∂q1 for a fixed f.
+    """
+
+    size = 2
+    linear = False
+
+    def __init__(self, n):
+        self.n = n
+
+    def mean(self, q0, q1):
+        return 0.5 * (self.value(q0) + self.value(q1))
+
+    def _zero(self):
+        return np.zeros((self.n, self.n))
+
+
+class _Constant(_Term):
+    linear = True
+
+    def __init__(self, n, c):
+        super().__init__(n)
+        self.c = np.atleast_1d(np.asarray(c, dtype=float))
+        self.size = self.c.size
+
+    def value(self, q):
+        return self.c.copy()
+
+    def jacobian(self, q):
+        return np.zeros((self.size, self.n))
+
+    def hessian(self, q, f):
+        return self._zero()
+
+    def dgrad(self, q0, q1):
+        return np.zeros((self.size, self.n))
+
+    def dgrad_jacobian(self, q0, q1, f):
+        return self._zero()
+
+
+class _Position(_Term):
+    """r(q) of a body point."""
+
+    def __init__(self, n, point, sl):
+        super().__init__(n)
+        self.point, self.sl = point, sl
+
+    def value(self, q):
+        return np.asarray(self.point.position(q[self.sl]), dtype=float)
+
+    def jacobian(self, q):
+        out = np.zeros((2, self.n))
+        out[:, self.sl] = _dense(self.point.position_jacobian(q[self.sl]))
+        return out
+
+    def hessian(self, q, f):
+        out = self._zero()
+        out[self.sl, self.sl] = _dense(self.point.position_hessian_product(q[self.sl], f))
+        return out
+
+    def dgrad(self, q0, q1):
+        out = np.zeros((2, self.n))
+        out[:, self.sl] = _dense(self.point.position_discrete_gradient(q0[self.sl], q1[self.sl]))
+        return out
+
+    def dgrad_jacobian(self, q0, q1, f):
+        out = self._zero()
+        out[self.sl, self.sl] = _dense(self.point.position_discrete_gradient_jacobian(q0[self.sl], q1[self.sl], f))
+        return out
+
+
+class _Difference(_Term):
+    """r_a(q) − r_b(q) of two body points, or r_a(q) − a for a ground point a (b is None)."""
+
+    def __init__(self, n, point_a, sl_a, point_b=None, sl_b=None, anchor=None):
+        super().__init__(n)
+        self.pa, self.sa, self.pb, self.sb = point_a, sl_a, point_b, sl_b
+        self.anchor = None if anchor is None else np.asarray(anchor, dtype=float)
+        if (point_b is None) == (anchor is None):
+            raise ValueError("a point difference needs exactly one of a second point and a ground anchor")
+
+    def value(self, q):
+        ra = np.asarray(self.pa.position(q[self.sa]), dtype=float)
+        if self.pb is None:
+            return ra - self.anchor
+        return ra - np.asarray(self.pb.position(q[self.sb]), dtype=float)
+
+    def jacobian(self, q):
+        out = np.zeros((2, self.n))
+        out[:, self.sa] = _dense(self.pa.position_jacobian(q[self.sa]))
+        if self.pb is not None:
+            out[:, self.sb] -= _dense(self.pb.position_jacobian(q[self.sb]))
+        return out
+
+    def hessian(self, q, f):
+        out = self._zero()
+        out[self.sa, self.sa] = _dense(self.pa.position_hessian_product(q[self.sa], f))
+        if self.pb is not None:
+            out[self.sb, self.sb] -= _dense(self.pb.position_hessian_product(q[self.sb], f))
+        return out
+
+    def dgrad(self, q0, q1):
+        out = np.zeros((2, self.n))
+        out[:, self.sa] = _dense(self.pa.position_discrete_gradient(q0[self.sa], q1[self.sa]))
+        if self.pb is not None:
+            out[:, self.sb] -= _dense(self.pb.position_discrete_gradient(q0[self.sb], q1[self.sb]))
+        return out
+
+    def dgrad_jacobian(self, q0, q1, f):
+        out = self._zero()
+        out[self.sa, self.sa] = _dense(self.pa.position_discrete_gradient_jacobian(q0[self.sa], q1[self.sa], f))
+        if self.pb is not None:
+            out[self.sb, self.sb] -= _dense(self.pb.position_discrete_gradient_jacobian(q0[self.sb], q1[self.sb], f))
+        return out
+
+
+class _Linear(_Term):
+    """A scalar linear in q: a point's angle or a coordinate (constant gradient)."""
+
+    size = 1
+    linear = True
+
+    def __init__(self, n, fun, grad):
+        super().__init__(n)
+        self.fun, self.grad = fun, np.asarray(grad, dtype=float)
+
+    def value(self, q):
+        return np.array([float(self.fun(q))])
+
+    def jacobian(self, q):
+        return self.grad[None, :].copy()
+
+    def hessian(self, q, f):
+        return self._zero()
+
+    def dgrad(self, q0, q1):
+        return self.grad[None, :].copy()
+
+    def dgrad_jacobian(self, q0, q1, f):
+        return self._zero()
+
+
+def _angle_term(n, point, sl):
+    if not point.has_angle:
+        point.angle(point.body.q0)          # raises the body's own "has no angle" ValueError
+    q0 = np.asarray(point.body.q0, dtype=float)
+    grad = np.zeros(n)
+    grad[sl] = _dense(point.angle_jacobian(q0)).ravel()
+    return _Linear(n, lambda q: point.angle(q[sl]), grad)
+
+
+def _linear_combination(n, terms, coefs, const=0.0):
+    """Σ c_i s_i − const of linear scalar terms, as one :class:`_Linear` (gradient summed once)."""
+    terms, coefs = list(terms), [float(c) for c in coefs]
+    grad = sum(c * t.grad for c, t in zip(coefs, terms))
+    const = float(const)
+
+    def fun(q):
+        return sum(c * t.fun(q) for c, t in zip(coefs, terms)) - const
+    return _Linear(n, fun, grad)
+
+
+def _coordinate_term(n, index):
+    grad = np.zeros(n)
+    grad[index] = 1.0
+    return _Linear(n, lambda q: q[index], grad)
+
+
+class _Rotated(_Term):
+    """n(q) = A(ϑ(q)) n_loc: a vector fixed in the frame of a body point (ϑ linear in q)."""
+
+    def __init__(self, n, angle, local):
+        super().__init__(n)
+        self.angle, self.local = angle, np.asarray(local, dtype=float)
+        self.g = angle.grad
+
+    def value(self, q):
+        return rotation(self.angle.value(q)[0]) @ self.local
+
+    def jacobian(self, q):
+        return np.outer(E_MATRIX @ self.value(q), self.g)
+
+    def hessian(self, q, f):
+        return -float(f @ self.value(q)) * np.outer(self.g, self.g)
+
+    def _half(self, q0, q1):
+        t0, t1 = self.angle.value(q0)[0], self.angle.value(q1)[0]
+        half = 0.5 * (t1 - t0)
+        return half, rotation(t0 + half)
+
+    def dgrad(self, q0, q1):
+        half, am = self._half(q0, q1)
+        return np.outer(sinc(half) * (am @ (E_MATRIX @ self.local)), self.g)
+
+    def dgrad_jacobian(self, q0, q1, f):
+        half, am = self._half(q0, q1)
+        c = 0.5 * (dsinc(half) * float(f @ (am @ (E_MATRIX @ self.local))) - sinc(half) * float(f @ (am @ self.local)))
+        return c * np.outer(self.g, self.g)
+
+
+class _Dot(_Term):
+    """u · v of two 2-vector terms; exact discrete gradient Δ(u·v) = ū·Δv + v̄·Δu."""
+
+    size = 1
+
+    def __init__(self, n, u, v):
+        super().__init__(n)
+        self.u, self.v = u, v
+        self.linear = (u.linear and isinstance(v, _Constant)) or (v.linear and isinstance(u, _Constant))
+
+    def value(self, q):
+        return np.array([float(self.u.value(q) @ self.v.value(q))])
+
+    def jacobian(self, q):
+        return (self.u.value(q) @ self.v.jacobian(q) + self.v.value(q) @ self.u.jacobian(q))[None, :]
+
+    def hessian(self, q, f):
+        uu, vv = self.u.value(q), self.v.value(q)
+        ju, jv = self.u.jacobian(q), self.v.jacobian(q)
+        cross = ju.T @ jv
+        return f[0] * (self.v.hessian(q, uu) + self.u.hessian(q, vv) + cross + cross.T)
+
+    def dgrad(self, q0, q1):
+        ub, vb = self.u.mean(q0, q1), self.v.mean(q0, q1)
+        return (ub @ self.v.dgrad(q0, q1) + vb @ self.u.dgrad(q0, q1))[None, :]
+
+    def dgrad_jacobian(self, q0, q1, f):
+        ub, vb = self.u.mean(q0, q1), self.v.mean(q0, q1)
+        out = self.v.dgrad_jacobian(q0, q1, ub) + self.u.dgrad_jacobian(q0, q1, vb)
+        out += 0.5 * (self.v.dgrad(q0, q1).T @ self.u.jacobian(q1) + self.u.dgrad(q0, q1).T @ self.v.jacobian(q1))
+        return f[0] * out
+
+
+# ============================================================ the base class
 class Constraint:
     """Base class of holonomic constraints.
 
@@ -35,6 +354,8 @@ class Constraint:
     rheonomic: bool = False
     #: True when Φ is at most quadratic in q: then the midpoint gradient is exact
     quadratic: bool = False
+    #: what :meth:`reaction` returns, one label per entry
+    reaction_labels: tuple = ()
 
     def value(self, q, t):
         """Φ(q, t), shape (n_equations,)."""
@@ -82,7 +403,359 @@ class Constraint:
         """∂(Dᵀ μ)/∂q1 (the Gonzalez correction's own derivative is left out)."""
         return 0.5 * self.hessian_product(0.5 * (q0 + q1), mu, t)
 
+    def reaction(self, q, lam):
+        """What the constraint exerts, from its multipliers λ at coordinates q.
 
+        The base class returns −λ, the generalized reaction per equation
+        (−Φ_qᵀλ projected on each equation's own gradient); joints override
+        it with forces (N) and moments (N m) in the global frame.
+        """
+        return -np.asarray(lam, dtype=float)
+
+
+class _TermConstraint(Constraint):
+    """A constraint whose equations are terms (rows stacked in order); exact discrete gradient."""
+
+    def _set_terms(self, layout, terms):
+        self.layout = layout
+        self.bodies = layout.bodies
+        self._terms = list(terms)
+        rows, r = [], 0
+        for t in self._terms:
+            rows.append(slice(r, r + t.size))
+            r += t.size
+        self._rows = rows
+        self.n_equations = r
+        self.quadratic = all(t.linear for t in self._terms)
+
+    def value(self, q, t):
+        if len(self._terms) == 1:
+            return self._terms[0].value(q)
+        return np.concatenate([term.value(q) for term in self._terms])
+
+    def jacobian(self, q, t):
+        if len(self._terms) == 1:
+            return self._terms[0].jacobian(q)
+        return np.vstack([term.jacobian(q) for term in self._terms])
+
+    def hessian_product(self, q, mu, t):
+        mu = np.asarray(mu, dtype=float)
+        out = np.zeros((self.layout.n, self.layout.n))
+        for term, r in zip(self._terms, self._rows):
+            if not term.linear:
+                out += term.hessian(q, mu[r])
+        return out
+
+    def discrete_gradient(self, q0, q1, t):
+        if len(self._terms) == 1:
+            return self._terms[0].dgrad(q0, q1)
+        return np.vstack([term.dgrad(q0, q1) for term in self._terms])
+
+    def discrete_gradient_jacobian(self, q0, q1, mu, t):
+        mu = np.asarray(mu, dtype=float)
+        out = np.zeros((self.layout.n, self.layout.n))
+        for term, r in zip(self._terms, self._rows):
+            if not term.linear:
+                out += term.dgrad_jacobian(q0, q1, mu[r])
+        return out
+
+
+def _point_position0(point):
+    return np.asarray(point.position(np.asarray(point.body.q0, dtype=float)), dtype=float)
+
+
+def _point_angle0(point):
+    return float(point.angle(np.asarray(point.body.q0, dtype=float)))
+
+
+def _unit(name, vec):
+    vec = check_finite_vector(name, vec, 2)
+    nrm = float(np.hypot(*vec))
+    if nrm == 0.0:
+        raise ValueError(f"{name} must not be the zero vector")
+    return vec / nrm
+
+
+# ==================================================================== joints
+class Pin(_TermConstraint):
+    """A body point fixed to the ground: Φ = r(q) − a = 0 (a revolute joint to the ground).
+
+    Parameters
+    ----------
+    point : BodyPoint
+        ``body.point(locator)``.
+    anchor : array_like, shape (2,), optional
+        Ground point a in m; default the point's initial position.
+    name : str
+
+    Notes
+    -----
+    Reaction: the force (F_x, F_y) = −λ (N) the pin exerts on the body.
+    """
+
+    reaction_labels = ("Fx", "Fy")
+
+    def __init__(self, point, anchor=None, name="pin"):
+        layout = PointLayout([point])
+        self.point = point
+        self.anchor = _point_position0(point) if anchor is None else check_finite_vector("anchor", anchor, 2)
+        n = layout.n
+        self._set_terms(layout, [_Difference(n, point, layout.slices[0], anchor=self.anchor)])
+        self.name = name
+
+    def reaction(self, q, lam):
+        return -np.asarray(lam, dtype=float)
+
+
+class Revolute(_TermConstraint):
+    """Two body points coincide: Φ = r_a(q) − r_b(q) = 0.
+
+    Parameters
+    ----------
+    point_a, point_b : BodyPoint
+        Points of two bodies (``body.point(locator)``).
+    name : str
+
+    Notes
+    -----
+    Reaction: the force (F_x, F_y) = −λ (N) the joint exerts on the body of
+    ``point_a`` (the body of ``point_b`` receives the opposite force).
+    """
+
+    reaction_labels = ("Fx", "Fy")
+
+    def __init__(self, point_a, point_b, name="revolute"):
+        if point_a is None or point_b is None:
+            raise ValueError("Revolute joins two body points; use Pin for a point fixed to the ground")
+        layout = PointLayout([point_a, point_b])
+        n = layout.n
+        self.points = (point_a, point_b)
+        self._set_terms(layout, [_Difference(n, point_a, layout.slices[0], point_b, layout.slices[1])])
+        self.name = name
+
+    def reaction(self, q, lam):
+        return -np.asarray(lam, dtype=float)
+
+
+class Weld(_TermConstraint):
+    """Positions and angles of two body points coincide (or one point is clamped to the ground).
+
+    Φ = [r_a − r_b; ϑ_a − ϑ_b − ϑ_0] with ϑ_0 the relative angle at the
+    start (the bodies keep their initial relative orientation).
+
+    Parameters
+    ----------
+    point_a : BodyPoint
+        A point with an angle (rigid body, beam section).
+    point_b : BodyPoint, optional
+        The other point; ``None`` welds ``point_a`` to the ground at its
+        initial position and angle.
+    angle : float, optional
+        ϑ_0 in rad (default: the initial relative angle).
+    name : str
+
+    Notes
+    -----
+    Reaction: (F_x, F_y, M) = −λ, the force (N) and moment (N m) the weld
+    exerts on the body of ``point_a``.
+    """
+
+    reaction_labels = ("Fx", "Fy", "M")
+
+    def __init__(self, point_a, point_b=None, angle=None, name="weld"):
+        layout = PointLayout([point_a, point_b])
+        n = layout.n
+        sa, sb = layout.slices
+        ta = _angle_term(n, point_a, sa)
+        if point_b is None:
+            pos = _Difference(n, point_a, sa, anchor=_point_position0(point_a))
+            rel0 = _point_angle0(point_a)
+            ang = [ta]
+        else:
+            pos = _Difference(n, point_a, sa, point_b, sb)
+            rel0 = _point_angle0(point_a) - _point_angle0(point_b)
+            ang = [ta, _angle_term(n, point_b, sb)]
+        self.angle0 = rel0 if angle is None else float(check_finite_vector("angle", angle, 1)[0])
+        ang_term = _linear_combination(n, ang, [1.0, -1.0][:len(ang)], self.angle0)
+        self.points = (point_a, point_b)
+        self._set_terms(layout, [pos, ang_term])
+        self.name = name
+
+    def reaction(self, q, lam):
+        return -np.asarray(lam, dtype=float)
+
+
+class Slider(_TermConstraint):
+    """A body point moves along a line fixed to the ground or to another body.
+
+    Φ = n · (r_P − r_L) = 0 with n the unit normal of the line and r_L a point
+    on it. On the ground, n and r_L are constant; on a body, r_L is a point
+    of that body and n = A(ϑ_L) n_loc turns with its frame, so the exact
+    discrete gradient combines the product rule with the rotation identity.
+
+    Parameters
+    ----------
+    point : BodyPoint
+        The sliding point P.
+    direction : array_like, shape (2,)
+        Direction of the line in the global frame at the initial configuration.
+    anchor : array_like, shape (2,), optional
+        A ground point of the line (m); default the initial position of P.
+        Only for a ground line.
+    on : BodyPoint, optional
+        A point of the guiding body, on the line; its frame carries the line.
+    name : str
+
+    Notes
+    -----
+    Reaction: (F_x, F_y) = −λ n, the normal force (N) on the body of P.
+    """
+
+    reaction_labels = ("Fx", "Fy")
+
+    def __init__(self, point, direction=(1.0, 0.0), anchor=None, on=None, name="slider"):
+        self._build(point, direction, anchor, on, lock=False)
+        self.name = name
+
+    def _build(self, point, direction, anchor, on, lock):
+        d = _unit("direction", direction)
+        normal = E_MATRIX @ d
+        layout = PointLayout([point, on])
+        n = layout.n
+        sp, so = layout.slices
+        self.point, self.on = point, on
+        terms = []
+        if on is None:
+            a = _point_position0(point) if anchor is None else check_finite_vector("anchor", anchor, 2)
+            self.anchor = a
+            self._normal = _Constant(n, normal)
+            terms.append(_Dot(n, self._normal, _Difference(n, point, sp, anchor=a)))
+        else:
+            if anchor is not None:
+                raise ValueError("anchor applies to a ground line only; a line on a body passes through `on`")
+            theta = _angle_term(n, on, so)
+            local = rotation(-_point_angle0(on)) @ normal
+            self._normal = _Rotated(n, theta, local)
+            terms.append(_Dot(n, self._normal, _Difference(n, point, sp, on, so)))
+        if lock:
+            tp = _angle_term(n, point, sp)
+            if on is None:
+                rel0 = _point_angle0(point)
+                terms.append(_linear_combination(n, [tp], [1.0], rel0))
+            else:
+                rel0 = _point_angle0(point) - _point_angle0(on)
+                terms.append(_linear_combination(n, [tp, _angle_term(n, on, so)], [1.0, -1.0], rel0))
+        self._set_terms(layout, terms)
+
+    def normal(self, q):
+        """Unit normal n of the line at local coordinates q."""
+        return self._normal.value(q)
+
+    def reaction(self, q, lam):
+        return -float(lam[0]) * self.normal(q)
+
+
+class Prismatic(Slider):
+    """A slider whose relative angle is locked: the point moves along the line without turning.
+
+    Φ = [n · (r_P − r_L); ϑ_P − ϑ_L − ϑ_0] (ϑ_L = 0 for a ground line,
+    ϑ_0 the initial relative angle). Parameters as :class:`Slider`; the point
+    must have an angle (rigid body or beam section).
+
+    Notes
+    -----
+    Reaction: (F_x, F_y, M) = (−λ_0 n, −λ_1) on the body of P.
+    """
+
+    reaction_labels = ("Fx", "Fy", "M")
+
+    def __init__(self, point, direction=(1.0, 0.0), anchor=None, on=None, name="prismatic"):
+        self._build(point, direction, anchor, on, lock=True)
+        self.name = name
+
+    def reaction(self, q, lam):
+        f = -float(lam[0]) * self.normal(q)
+        return np.array([f[0], f[1], -float(lam[1])])
+
+
+class Driver(_TermConstraint):
+    """A coordinate, an angle or a relative angle prescribed as a function of time.
+
+    Φ = s(q) − x(t) = 0 with s a body coordinate, the angle ϑ of a body point,
+    or the relative angle ϑ_a − ϑ_b of two points (all linear in q, so the
+    discrete gradient is the constant gradient of s). Unlike
+    :class:`~skfem_flex.motion.Prescribed`, the coordinate stays an unknown
+    and the driving force is the multiplier: generalized force −λ.
+
+    Parameters
+    ----------
+    target : Body or BodyPoint
+        A body (then ``coordinate`` names the driven coordinate) or a body
+        point whose angle is driven.
+    law : MotionLaw
+        x(t), ẋ(t), ẍ(t).
+    coordinate : str or int, optional
+        For a body target: the coordinate's name or index (e.g. ``"theta"``).
+    relative_to : BodyPoint, optional
+        For a point target: drive ϑ_target − ϑ_relative_to.
+    name : str
+
+    Notes
+    -----
+    Φ_t = −ẋ(t), acceleration equation Φ_q q̈ = ẍ(t). Reaction: the
+    generalized force −λ the driver exerts on s (N m for angles, N for
+    lengths); its power is −λ ṡ.
+    """
+
+    rheonomic = True
+    reaction_labels = ("Q",)
+
+    def __init__(self, target, law, coordinate=None, relative_to=None, name="driver"):
+        if not isinstance(law, MotionLaw):
+            raise ValueError(f"Driver needs a MotionLaw (position, velocity, acceleration), got {law!r}")
+        self.law = law
+        if isinstance(target, BodyPoint):
+            if coordinate is not None:
+                raise ValueError("coordinate applies to a body target, not to a body point (whose angle is driven)")
+            layout = PointLayout([target, relative_to])
+            n = layout.n
+            term = _angle_term(n, target, layout.slices[0])
+            if relative_to is not None:
+                term = _linear_combination(n, [term, _angle_term(n, relative_to, layout.slices[1])], [1.0, -1.0])
+        else:
+            if relative_to is not None:
+                raise ValueError("relative_to applies to a body-point (angle) target")
+            if coordinate is None:
+                raise ValueError(f"Driver on body {getattr(target, 'name', target)!r} needs coordinate=...")
+            index = target.coordinate_index(coordinate)
+            layout = PointLayout.of_bodies([target])
+            term = _coordinate_term(layout.n, index)
+        self._s = term
+        self._set_terms(layout, [term])
+        self.quadratic = True
+        self.name = name
+
+    def driven_value(self, q):
+        """s(q), the driven quantity."""
+        return float(self._s.value(q)[0])
+
+    def value(self, q, t):
+        return self._s.value(q) - float(self.law.position(t))
+
+    def time_derivative(self, q, t):
+        return np.array([-float(self.law.velocity(t))])
+
+    def time_terms(self, q, v, t):
+        return np.array([-float(self.law.acceleration(t))])
+
+    def acceleration_rhs(self, q, v, t):
+        return np.array([float(self.law.acceleration(t))])
+
+    def reaction(self, q, lam):
+        return -np.asarray(lam, dtype=float)
+
+
+# ============================================================ point masses
 class Distance(Constraint):
     """Keeps a planar point mass at a fixed distance from a ground anchor.
 
@@ -96,14 +769,20 @@ class Distance(Constraint):
         Ground point a in m.
     length : float
         Distance l in m, finite and positive.
+
+    Notes
+    -----
+    Reaction: the force −λ (x − a) (N) on the mass (the rod's tension).
     """
 
     n_equations = 1
     quadratic = True
+    reaction_labels = ("Fx", "Fy")
 
     def __init__(self, body, anchor=(0.0, 0.0), length=1.0, name="distance"):
         if body.n_dofs != 2:
-            raise ValueError(f"Distance needs a planar point mass (2 coordinates), body {body.name!r} has {body.n_dofs}")
+            raise ValueError(f"Distance needs a planar point mass (2 coordinates), body {body.name!r} "
+                             f"has {body.n_dofs}")
         length = float(length)
         if not np.isfinite(length) or length <= 0:
             raise ValueError(f"length must be finite and positive, got {length!r}")
@@ -121,6 +800,9 @@ class Distance(Constraint):
 
     def hessian_product(self, q, mu, t):
         return mu[0] * np.eye(2)
+
+    def reaction(self, q, lam):
+        return -float(lam[0]) * (np.asarray(q, dtype=float) - self.anchor)
 
 
 class UserConstraint(Constraint):
@@ -141,16 +823,28 @@ class UserConstraint(Constraint):
         Φ_t for rheonomic constraints.
     time_terms : callable (q, v, t) -> array (m,), optional
         2 Φ_qt v + Φ_tt for rheonomic constraints.
+    discrete_gradient : callable (q0, q1, t) -> array (m, len(q)), optional
+        An exact discrete gradient. Without it the midpoint Jacobian with
+        Gonzalez's correction is used, which is exact too (the correction
+        makes D (q1 − q0) = Φ(q1) − Φ(q0) hold by construction).
     name : str
+
+    Notes
+    -----
+    Reaction: −λ, the generalized reaction per equation.
     """
 
     def __init__(self, bodies, value, jacobian, hessian_product=None, time_derivative=None,
-                 time_terms=None, name="user"):
+                 time_terms=None, discrete_gradient=None, name="user"):
         self.bodies = tuple(bodies)
         if not callable(value) or not callable(jacobian):
             raise ValueError("UserConstraint needs callables value(q, t) and jacobian(q, t)")
+        for label, fn in (("hessian_product", hessian_product), ("time_derivative", time_derivative),
+                          ("time_terms", time_terms), ("discrete_gradient", discrete_gradient)):
+            if fn is not None and not callable(fn):
+                raise ValueError(f"UserConstraint: {label} must be callable, got {fn!r}")
         self._value, self._jac = value, jacobian
-        self._hess, self._phit, self._tt = hessian_product, time_derivative, time_terms
+        self._hess, self._phit, self._tt, self._dg = hessian_product, time_derivative, time_terms, discrete_gradient
         self.rheonomic = time_derivative is not None
         n = sum(b.n_dofs for b in self.bodies)
         q = np.concatenate([b.q0 for b in self.bodies]) if self.bodies else np.zeros(0)
@@ -159,6 +853,7 @@ class UserConstraint(Constraint):
         if jac.shape != (phi.size, n):
             raise ValueError(f"jacobian must have shape ({phi.size}, {n}), got {jac.shape}")
         self.n_equations = phi.size
+        self.reaction_labels = tuple(f"Q{i}" for i in range(phi.size))
         self.name = name
 
     def value(self, q, t):
@@ -183,3 +878,8 @@ class UserConstraint(Constraint):
 
     def time_terms(self, q, v, t):
         return np.zeros(self.n_equations) if self._tt is None else np.atleast_1d(self._tt(q, v, t))
+
+    def discrete_gradient(self, q0, q1, t):
+        if self._dg is not None:
+            return np.atleast_2d(np.asarray(self._dg(q0, q1, t), dtype=float))
+        return super().discrete_gradient(q0, q1, t)

@@ -245,6 +245,7 @@ class Integrator:
         s = self.newton
         x = x0.copy()
         r, jac, err = fun(x)
+        err_prev = np.inf
         for it in range(s.max_iterations + 1):
             if not (np.all(np.isfinite(r)) and np.isfinite(err)):
                 raise ConvergenceError(f"{self.name}: residual is not finite at {where} after {it} iterations "
@@ -265,6 +266,9 @@ class Integrator:
                                        iterations=it, residual=err)
             if _inf(dx) <= 8 * _EPS * max(_inf(x), _TINY) and err < 1e6:
                 return x, r, it + 1          # update below round-off: as converged as floating point allows
+            if it >= 2 and err >= 0.25 * err_prev and _inf(dx) <= 1.5e-8 * _inf(x) and err < 1e4:
+                return x, r, it + 1          # stagnated at the round-off floor of the residual's own terms
+            err_prev = err
             step = 1.0
             for _ in range(7 if s.line_search else 1):
                 x_try = x + step * dx

@@ -21,7 +21,8 @@ them throughout):
 
 point data
     ``displacement`` (global, m; a body that gives none gets the motion of its
-    geometry points from the scene's initial state), ``velocity`` (m/s),
+    geometry points since the first call of :meth:`VTKSeries.write`, the
+    initial state of the run), ``velocity`` (m/s),
     ``angle`` (cross-section or body angle, rad), plus any other point array a
     body supplies. Vectors have three components (z = 0).
 cell data
@@ -237,6 +238,7 @@ class VTKSeries:
         self._next_time = 0
         self._pending = None
         self._closed = False
+        self._started = False
         self._reference = None
         self._point_names = None
         self._cell_names = None
@@ -252,7 +254,9 @@ class VTKSeries:
         """Path of the ``.vtu.series`` JSON file."""
         return None if self.name is None else self.directory / f"{self.name}.vtu.series"
 
-    def _start(self, scene):
+    def _start(self, scene, q, v):
+        """First write: name, directory, removal of an older series, reference geometry."""
+        self._started = True
         if self.name is None:
             self.name = re.sub(r"[^\w.+-]", "_", str(scene.name)) or "scene"
         self.directory.mkdir(parents=True, exist_ok=True)
@@ -265,8 +269,14 @@ class VTKSeries:
             for p in self.directory.iterdir():
                 if pattern.match(p.name):
                     p.unlink()
-        q0, v0 = scene.initial_state()
-        self._reference = [np.asarray(b.geometry(q0[scene.slice(b)], v0[scene.slice(b)]).points, dtype=float)
+        self._init_arrays(scene, q, v)
+
+    def _init_arrays(self, scene, q=None, v=None):
+        """Reference geometry (for displacements) and the array set of the series."""
+        if q is None:
+            q, v = scene.initial_state()
+        q, v = np.asarray(q, dtype=float), np.asarray(v, dtype=float)
+        self._reference = [np.asarray(b.geometry(q[scene.slice(b)], v[scene.slice(b)]).points, dtype=float)
                            for b in scene.bodies]
         self._point_names = {k: ((3,) if n == 3 else ()) for k, n in POINT_ARRAYS.items()}
         self._cell_names = {k: ((3,) if n == 3 else ()) for k, n in CELL_ARRAYS.items()}
@@ -286,8 +296,8 @@ class VTKSeries:
         """Called by ``simulate`` at every recorded step; writes the ones selected by ``every``/``times``."""
         if self._closed:
             raise RuntimeError("this VTKSeries is closed; make a new sink for each run")
-        if self._reference is None:
-            self._start(scene)
+        if not self._started:
+            self._start(scene, q, v)
         self._calls += 1
         if self._selected(t):
             self._write_step(scene, t, q, v)
@@ -307,7 +317,7 @@ class VTKSeries:
     def mesh(self, scene, q, v):
         """The merged meshio mesh of the scene at (q, v), as it would be written."""
         if self._reference is None:
-            self._start(scene)
+            self._init_arrays(scene)
         geoms = []
         for b, ref in zip(scene.bodies, self._reference):
             sl = scene.slice(b)

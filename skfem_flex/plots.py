@@ -80,14 +80,14 @@ def plot_constraints(result, path=None):
     """Constraint residuals max |Φ| and max |Φ_q v + Φ_t| against time (log scale)."""
     fig, ax = _figure(1, 1)
     a = ax[0, 0]
-    floor = 1e-300
     for arr, label in [(result.constraint_residual, "max |Φ(q, t)|"),
                        (result.velocity_constraint_residual, "max |Φ_q v + Φ_t|")]:
         arr = np.abs(np.asarray(arr, dtype=float))
         if np.any(arr > 0):
-            a.semilogy(result.t, np.maximum(arr, floor), label=label)
+            # exact zeros cannot be shown on a log scale: they are left out (gaps)
+            a.semilogy(result.t, np.where(arr > 0, arr, np.nan), ".-", ms=2, lw=0.8, label=label)
         else:
-            a.plot(result.t, arr, label=f"{label} (zero)")
+            a.plot(result.t, arr, label=f"{label} (zero throughout)")
     a.set_xlabel("t (s)")
     a.set_ylabel("residual")
     a.grid(alpha=0.3, which="both")
@@ -128,26 +128,33 @@ def plot_snapshots(scene, result, path=None, count=6):
     n = len(result.t)
     count = max(1, min(int(count), n))
     idx = np.unique(np.round(np.linspace(0, n - 1, count)).astype(int))
-    fig, ax = _figure(1, len(idx), size=(min(2.4 * len(idx), 16.0), 3.2), sharex=True, sharey=True)
+    geoms = []
     lo, hi = np.full(2, np.inf), np.full(2, -np.inf)
-    for a, i in zip(ax[0], idx):
+    for i in idx:
         q, v = result.q[i], result.v[i]
-        for bid, b in enumerate(scene.bodies):
-            sl = scene.slice(b)
-            xy = _draw_geometry(a, b.geometry(q[sl], v[sl]), f"C{bid % 10}")
+        geoms.append([b.geometry(q[scene.slice(b)], v[scene.slice(b)]) for b in scene.bodies])
+        for g in geoms[-1]:
+            xy = np.asarray(g.points, dtype=float)[:, :2]
             if len(xy):
                 lo, hi = np.minimum(lo, xy.min(axis=0)), np.maximum(hi, xy.max(axis=0))
-        a.set_title(f"t = {result.t[i]:.4g} s", fontsize="small")
-        a.set_aspect("equal", adjustable="datalim")
-        a.grid(alpha=0.3)
-        a.tick_params(labelsize="x-small")
     if np.all(np.isfinite(lo)):
         span = max(float(np.max(hi - lo)), 1e-9)
-        pad = 0.08 * span
         mid = 0.5 * (lo + hi)
-        half = 0.5 * np.maximum(hi - lo, 0.1 * span) + pad
-        ax[0, 0].set_xlim(mid[0] - half[0], mid[0] + half[0])
-        ax[0, 0].set_ylim(mid[1] - half[1], mid[1] + half[1])
+        half = 0.5 * np.maximum(hi - lo, 0.4 * span) + 0.08 * span
+    else:
+        mid, half = np.zeros(2), np.ones(2)
+    width = min(2.4 * len(idx), 16.0)
+    height = float(np.clip(width / len(idx) * half[1] / half[0] + 0.9, 2.0, 6.0))
+    fig, ax = _figure(1, len(idx), size=(width, height), sharex=True, sharey=True)
+    for a, i, gs in zip(ax[0], idx, geoms):
+        for bid, g in enumerate(gs):
+            _draw_geometry(a, g, f"C{bid % 10}")
+        a.set_title(f"t = {result.t[i]:.4g} s", fontsize="small")
+        a.set_aspect("equal", adjustable="box")
+        a.grid(alpha=0.3)
+        a.tick_params(labelsize="x-small")
+    ax[0, 0].set_xlim(mid[0] - half[0], mid[0] + half[0])
+    ax[0, 0].set_ylim(mid[1] - half[1], mid[1] + half[1])
     ax[0, 0].set_xlabel("x (m)", fontsize="small")
     ax[0, 0].set_ylabel("y (m)", fontsize="small")
     fig.suptitle(scene.name)

@@ -41,6 +41,13 @@ class Result:
         About the global origin; None when a body does not provide it.
     probes : dict of str to ndarray
         Probe histories, first axis time.
+    reactions : dict of str to ndarray
+        Joint reactions from the multipliers, constraint name → (n, k) array
+        in the global frame: (F_x, F_y) in N that a Pin, Revolute or Slider
+        exerts on its (first) body, (F_x, F_y, M) for Weld and Prismatic,
+        the generalized force −λ for a Driver (N m on an angle) and for
+        user constraints (see each constraint's ``reaction``).
+        Energy-momentum: the mean over the step ending there.
     wall_time : float
         Seconds spent in the time loop.
     scheme : str
@@ -69,6 +76,7 @@ class Result:
     linear_momentum: np.ndarray = None
     angular_momentum: np.ndarray = None
     probes: dict = field(default_factory=dict)
+    reactions: dict = field(default_factory=dict)
     wall_time: float = 0.0
     scheme: str = ""
     dt: float = 0.0

@@ -402,3 +402,28 @@ class Scene:
     def evaluate_probes(self, t, q, v):
         """{name: value} of every probe."""
         return {k: np.asarray(fn(self, t, q, v), dtype=float) for k, fn in self.probes.items()}
+
+    @property
+    def length_scale(self):
+        """Characteristic size of the scene, m: the diagonal of the bounding box of all bodies at q0.
+
+        A floor for scale-relative tolerances of position constraints: a joint
+        at the global origin whose coordinates are zero has |Φ_q| |q| = 0, so
+        |Φ_q| · length_scale gives its residual a meaningful scale. Computed
+        once from the bodies' output geometry (1 m if that is degenerate).
+        """
+        if getattr(self, "_length_scale", None) is None:
+            pts = []
+            for b in self.bodies:
+                try:
+                    pts.append(np.asarray(b.geometry(np.asarray(b.q0, float), np.asarray(b.v0, float)).points,
+                                          dtype=float).reshape(-1, 2))
+                except (NotImplementedError, AttributeError, ValueError):
+                    continue
+            size = 0.0
+            if pts:
+                allp = np.vstack(pts)
+                if allp.size and np.all(np.isfinite(allp)):
+                    size = float(np.hypot(*(allp.max(axis=0) - allp.min(axis=0))))
+            self._length_scale = size if size > 0.0 else 1.0
+        return self._length_scale

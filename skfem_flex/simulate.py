@@ -7,6 +7,7 @@ import time
 
 import numpy as np
 
+from .initial_conditions import consistent_initial_state
 from .integrators import ConvergenceError, SimulationError, State, make_integrator
 from .result import Result
 
@@ -51,6 +52,8 @@ class _Recorder:
                                      "angular_momentum")}
         self.probes = {k: [] for k in scene.probes}
         self.with_momentum = None
+        self.reactions = _reaction_maps(scene)
+        self.reaction_rows = {k: [] for k, _ in self.reactions}
 
     def record(self, state, work, iterations, vres):
         s = self.scene
@@ -74,6 +77,10 @@ class _Recorder:
             r["angular_momentum"].append(s.angular_momentum(q, v))
         for k, val in s.evaluate_probes(t, q, v).items():
             self.probes[k].append(val)
+        if self.reactions:
+            lam = np.asarray(state.lam, dtype=float)
+            for k, fn in self.reactions:
+                self.reaction_rows[k].append(fn(q, lam))
 
     def result(self, **meta):
         r = {k: np.asarray(val, dtype=float) for k, val in self.rows.items()}
@@ -82,12 +89,30 @@ class _Recorder:
         if not self.with_momentum:
             r["linear_momentum"] = None
             r["angular_momentum"] = None
+        reactions = {k: np.asarray(val, dtype=float) for k, val in self.reaction_rows.items()}
         return Result(total_energy=kin + pot, probes={k: np.asarray(v) for k, v in self.probes.items()},
-                      **r, **meta)
+                      reactions=reactions, **r, **meta)
+
+
+def _reaction_maps(scene):
+    """[(unique name, fn(q, lam) -> reaction)] for the scene's constraints (names made unique with #2, #3...)."""
+    out, seen = [], {}
+    for c, idx, rows in zip(scene.constraints, scene._con_idx, scene._con_rows):
+        name = c.name
+        seen[name] = seen.get(name, 0) + 1
+        if seen[name] > 1:
+            name = f"{name}#{seen[name]}"
+
+        def fn(q, lam, c=c, idx=idx, rows=rows):
+            if lam.size != scene.n_constraints:
+                return np.full(len(c.reaction_labels) or c.n_equations, np.nan)
+            return np.atleast_1d(np.asarray(c.reaction(q[idx], lam[rows]), dtype=float))
+        out.append((name, fn))
+    return out
 
 
 def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newton=None, record_every=1,
-             output=(), progress=False, max_halvings=8):
+             output=(), progress=False, max_halvings=8, project=True):
     """Integrate a scene in time.
 
     Parameters
@@ -112,6 +137,12 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
     max_halvings : int
         A step whose Newton iteration fails is split in two, recursively,
         at most this deep, before the run is given up.
+    project : bool
+        True (default): project the initial state onto the constraints
+        (minimum-norm Gauss–Newton for q0, minimum-norm correction for v0,
+        prescribed coordinates kept; see
+        :func:`skfem_flex.initial_conditions.consistent_initial_state`).
+        False: only check it. Either way redundant constraints raise.
 
     Returns
     -------
@@ -120,7 +151,10 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
     Raises
     ------
     ValueError
-        On bad arguments or inconsistent initial conditions.
+        On bad arguments, redundant constraints
+        (:class:`~skfem_flex.initial_conditions.RedundantConstraintsError`) or
+        initial conditions that cannot be made consistent
+        (:class:`~skfem_flex.initial_conditions.InconsistentInitialConditionsError`).
     ConvergenceError
         When a step fails even after halving; ``exc.result`` holds the
         history up to the last good step, and output sinks keep what they
@@ -135,7 +169,7 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
         raise ValueError(f"record_every must be >= 1, got {record_every!r}")
     scheme = make_integrator(integrator, rho_inf=rho_inf, newton=newton)
     q, v = scene.initial_state()
-    check_initial_state(scene, q, v)
+    q, v = consistent_initial_state(scene, q, v, 0.0, project=bool(project))
     state = scheme.start(scene, State(0.0, q, v))
     n_steps = int(math.ceil(t_end / dt - 1e-9)) if t_end > 0 else 0
     rec = _Recorder(scene)
@@ -150,7 +184,7 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
         # shown only for runs longer than a second (delay); steps/s is tqdm's rate
         bar = tqdm(total=n_steps, unit="step", desc=f"{scene.name} [{scheme.name}]", leave=False,
                    file=sys.stderr, delay=1.0, mininterval=0.25, dynamic_ncols=True)
-        bar_its = bar_steps = 0
+        bar_its = 0
     start = time.perf_counter()
     meta = dict(scheme=scheme.name, dt=dt)
     step = 0
@@ -165,13 +199,10 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
                 for s in sinks:
                     s.write(scene, state.t, state.q, state.v)
             if bar is not None:
-                bar.update(1)
                 bar_its += its
-                bar_steps += 1
-                if step % 50 == 0:
-                    bar.set_postfix_str(f"t={state.t:.4g}/{t_end:.4g} s, Newton {bar_its / bar_steps:.1f}/step",
-                                        refresh=False)
-                    bar_its = bar_steps = 0
+                bar.set_postfix_str(f"t={state.t:.4g}/{t_end:.4g} s, Newton {bar_its / step:.1f}/step",
+                                    refresh=False)
+                bar.update(1)
     except SimulationError as exc:
         exc.args = (f"{exc.args[0]} [step {step} of {n_steps}]",) + exc.args[1:]
         exc.info.update(step=step, time=state.t)

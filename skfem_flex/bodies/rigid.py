@@ -22,6 +22,8 @@ round-off for any step.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .base import Body, BodyGeometry, BodyPoint, check_finite_vector
@@ -34,7 +36,8 @@ E_MATRIX = np.array([[0.0, -1.0], [1.0, 0.0]])
 
 def rotation(theta):
     """A(θ) = [[cos θ, −sin θ], [sin θ, cos θ]]."""
-    c, s = np.cos(theta), np.sin(theta)
+    theta = float(theta)
+    c, s = math.cos(theta), math.sin(theta)
     return np.array([[c, -s], [s, c]])
 
 
@@ -43,7 +46,7 @@ def sinc(x):
     x = float(x)
     if x == 0.0:
         return 1.0
-    return np.sin(x) / x
+    return math.sin(x) / x
 
 
 def dsinc(x):
@@ -52,7 +55,7 @@ def dsinc(x):
     if abs(x) < 2e-2:
         x2 = x * x
         return x * (-1.0 / 3.0 + x2 * (1.0 / 30.0 - x2 / 840.0))
-    return (x * np.cos(x) - np.sin(x)) / (x * x)
+    return (x * math.cos(x) - math.sin(x)) / (x * x)
 
 
 def _positive(name, value):
@@ -191,6 +194,7 @@ class RigidPoint(BodyPoint):
     def __init__(self, body, s):
         self.body = body
         self.s = np.asarray(s, dtype=float)
+        self._es = E_MATRIX @ self.s
 
     def position(self, q):
         return q[:2] + rotation(q[2]) @ self.s
@@ -198,7 +202,7 @@ class RigidPoint(BodyPoint):
     def position_jacobian(self, q):
         jac = np.zeros((2, 3))
         jac[0, 0] = jac[1, 1] = 1.0
-        jac[:, 2] = rotation(q[2]) @ (E_MATRIX @ self.s)
+        jac[:, 2] = rotation(q[2]) @ self._es
         return jac
 
     def position_hessian_product(self, q, f):
@@ -210,18 +214,18 @@ class RigidPoint(BodyPoint):
         half = 0.5 * (q1[2] - q0[2])
         d = np.zeros((2, 3))
         d[0, 0] = d[1, 1] = 1.0
-        d[:, 2] = sinc(half) * (rotation(q0[2] + half) @ (E_MATRIX @ self.s))
+        d[:, 2] = sinc(half) * (rotation(q0[2] + half) @ self._es)
         return d
 
     def position_discrete_gradient_jacobian(self, q0, q1, f):
         half = 0.5 * (q1[2] - q0[2])
         am = rotation(q0[2] + half)
         h = np.zeros((3, 3))
-        h[2, 2] = 0.5 * (dsinc(half) * float(f @ (am @ (E_MATRIX @ self.s))) - sinc(half) * float(f @ (am @ self.s)))
+        h[2, 2] = 0.5 * (dsinc(half) * float(f @ (am @ self._es)) - sinc(half) * float(f @ (am @ self.s)))
         return h
 
     def velocity(self, q, v):
-        return v[:2] + v[2] * (rotation(q[2]) @ (E_MATRIX @ self.s))
+        return v[:2] + v[2] * (rotation(q[2]) @ self._es)
 
     def angle(self, q):
         return float(q[2])

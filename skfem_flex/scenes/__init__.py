@@ -6,5 +6,8 @@ its keyword parameters with defaults and units (for ``skfem-flex list``).
 """
 from ._registry import CATALOGUE, get, parameters, register
 from .particles import pendulum, spring_mass
+from .exact_beams import exact_spin_up_beam, flying_beam, very_flexible_pendulum
+from .mechanisms import double_pendulum, flexible_pendulum, free_beam, slider_crank, spin_up_pinned
+from .rotating import hub_beam, rotating_beam, rotating_beam_frequencies, spin_up_beam
 
 __all__ = ["CATALOGUE", "get", "parameters", "register", "pendulum", "spring_mass"]

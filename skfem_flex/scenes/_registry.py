@@ -9,10 +9,23 @@ __all__ = ["CATALOGUE", "register", "get", "parameters"]
 CATALOGUE = {}
 
 
-def register(**units):
-    """Decorator adding a scene factory to the catalogue; ``units`` maps parameter names to units."""
+def register(t_end=None, dt=None, **units):
+    """Decorator adding a scene factory to the catalogue.
+
+    Parameters
+    ----------
+    t_end, dt : float, optional
+        Default end time and step (s) of ``skfem-flex run SCENE``, stored in
+        ``fn.defaults`` (only the ones given); the CLI falls back to its own
+        defaults for the others.
+    **units
+        Parameter name -> unit, shown by ``skfem-flex list``.
+    """
+    defaults = {k: float(v) for k, v in (("t_end", t_end), ("dt", dt)) if v is not None}
+
     def deco(fn):
         fn.units = dict(units)
+        fn.defaults = dict(defaults)
         CATALOGUE[fn.__name__] = fn
         return fn
     return deco

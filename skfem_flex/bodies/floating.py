@@ -1,0 +1,1025 @@
+r"""Floating frame of reference (FFR): a Timoshenko beam in large overall motion.
+
+A :class:`FloatingBeam` carries the coordinates of a body frame, q_r = (R_x, R_y, θ),
+and elastic coordinates q_f of a :class:`~skfem_flex.beam.TimoshenkoBeam` measured in that
+frame. A material point of the axis at x is at (seed paper, eqs. 10–11, 31–33)
+
+.. math::
+
+    r(x) = R + A(θ)\,(x_0 + S(x)\,q_f),\qquad x_0 = (x, 0),
+
+where S(x) = [N_u; N_w] maps q_f to the axial and transverse displacement (u, w); the
+cross-section turns by θ + N_φ(x) q_f. Reference conditions remove the rigid-body modes
+from q_f: ``"clamped"`` eliminates u, w, φ at the root node (the frame is tangent to the
+root), ``"pinned"`` eliminates u, w at the root and w at the tip (chord frame).
+
+Kinetic energy T = ½ ∫ ρA |ṙ|² + ρI (θ̇ + φ̇)² dx = ½ q̇ᵀ M(q) q̇ (eqs. 14–17) with
+
+.. math::
+
+    M = \begin{bmatrix} m I & A E \bar s & A \bar S \\
+                        \cdot & J(q_f) & a(q_f)^T \\
+                        \cdot & \cdot & M_{ff} \end{bmatrix},\quad
+    \begin{aligned}
+    \bar s &= S_0 + \bar S q_f, &  J &= I_{00} + J_r + 2 c^T q_f + q_f^T M_A q_f,\\
+    a &= k_0 + n_φ + H q_f, & M_{ff} &= M_A + M_I,
+    \end{aligned}
+
+E = [[0, −1], [1, 0]], built from inertia shape integrals that scikit-fem assembles once:
+m = ∫ρA, S_0 = ∫ρA x_0, I_00 = ∫ρA x², S̄ = ∫ρA S, c = ∫ρA Sᵀx_0, k_0 = ∫ρA SᵀE x_0,
+M_A = ∫ρA SᵀS, H = ∫ρA SᵀE S (skew), J_r = ∫ρI, n_φ = ∫ρI N_φ, M_I = ∫ρI N_φᵀN_φ.
+Only the reference rows and columns depend on q; M_ff is constant.
+
+Quadratic-velocity force (eq. 26, Q_v = ∂T/∂q − Ṁ q̇), with ω = θ̇, f = q̇_f and
+c_m = c + M_A q_f::
+
+    Q_R = A (ω² s̄ − 2 ω E S̄ f),   Q_θ = −2 ω c_m · f,   Q_f = ω² c_m − 2 ω H f
+
+(centrifugal ω² c_m, Coriolis −2ωHf; no term depends on Ṙ).
+
+Strain energy: bending EI κ², κ = φ', and shear kGA γ², γ = w' − φ, as in the linear beam
+(constant matrices from scikit-fem); axial EA ε² with the Green–Lagrange strain
+ε = u' + ½(u'² + w'²) (``strain="green-lagrange"``, default) or ε = u' (``strain="linear"``,
+which misses the centrifugal stiffening). The nonlinear axial kernel is vectorised over
+elements on the beam's precomputed quadrature arrays; nothing is assembled in the time loop.
+
+Discrete gradients for the energy-conserving scheme (``shared/notes/ENERGY_SCHEME.md``) are
+exact closed forms: stress at the mean strain for V, and for G(q) = ½ v₀ᵀ M(q) v₁ the identities
+A(θ₁) − A(θ₀) = sinc(Δθ/2) A(θ_m) E Δθ and (A(θ₀) + A(θ₁))/2 = cos(Δθ/2) A(θ_m).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sps
+import scipy.sparse.linalg as spla
+from skfem import BilinearForm, LinearForm, asm
+
+from ..beam import TimoshenkoBeam
+from ..forces import ForceElement
+from ..forms import bending, shear, translational_mass, rotary_mass
+from .base import Body, BodyGeometry, BodyPoint, check_finite_vector
+
+__all__ = ["FloatingBeam", "DistributedLoad"]
+
+#: E = [[0, −1], [1, 0]]: E a is a turned by +90°
+E2 = np.array([[0.0, -1.0], [1.0, 0.0]])
+#: bodies with more coordinates than this use scipy.sparse matrices
+SPARSE_LIMIT = 400
+_FIELDS = {"u": 0, "w": 1, "theta": 2, "th": 2, "phi": 2}
+_FIELD_NAMES = ("u", "w", "th")
+
+
+def _rot(th):
+    c, s = math.cos(th), math.sin(th)
+    return np.array([[c, -s], [s, c]])
+
+
+def _sinc_half(d):
+    """σ = sin(d/2)/(d/2) and dσ/dd (series near 0)."""
+    h = 0.5 * d
+    if abs(h) < 1e-3:
+        h2 = h * h
+        return 1.0 - h2 / 6.0 + h2 * h2 / 120.0, 0.5 * (-h / 3.0 + h * h2 / 30.0)
+    s, c = math.sin(h), math.cos(h)
+    return s / h, 0.5 * (h * c - s) / (h * h)
+
+
+def _cross(a, b):
+    return float(a[0] * b[1] - a[1] * b[0])
+
+
+# ---------------------------------------------------------------- scikit-fem forms (assembled once)
+@BilinearForm
+def skew_inertia(u, w, th, du, dw, dth, prm):
+    """ρA (δu, δw)·E(u, w) = ρA (δw u − δu w): the skew coupling H = ∫ρA SᵀE S (parameter ``rhoA``)."""
+    return prm.rhoA * (dw * u - du * w)
+
+
+@LinearForm
+def axis_moments(du, dw, dth, prm):
+    """∫ (a_u δu + a_w δw + a_θ δθ) with a_k = α_k + β_k x (parameters ``au, bu, aw, bw, at``).
+
+    Gives ∫ρA N (β = 0), ∫ρA x N (α = 0) and ∫ρI N_φ."""
+    x = prm.x[0]
+    return (prm.au + prm.bu * x) * du + (prm.aw + prm.bw * x) * dw + prm.at * dth
+
+
+def _restrict(mat, free):
+    return sps.csr_matrix(mat)[free][:, free].tocsr()
+
+
+class FloatingBeam(Body):
+    """A Timoshenko beam in the floating frame of reference.
+
+    Coordinates q = (R_x, R_y, θ, q_f), named ``"Rx", "Ry", "theta"`` and then
+    ``"u1", "w1", "th1", ...`` (field and node number, nodes counted from the
+    root along the beam) for the elastic DOFs left after the reference condition.
+
+    Parameters
+    ----------
+    beam : TimoshenkoBeam
+        Straight beam along the body x axis (its mesh coordinates are x).
+    reference : {"clamped", "pinned"} or sequence of (x, field)
+        Elastic DOFs eliminated to remove the rigid-body modes. ``"clamped"``:
+        u, w, φ at the root (the node of smallest x); ``"pinned"``: u, w at the
+        root and w at the tip. A sequence of (x, field) pairs, field in
+        {"u", "w", "theta"}, gives them explicitly; it must remove exactly the
+        three rigid modes.
+    strain : {"green-lagrange", "linear"}
+        Axial strain measure (see module docstring).
+    position : array_like (2,)
+        Initial R, m.
+    angle : float
+        Initial θ, rad.
+    velocity : array_like (2,)
+        Initial Ṙ, m/s.
+    angular_velocity : float
+        Initial θ̇, rad/s.
+    elastic, elastic_velocity : array_like, optional
+        Initial q_f and q̇_f (length ``n_elastic``; see :meth:`elastic_vector`).
+    name : str
+    sparse : bool, optional
+        Matrix format; default: sparse when the body has more than 400 coordinates.
+
+    Raises
+    ------
+    ValueError
+        On a reference condition that leaves rigid modes (singular elastic
+        stiffness) or over-constrains the beam, an unknown strain measure, or
+        non-finite / wrongly sized initial data.
+    """
+
+    constant_mass = False
+    has_potential = True
+
+    def __init__(self, beam, reference="clamped", strain="green-lagrange", position=(0.0, 0.0), angle=0.0,
+                 velocity=(0.0, 0.0), angular_velocity=0.0, elastic=None, elastic_velocity=None, name="beam",
+                 sparse=None):
+        if not isinstance(beam, TimoshenkoBeam):
+            raise ValueError(f"FloatingBeam needs a TimoshenkoBeam, got {beam!r}")
+        if strain not in ("green-lagrange", "linear"):
+            raise ValueError(f"strain must be 'green-lagrange' or 'linear', got {strain!r}")
+        self.beam, self.strain, self.name = beam, strain, name
+        self.section = sec = beam.section
+        self.reference = reference
+        self.x_min, self.x_max = float(beam.x_nodes[0]), float(beam.x_nodes[-1])
+
+        # ------------------------------------------------ reference condition -> free elastic DOFs
+        fixed = self._reference_dofs(reference)
+        n_full = beam.n_dofs
+        node_major = beam.node_dofs.ravel()              # (u, w, θ) per node, nodes along x
+        fixed_set = set(fixed.tolist())
+        self.free_dofs = np.array([d for d in node_major if d not in fixed_set], dtype=int)
+        self.fixed_dofs = fixed
+        self.n_elastic = nf = self.free_dofs.size
+        self.n_dofs = n = 3 + nf
+        self.sparse = (n > SPARSE_LIMIT) if sparse is None else bool(sparse)
+        red = -np.ones(n_full, dtype=int)
+        red[self.free_dofs] = np.arange(nf)
+        self._red = red
+        names = []
+        node_of = {}
+        for i, dofs in enumerate(beam.node_dofs):
+            for k, d in enumerate(dofs):
+                node_of[int(d)] = (i, k)
+        for d in self.free_dofs:
+            i, k = node_of[int(d)]
+            names.append(f"{_FIELD_NAMES[k]}{i}")
+        self._names = ("Rx", "Ry", "theta") + tuple(names)
+
+        # ------------------------------------------------ inertia shape integrals (scikit-fem, once)
+        b = beam.basis
+        free = self.free_dofs
+        MA = _restrict(asm(translational_mass, b, rhoA=sec.rhoA), free)
+        MI = _restrict(asm(rotary_mass, b, rhoI=sec.rhoI), free)
+        H = _restrict(asm(skew_inertia, b, rhoA=sec.rhoA), free)
+        zero = dict(au=0.0, bu=0.0, aw=0.0, bw=0.0, at=0.0)
+        lin = lambda **kw: asm(axis_moments, b, **{**zero, **kw})[free]   # noqa: E731
+        Nu, Nw = lin(au=sec.rhoA), lin(aw=sec.rhoA)
+        self._Sbar = np.vstack([Nu, Nw])                 # ∫ρA S, (2, nf)
+        self._c = lin(bu=sec.rhoA)                        # ∫ρA Sᵀ x0
+        k0 = lin(bw=sec.rhoA)                             # ∫ρA Sᵀ E x0 = ∫ρA x N_w
+        nphi = lin(at=sec.rhoI)                           # ∫ρI N_φ
+        self._k0n = k0 + nphi
+        qd = beam.quadrature
+        self.mass_total = float(np.sum(sec.rhoA * qd.dx))
+        self._S0 = np.array([float(np.sum(sec.rhoA * qd.x * qd.dx)), 0.0])
+        self._I00 = float(np.sum(sec.rhoA * qd.x ** 2 * qd.dx))
+        self._Jr = float(np.sum(sec.rhoI * qd.dx))
+        self._I0 = self._I00 + self._Jr
+        mats = dict(MA=MA, H=H, Mff=(MA + MI).tocsr())
+        for k, v in mats.items():
+            setattr(self, "_" + k, v if self.sparse else v.toarray())
+        self._SbarT = self._Sbar.T.copy()
+        self._SbEt = self._SbarT @ E2.T                  # S̄ᵀEᵀ, (nf, 2)
+        stack = sps.vstack if self.sparse else np.vstack
+        self._Pq = stack([self._Sbar, self._MA, self._H])  # q_f -> (S̄ q_f, M_A q_f, H q_f)
+        self._Pf = stack([self._Sbar, self._H])            # f -> (S̄ f, H f)
+        if self.sparse:
+            self._Pq, self._Pf = self._Pq.tocsr(), self._Pf.tocsr()
+        self._top_template = np.zeros((3, 3 + nf))
+        self._top_template[:2, :2] = self.mass_total * np.eye(2)
+        self._cache_key, self._cache_val = None, None
+        self._pcache = (None, None, None)
+
+        # ------------------------------------------------ stiffness
+        if strain == "linear":
+            K = _restrict(beam.stiffness(), free)
+        else:
+            K = _restrict(asm(bending, b, EI=sec.EI) + asm(shear, beam.shear_basis, kGA=sec.kGA), free)
+        self._K = K if self.sparse else K.toarray()
+        self._check_stiffness(_restrict(beam.stiffness(), free))
+        # quadrature arrays of the axial kernel and of the output strains
+        ed = beam.element_dofs
+        self._eu, self._ew, self._eth = ed[:, 0::3], ed[:, 1::3], ed[:, 2::3]
+        self._dN, self._dx = qd.dNdx, qd.dx
+        if np.allclose(qd.dNdx, qd.dNdx[:, :, :1]):     # P1: u', w' constant per element, one point is exact
+            self._dN, self._dx = qd.dNdx[:, :, :1].copy(), qd.dx.sum(axis=1, keepdims=True)
+        self._gl_cache = {}
+        self._N = qd.N
+        self._sq = beam.shear_quadrature
+        self._EA = sec.EA
+        # D = [D_u; D_w] maps q_f to (u', w') at the quadrature points, so that the axial kernel is a
+        # few matrix products: dε = diag(1 + u') D_u + diag(w') D_w, ∇V_ax = dεᵀ (EA ε dx), ...
+        nel, nqp = self._dx.shape
+        nq = nel * nqp
+        self._nq = nq
+        blocks = []
+        for e_dofs in (self._eu, self._ew):
+            loc = red[e_dofs]                                            # (nel, nl)
+            rows = np.broadcast_to((np.arange(nel)[:, None] * nqp + np.arange(nqp)[None, :])[:, :, None],
+                                   (nel, nqp, loc.shape[1]))
+            cols = np.broadcast_to(loc[:, None, :], rows.shape)
+            vals = self._dN.transpose(1, 2, 0)
+            keep = cols >= 0
+            blocks.append(sps.csr_matrix((vals[keep], (rows[keep], cols[keep])), shape=(nq, nf)))
+        D = sps.vstack(blocks).tocsr()
+        self._D = D if self.sparse else D.toarray()
+        self._DT = self._D.T.tocsr() if self.sparse else np.ascontiguousarray(self._D.T)
+        self._wq = (sec.EA * self._dx).ravel()                           # EA dx per point
+
+        # ------------------------------------------------ initial state
+        qf0 = np.zeros(nf) if elastic is None else check_finite_vector("elastic", elastic, nf)
+        vf0 = np.zeros(nf) if elastic_velocity is None else check_finite_vector("elastic_velocity",
+                                                                                elastic_velocity, nf)
+        pos = check_finite_vector("position", position, 2)
+        vel = check_finite_vector("velocity", velocity, 2)
+        ang = check_finite_vector("angle", angle, 1)
+        om = check_finite_vector("angular_velocity", angular_velocity, 1)
+        self.q0 = np.concatenate([pos, ang, qf0])
+        self.v0 = np.concatenate([vel, om, vf0])
+
+    # ================================================================ setup helpers
+    def _reference_dofs(self, reference):
+        beam = self.beam
+        if isinstance(reference, str):
+            if reference == "clamped":
+                spec = [(self.x_min, "u"), (self.x_min, "w"), (self.x_min, "theta")]
+            elif reference == "pinned":
+                spec = [(self.x_min, "u"), (self.x_min, "w"), (self.x_max, "w")]
+            else:
+                raise ValueError(f"reference must be 'clamped', 'pinned' or a sequence of (x, field) pairs, "
+                                 f"got {reference!r}")
+        else:
+            try:
+                spec = [(float(x), str(f)) for x, f in reference]
+            except (TypeError, ValueError):
+                raise ValueError(f"reference must be 'clamped', 'pinned' or a sequence of (x, field) pairs, "
+                                 f"got {reference!r}") from None
+        fixed = []
+        for x, f in spec:
+            if f not in _FIELDS:
+                raise ValueError(f"reference field must be one of 'u', 'w', 'theta', got {f!r}")
+            fixed.append(int(beam.dofs_at(x)[_FIELDS[f]]))
+        fixed = np.array(fixed, dtype=int)
+        if np.unique(fixed).size != fixed.size:
+            raise ValueError(f"reference condition {reference!r} names a DOF twice")
+        # infinitesimal rigid modes of the beam: translation x, translation y, rotation
+        rig = np.zeros((beam.n_dofs, 3))
+        nd = beam.node_dofs
+        rig[nd[:, 0], 0] = 1.0
+        rig[nd[:, 1], 1] = 1.0
+        rig[nd[:, 1], 2] = beam.x_nodes
+        rig[nd[:, 2], 2] = 1.0
+        rank = np.linalg.matrix_rank(rig[fixed], tol=1e-9 * max(1.0, beam.length))
+        if rank < 3:
+            raise ValueError(f"reference condition {reference!r} leaves {3 - rank} rigid-body mode(s) in the "
+                             f"elastic coordinates (singular elastic stiffness); fix u, w, theta at the root "
+                             f"('clamped') or u, w at the root and w at the tip ('pinned')")
+        if fixed.size > 3:
+            raise ValueError(f"reference condition {reference!r} over-constrains the beam: it fixes "
+                             f"{fixed.size} elastic DOFs, but only the 3 rigid-body modes may be removed")
+        return fixed
+
+    def _check_stiffness(self, K):
+        """The linear elastic stiffness on q_f must be regular (no rigid modes left)."""
+        if K.shape[0] <= 600:
+            ev = np.linalg.eigvalsh(K.toarray())
+            if ev[0] <= 1e-13 * ev[-1]:
+                raise ValueError(f"the elastic stiffness with reference {self.reference!r} is singular: "
+                                 f"rigid-body modes remain in q_f")
+
+    @property
+    def coordinate_names(self):
+        return self._names
+
+    def elastic_vector(self, u=None, w=None, theta=None):
+        """q_f from nodal fields: callables of x (m) or arrays over ``beam.x_nodes``.
+
+        Raises ``ValueError`` if a value at an eliminated DOF is not zero.
+        """
+        full = np.zeros(self.beam.n_dofs)
+        x = self.beam.x_nodes
+        for k, fld in enumerate((u, w, theta)):
+            if fld is None:
+                continue
+            vals = np.asarray(fld(x) if callable(fld) else fld, dtype=float)
+            vals = np.broadcast_to(vals, x.shape)
+            if not np.all(np.isfinite(vals)):
+                raise ValueError(f"elastic field {_FIELD_NAMES[k]} is not finite")
+            full[self.beam.node_dofs[:, k]] = vals
+        bad = np.abs(full[self.fixed_dofs])
+        if bad.size and bad.max() > 1e-12 * max(1.0, np.abs(full).max()):
+            raise ValueError(f"elastic fields are not zero at the DOFs the reference condition "
+                             f"{self.reference!r} eliminates: {full[self.fixed_dofs]}")
+        return full[self.free_dofs].copy()
+
+    def full_elastic(self, q):
+        """Beam DOF vector (u, w, φ per node, scikit-fem numbering) of the body coordinates q."""
+        d = np.zeros(self.beam.n_dofs)
+        d[self.free_dofs] = q[3:]
+        return d
+
+    def nodal_fields(self, q):
+        """(x, u, w, φ) at the nodes along the beam, in the body frame (m, m, m, rad)."""
+        d = self.full_elastic(q)
+        nd = self.beam.node_dofs
+        return self.beam.x_nodes.copy(), d[nd[:, 0]], d[nd[:, 1]], d[nd[:, 2]]
+
+    # ================================================================ matrix composition
+    def _compose(self, top, left, ff):
+        """n × n matrix from its reference rows ``top`` (3, n), the block ``left`` (nf, 3) below
+        them and the elastic block ``ff`` (nf, nf) (None = 0)."""
+        n = self.n_dofs
+        if not self.sparse:
+            out = np.zeros((n, n))
+            out[:3] = top
+            out[3:, :3] = left
+            if ff is not None:
+                out[3:, 3:] = ff.toarray() if sps.issparse(ff) else ff
+            return out
+        border = np.zeros((n, 3))
+        border[3:] = left
+        r1, c1 = np.nonzero(top)
+        r2, c2 = np.nonzero(border)
+        rows, cols, vals = [r1, r2], [c1, c2], [top[r1, c1], border[r2, c2]]
+        if ff is not None:
+            c = sps.coo_matrix(ff)
+            rows.append(c.row + 3)
+            cols.append(c.col + 3)
+            vals.append(c.data)
+        return sps.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
+
+    def _ff_only(self, ff):
+        n = self.n_dofs
+        if not self.sparse:
+            out = np.zeros((n, n))
+            out[3:, 3:] = ff.toarray() if sps.issparse(ff) else ff
+            return out
+        c = sps.coo_matrix(ff)
+        return sps.csr_matrix((c.data, (c.row + 3, c.col + 3)), shape=(n, n))
+
+    # ================================================================ kinetic
+    def _parts(self, q):
+        """(A, q_f, s̄, c_m = c + M_A q_f, a = k0 + n_φ + H q_f, J) at q; one-entry cache (Newton
+        evaluates M, p, B at the same q several times per iteration)."""
+        key = q.tobytes()
+        if key == self._cache_key:
+            return self._cache_val
+        A = _rot(q[2])
+        qf = np.array(q[3:], dtype=float)
+        y = self._Pq @ qf
+        nf = self.n_elastic
+        sbar = self._S0 + y[:2]
+        cm = self._c + y[2:2 + nf]
+        a = self._k0n + y[2 + nf:]
+        J = self._I0 + float(qf @ (self._c + cm))
+        self._cache_key, self._cache_val = key, (A, qf, sbar, cm, a, J)
+        return self._cache_val
+
+    def mass_matrix(self, q):
+        """M(q) (eq. 16), kg, kg m, kg m²."""
+        A, qf, sbar, cm, a, J = self._parts(q)
+        AEs = A @ (E2 @ sbar)
+        ASb = A @ self._Sbar
+        top = self._top_template.copy()
+        top[:2, 2] = AEs
+        top[:2, 3:] = ASb
+        top[2, :2] = AEs
+        top[2, 2] = J
+        top[2, 3:] = a
+        left = np.empty((self.n_elastic, 3))
+        left[:, :2] = ASb.T
+        left[:, 2] = a
+        return self._compose(top, left, self._Mff)
+
+    def momentum(self, q, v):
+        """p = M(q) v."""
+        key = v.tobytes()
+        A, qf, sbar, cm, a, J = self._parts(q)
+        if self._pcache[0] is self._cache_val and self._pcache[1] == key:
+            return self._pcache[2].copy()
+        V, om, f = v[:2], float(v[2]), v[3:]
+        AEs = A @ (E2 @ sbar)
+        Sf = self._Sbar @ f
+        p = np.empty(self.n_dofs)
+        p[:2] = self.mass_total * V + om * AEs + A @ Sf
+        p[2] = AEs @ V + J * om + a @ f
+        p[3:] = self._SbarT @ (A.T @ V) + om * a + self._Mff @ f
+        self._pcache = (self._cache_val, key, p.copy())
+        return p
+
+    def kinetic_energy(self, q, v):
+        return 0.5 * float(v @ self.momentum(q, v))
+
+    def momentum_jacobian(self, q, v):
+        """B(q, v) = ∂(M(q) v)/∂q."""
+        A, qf, sbar, cm, a, J = self._parts(q)
+        V, om, f = v[:2], float(v[2]), v[3:]
+        n = self.n_dofs
+        b = A.T @ V
+        AE = A @ E2
+        Sf = self._Sbar @ f
+        SbEb = self._SbEt @ b
+        top = np.zeros((3, n))
+        top[:2, 2] = -om * (A @ sbar) + AE @ Sf
+        top[:2, 3:] = om * (AE @ self._Sbar)
+        top[2, 2] = -float(b @ sbar)
+        top[2, 3:] = SbEb + 2.0 * om * cm - self._H @ f
+        left = np.zeros((self.n_elastic, 3))
+        left[:, 2] = SbEb
+        return self._compose(top, left, om * self._H)
+
+    def quadratic_velocity_force(self, q, v):
+        """Q_v = ∂T/∂q − Ṁ v (eq. 26) with ∂Q_v/∂q and ∂Q_v/∂v."""
+        A, qf, sbar, cm, a, J = self._parts(q)
+        om, f = float(v[2]), v[3:]
+        n = self.n_dofs
+        AE = A @ E2
+        Sf = self._Sbar @ f
+        Hf = self._H @ f
+        g = np.empty(n)
+        inner = om * om * sbar - 2.0 * om * (E2 @ Sf)
+        g[:2] = A @ inner
+        g[2] = -2.0 * om * float(cm @ f)
+        g[3:] = om * om * cm - 2.0 * om * Hf
+        tq = np.zeros((3, n))
+        tq[:2, 2] = AE @ inner
+        tq[:2, 3:] = om * om * (A @ self._Sbar)
+        tq[2, 3:] = -2.0 * om * (self._MA @ f)
+        gq = self._compose(tq, np.zeros((self.n_elastic, 3)), om * om * self._MA)
+        tv = np.zeros((3, n))
+        tv[:2, 2] = A @ (2.0 * om * sbar - 2.0 * (E2 @ Sf))
+        tv[:2, 3:] = -2.0 * om * (AE @ self._Sbar)
+        tv[2, 2] = -2.0 * float(cm @ f)
+        tv[2, 3:] = -2.0 * om * cm
+        lv = np.zeros((self.n_elastic, 3))
+        lv[:, 2] = 2.0 * om * cm - 2.0 * Hf
+        gv = self._compose(tv, lv, -2.0 * om * self._H)
+        return g, gq, gv
+
+    def kinetic_discrete_gradient(self, q0, q1, v0, v1):
+        """Exact discrete gradient of G(q) = ½ v0ᵀ M(q) v1 with its derivatives (ENERGY_SCHEME.md).
+
+        With b_i = A(θ_m)ᵀ Ṙ_i, s̄_m = s̄(q_f,m), c_i = ω_i E s̄_m + S̄ f_i, σ = sinc(Δθ/2), κ = cos(Δθ/2)::
+
+            g_R = 0,   g_θ = ½ σ (b_0·E c_1 + b_1·E c_0)
+            g_f = ½ κ S̄ᵀEᵀ(ω_1 b_0 + ω_0 b_1) + ω_0 ω_1 (c + M_A q_f,m) − ½ H (ω_0 f_1 + ω_1 f_0)
+
+        The derivatives include those of σ and κ (exact tangent).
+        """
+        n, nf = self.n_dofs, self.n_elastic
+        d = float(q1[2] - q0[2])
+        tm = 0.5 * float(q0[2] + q1[2])
+        ca, sa = math.cos(tm), math.sin(tm)
+        sig, dsig = _sinc_half(d)
+        kap, dkap = math.cos(0.5 * d), -0.5 * math.sin(0.5 * d)
+        y = self._Pq @ (0.5 * (q0[3:] + q1[3:]))
+        smx, smy = self._S0[0] + y[0], y[1]
+        cmm = self._c + y[2:2 + nf]
+        w0, w1 = float(v0[2]), float(v1[2])
+        b0x, b0y = ca * v0[0] + sa * v0[1], -sa * v0[0] + ca * v0[1]
+        b1x, b1y = ca * v1[0] + sa * v1[1], -sa * v1[0] + ca * v1[1]
+        yf = self._Pf @ np.stack([v0[3:], v1[3:]], axis=1)   # (2 + nf, 2): S̄ f_i, H f_i
+        Hf0, Hf1 = yf[2:, 0], yf[2:, 1]
+        c0x, c0y = -w0 * smy + yf[0, 0], w0 * smx + yf[1, 0]     # c_i = ω_i E s̄_m + S̄ f_i
+        c1x, c1y = -w1 * smy + yf[0, 1], w1 * smx + yf[1, 1]
+        X = (-b0x * c1y + b0y * c1x) + (-b1x * c0y + b1y * c0x)  # b0·E c1 + b1·E c0
+        wb = np.array([w1 * b0x + w0 * b1x, w1 * b0y + w0 * b1y])
+        SbEwb = self._SbEt @ wb
+        SbTwb = self._SbarT @ wb
+        g = np.zeros(n)
+        g[2] = 0.5 * sig * X
+        g[3:] = 0.5 * kap * SbEwb + (w0 * w1) * cmm - 0.5 * (w0 * Hf1 + w1 * Hf0)
+        tq = np.zeros((3, n))
+        tq[2, 2] = 0.5 * dsig * X - 0.25 * sig * (b0x * c1x + b0y * c1y + b1x * c0x + b1y * c0y)
+        tq[2, 3:] = -0.25 * sig * SbTwb
+        lq = np.zeros((nf, 3))
+        lq[:, 2] = 0.5 * dkap * SbEwb - 0.25 * kap * SbTwb
+        gq = self._compose(tq, lq, (0.5 * w0 * w1) * self._MA)
+        SbEb0 = self._SbEt @ np.array([b0x, b0y])
+        tv = np.zeros((3, n))
+        e0x, e0y = -c0y, c0x                                       # E c_0, then A_m E c_0
+        tv[2, 0] = 0.5 * sig * (ca * e0x - sa * e0y)
+        tv[2, 1] = 0.5 * sig * (sa * e0x + ca * e0y)
+        tv[2, 2] = -0.5 * sig * (b0x * smx + b0y * smy)
+        tv[2, 3:] = 0.5 * sig * SbEb0
+        lv = np.zeros((nf, 3))
+        lv[:, :2] = (0.5 * kap * w0) * (self._SbEt @ np.array([[ca, sa], [-sa, ca]]))
+        lv[:, 2] = 0.5 * kap * SbEb0 + w0 * cmm - 0.5 * Hf0
+        gv = self._compose(tv, lv, (-0.5 * w0) * self._H)
+        return g, gq, gv
+
+    # ================================================================ strain energy
+    def _axial(self, qf):
+        """u', w' at the quadrature points (flattened, length n_q) of the elastic vector qf."""
+        y = self._D @ qf
+        return y[:self._nq], y[self._nq:]
+
+    def _deps(self, up, wp):
+        """dε/dq_f at the quadrature points, shape (n_q, n_elastic): diag(1 + u') D_u + diag(w') D_w."""
+        nq = self._nq
+        if self.sparse:
+            return (sps.diags(1.0 + up) @ self._D[:nq] + sps.diags(wp) @ self._D[nq:]).tocsr()
+        return (1.0 + up)[:, None] * self._D[:nq] + wp[:, None] * self._D[nq:]
+
+    def _tangent(self, w, de_a, de_b, weps):
+        """Σ_k w_k de_a,kᵀ de_b,k + Σ_k weps_k d²ε_k, with d²ε = D_uᵀD_u + D_wᵀD_w per point."""
+        w2 = np.concatenate([weps, weps])
+        if self.sparse:
+            return (de_a.T @ sps.diags(w) @ de_b + self._DT @ sps.diags(w2) @ self._D).tocsr()
+        return (de_a.T * w) @ de_b + (self._DT * w2) @ self._D
+
+    def _gl(self, qf):
+        """(u', w', ε) at the quadrature points; two-entry cache (q0 is reused through a step)."""
+        key = qf.tobytes()
+        hit = self._gl_cache.get(key)
+        if hit is not None:
+            return hit
+        up, wp = self._axial(qf)
+        val = (up, wp, up + 0.5 * (up * up + wp * wp))
+        if len(self._gl_cache) >= 2:
+            self._gl_cache.pop(next(iter(self._gl_cache)))
+        self._gl_cache[key] = val
+        return val
+
+    def potential_energy(self, q):
+        """Strain energy V(q_f), J."""
+        qf = q[3:]
+        e = 0.5 * float(qf @ (self._K @ qf))
+        if self.strain == "green-lagrange":
+            eps = self._gl(qf)[2]
+            e += 0.5 * float(self._wq @ (eps * eps))
+        return e
+
+    def potential_gradient(self, q):
+        qf = q[3:]
+        g = np.zeros(self.n_dofs)
+        g[3:] = self._K @ qf
+        if self.strain == "green-lagrange":
+            up, wp, eps = self._gl(qf)
+            t = self._wq * eps
+            g[3:] += self._DT @ np.concatenate([t * (1.0 + up), t * wp])
+        return g
+
+    def potential_hessian(self, q):
+        qf = q[3:]
+        if self.strain == "linear":
+            return self._ff_only(self._K)
+        up, wp, eps = self._gl(qf)
+        de = self._deps(up, wp)
+        return self._ff_only(self._K + self._tangent(self._wq, de, de, self._wq * eps))
+
+    def potential_discrete_gradient(self, q0, q1):
+        """Stress at the mean strain: g · (q1 − q0) = V(q1) − V(q0) exactly; with ∂g/∂q1.
+
+        Axial part (ε quadratic in q_f, so ε(q1) − ε(q0) = dε(q_m)·Δq exactly)::
+
+            g = Σ_k EA dx ½(ε_k(q0) + ε_k(q1)) dε_k(q_m)
+            ∂g/∂q1 = ½ Σ_k EA dx [dε_k(q_m)ᵀ dε_k(q1) + ½(ε_k(q0) + ε_k(q1)) d²ε_k]
+        """
+        qm = 0.5 * (q0[3:] + q1[3:])
+        g = np.zeros(self.n_dofs)
+        g[3:] = self._K @ qm
+        if self.strain == "linear":
+            return g, self._ff_only(0.5 * self._K)
+        up0, wp0, e0 = self._gl(q0[3:])
+        up1, wp1, e1 = self._gl(q1[3:])
+        upm, wpm = 0.5 * (up0 + up1), 0.5 * (wp0 + wp1)
+        t = self._wq * (0.5 * (e0 + e1))
+        g[3:] += self._DT @ np.concatenate([t * (1.0 + upm), t * wpm])
+        dem, de1 = self._deps(upm, wpm), self._deps(up1, wp1)
+        return g, self._ff_only(0.5 * self._K + self._tangent(0.5 * self._wq, dem, de1, 0.5 * t))
+
+    def strains(self, q):
+        """Axial strain ε and force N (exact rule), curvature κ and moment M (exact rule), shear strain
+        γ and force (shear rule), each of shape (n_elements, n_points)."""
+        d = self.full_elastic(q)
+        up = np.einsum("el,lek->ek", d[self._eu], self._dN)
+        wp = np.einsum("el,lek->ek", d[self._ew], self._dN)
+        eps = up + 0.5 * (up * up + wp * wp) if self.strain == "green-lagrange" else up
+        kap = np.einsum("el,lek->ek", d[self._eth], self._dN)
+        sq = self._sq
+        gam = (np.einsum("el,lek->ek", d[self._ew], sq.dNdx) - np.einsum("el,lek->ek", d[self._eth], sq.N))
+        s = self.section
+        return dict(axial_strain=eps, axial_force=s.EA * eps, curvature=kap, bending_moment=s.EI * kap,
+                    shear_strain=gam, shear_force=s.kGA * gam)
+
+    def element_strain_energy(self, q):
+        """Strain energy of each element, J (sums to :meth:`potential_energy`)."""
+        st = self.strains(q)
+        s = self.section
+        return (0.5 * np.sum((s.EA * st["axial_strain"] ** 2 + s.EI * st["curvature"] ** 2) * self._dx, axis=1)
+                + 0.5 * s.kGA * np.sum(st["shear_strain"] ** 2 * self._sq.dx, axis=1))
+
+    # ================================================================ frame-linear maps
+    def _lin_parts(self, q, y0, Y):
+        A = _rot(q[2])
+        return A, y0 + Y @ q[3:]
+
+    def _map_hessian(self, q, f, y0, Y):
+        """∂/∂q of (∂r/∂q)ᵀ f for r = R + A(θ)(y0 + Y q_f)."""
+        A, s = self._lin_parts(q, y0, Y)
+        top = np.zeros((3, self.n_dofs))
+        top[2, 2] = -float(f @ (A @ s))
+        row = (f @ (A @ E2)) @ Y
+        top[2, 3:] = row
+        left = np.zeros((self.n_elastic, 3))
+        left[:, 2] = row
+        return self._compose(top, left, None)
+
+    def _map_dg(self, q0, q1, y0, Y, mR=1.0):
+        """D (2, n) with D (q1 − q0) = r(q1) − r(q0), r = mR R + A(θ)(y0 + Y q_f)."""
+        d = q1[2] - q0[2]
+        Am = _rot(0.5 * (q0[2] + q1[2]))
+        sig, _ = _sinc_half(d)
+        sm = y0 + Y @ (0.5 * (q0[3:] + q1[3:]))
+        D = np.empty((2, self.n_dofs))
+        D[:, :2] = mR * np.eye(2)
+        D[:, 2] = sig * (Am @ (E2 @ sm))
+        D[:, 3:] = math.cos(0.5 * d) * (Am @ Y)
+        return D
+
+    def _map_dg_jacobian(self, q0, q1, f, y0, Y):
+        """∂(Dᵀ f)/∂q1 for :meth:`_map_dg`."""
+        d = q1[2] - q0[2]
+        Am = _rot(0.5 * (q0[2] + q1[2]))
+        sig, dsig = _sinc_half(d)
+        kap = math.cos(0.5 * d)
+        sm = y0 + Y @ (0.5 * (q0[3:] + q1[3:]))
+        fA = f @ Am
+        top = np.zeros((3, self.n_dofs))
+        top[2, 2] = dsig * float(fA @ (E2 @ sm)) - 0.5 * sig * float(fA @ sm)
+        top[2, 3:] = 0.5 * sig * ((fA @ E2) @ Y)
+        left = np.zeros((self.n_elastic, 3))
+        left[:, 2] = -0.5 * math.sin(0.5 * d) * (Y.T @ fA) + 0.5 * kap * (Y.T @ (E2.T @ fA))
+        return self._compose(top, left, None)
+
+    # ================================================================ gravity
+    def mass_moment(self):
+        """Not linear in q (the frame turns): gravity goes through :meth:`gravity_potential`."""
+        raise NotImplementedError("FloatingBeam positions are not linear in q; use gravity_potential")
+
+    def gravity_potential(self, q, g):
+        """V = −g · ∫ρA r dx = −g · (m R + A s̄), with gradient and Hessian."""
+        g = np.asarray(g, dtype=float)
+        A, s = self._lin_parts(q, self._S0, self._Sbar)
+        V = -float(g @ (self.mass_total * q[:2] + A @ s))
+        grad = np.empty(self.n_dofs)
+        grad[:2] = -self.mass_total * g
+        grad[2] = -float(g @ (A @ (E2 @ s)))
+        grad[3:] = -(self._Sbar.T @ (A.T @ g))
+        return V, grad, self._map_hessian(q, -g, self._S0, self._Sbar)
+
+    def gravity_discrete_gradient(self, q0, q1, g):
+        """Exact discrete gradient of the gravity potential (sinc/cos identities), with ∂/∂q1."""
+        g = np.asarray(g, dtype=float)
+        D = self._map_dg(q0, q1, self._S0, self._Sbar, self.mass_total)
+        return -(g @ D), self._map_dg_jacobian(q0, q1, -g, self._S0, self._Sbar)
+
+    # ================================================================ momenta
+    def linear_momentum(self, q, v):
+        """∫ρA ṙ dx = p_R, kg m/s."""
+        return self.momentum(q, v)[:2].copy()
+
+    def angular_momentum(self, q, v):
+        """∫ρA r × ṙ + ρI (θ̇ + φ̇) dx about the origin = R × p_R + p_θ, kg m²/s."""
+        p = self.momentum(q, v)
+        return _cross(q[:2], p[:2]) + float(p[2])
+
+    # ================================================================ points, probes, output
+    def _check_x(self, x, what="point"):
+        if isinstance(x, bool) or not np.isscalar(x) or not np.isfinite(x):
+            raise ValueError(f"{what}: axial coordinate x must be a finite number, got {x!r}")
+        tol = 1e-9 * self.beam.length
+        if not self.x_min - tol <= x <= self.x_max + tol:
+            raise ValueError(f"{what}: x = {x!r} lies outside beam {self.name!r} [{self.x_min}, {self.x_max}]")
+        return float(np.clip(x, self.x_min, self.x_max))
+
+    def shape_at(self, x):
+        """(S(x) (2, n_elastic), N_φ(x) (n_elastic,)) at axial coordinate x (m)."""
+        x = self._check_x(x)
+        beam = self.beam
+        pr = beam.field_basis.probes(np.array([[x]])).tocsr()
+        S = np.zeros((3, beam.n_dofs))
+        for k in range(3):
+            S[k, beam.field_dofs[k][pr.indices]] = pr.data
+        S = S[:, self.free_dofs]
+        return S[:2].copy(), S[2].copy()
+
+    def point(self, locator=None):
+        """The material point of the axis at x = ``locator`` (m; default the tip)."""
+        x = self.x_max if locator is None else locator
+        return _BeamPoint(self, self._check_x(x))
+
+    def displacement(self, q, x=None):
+        """Elastic displacement (u, w) of the axis at x in the body frame, m (default: tip)."""
+        S, _ = self.shape_at(self.x_max if x is None else x)
+        return S @ q[3:]
+
+    def displacement_probe(self, x=None, scene_body=None):
+        """Probe ``(scene, t, q, v) -> (u, w)`` of the body-frame displacement at x (default: tip).
+
+        Raises ``ValueError`` if x lies outside the beam."""
+        S, _ = self.shape_at(self.x_max if x is None else x)
+        body = self
+
+        def probe(scene, t, q, v):
+            return S @ scene.coordinates(body, q)[3:]
+        return probe
+
+    def geometry(self, q, v):
+        """Nodes in the global frame as line cells, with displacement, velocity, angle and section forces."""
+        x, u, w, ph = self.nodal_fields(q)
+        dv = self.full_elastic(v)
+        nd = self.beam.node_dofs
+        du, dw = dv[nd[:, 0]], dv[nd[:, 1]]
+        A = _rot(q[2])
+        s = np.stack([x + u, w], axis=1)
+        pts = q[:2] + s @ A.T
+        ref = self.q0[:2] + np.stack([x, np.zeros_like(x)], axis=1) @ _rot(self.q0[2]).T
+        om = v[2]
+        vel = v[:2] + (om * (s @ E2.T) + np.stack([du, dw], axis=1)) @ A.T
+        node_of_u = np.empty(self.beam.n_dofs, dtype=int)
+        node_of_u[nd[:, 0]] = np.arange(nd.shape[0])
+        conn = node_of_u[self._eu]
+        cell = "line" if conn.shape[1] == 2 else "line3"
+        st = self.strains(q)
+        h = self.beam.element_lengths
+        cd = {"axial_force": [st["axial_force"].mean(axis=1)],
+              "shear_force": [st["shear_force"].mean(axis=1)],
+              "bending_moment": [st["bending_moment"].mean(axis=1)],
+              "strain_energy_density": [self.element_strain_energy(q) / h]}
+        pd = {"displacement": pts - ref, "velocity": vel, "angle": q[2] + ph}
+        return BodyGeometry(pts, [(cell, conn)], pd, cd)
+
+    # ================================================================ steady rotation
+    def centrifugal_equilibrium(self, omega, tol=1e-12, max_iterations=50):
+        """Static elastic state q_f of the beam turning at constant ω (rad/s) with R fixed.
+
+        Solves ∇V(q_f) = ω² (c + M_A q_f) (centrifugal load, eq. 26) by Newton with the
+        tangent K_T(q_f) − ω² M_A.
+
+        Raises
+        ------
+        ValueError
+            If ω is not finite or Newton does not converge (e.g. beyond a divergence speed).
+        """
+        om = float(omega)
+        if not np.isfinite(om):
+            raise ValueError(f"omega must be finite, got {omega!r}")
+        q = self.q0.copy()
+        q[3:] = 0.0
+        MA = self._MA
+        for _ in range(max_iterations):
+            r = self.potential_gradient(q)[3:] - om * om * (self._c + MA @ q[3:])
+            K = self.potential_hessian(q)[3:, 3:] - om * om * MA
+            scale = max(np.abs(om * om * self._c).max(), 1e-300)
+            if np.abs(r).max() <= tol * scale:
+                return q[3:].copy()
+            dq = spla.spsolve(sps.csc_matrix(K), r) if sps.issparse(K) else np.linalg.solve(K, r)
+            q[3:] -= dq
+        raise ValueError(f"centrifugal equilibrium at omega = {om} did not converge")
+
+    def rotating_modes(self, omega, n_modes=3, bending_only=True):
+        """Natural frequencies (rad/s) in the frame turning at constant ω, about the stretched state.
+
+        Linearisation of the elastic equations (R fixed, θ̇ = ω)::
+
+            M_ff δq̈ + 2ω H δq̇ + (K_T(q_f*) − ω² M_A) δq = 0
+
+        with K_T the tangent stiffness at the centrifugal equilibrium q_f* (for the
+        Green–Lagrange strain it holds the geometric stiffness N δw'² — the centrifugal
+        stiffening), −ω² M_A the centrifugal softening (its transverse part is the "−1" of
+        in-plane bending) and 2ωH the Coriolis (gyroscopic) coupling of axial and transverse
+        motion. Solved as a first-order eigenproblem; frequencies are the positive imaginary
+        parts. With ``bending_only`` modes whose kinetic energy is mostly axial are skipped.
+
+        Returns
+        -------
+        omega_n : ndarray (n_modes,)
+            Frequencies in rad/s, ascending.
+        shapes : ndarray (n_elastic, n_modes)
+            Real parts of the displacement eigenvectors (normalised to unit max).
+        """
+        om = float(omega)
+        qf = self.centrifugal_equilibrium(om)
+        q = self.q0.copy()
+        q[3:] = qf
+        K = self.potential_hessian(q)[3:, 3:]
+        K = (K.toarray() if sps.issparse(K) else K) - om * om * _dense(self._MA)
+        M = _dense(self._Mff)
+        G = 2.0 * om * _dense(self._H)
+        nf = self.n_elastic
+        I = np.eye(nf)
+        Z = np.zeros((nf, nf))
+        a = np.block([[Z, I], [-K, -G]])
+        bm = np.block([[I, Z], [Z, M]])
+        lam, vec = sla.eig(a, bm)
+        finite = np.isfinite(lam)                   # ρI = 0 leaves infinite eigenvalues
+        lam, vec = lam[finite], vec[:, finite]
+        keep = lam.imag > 1e-9 * max(1.0, np.abs(lam).max())
+        lam, vec = lam[keep], vec[:nf, keep]
+        order = np.argsort(lam.imag)
+        lam, vec = lam[order], vec[:, order]
+        if bending_only:
+            d = np.zeros((self.beam.n_dofs, vec.shape[1]), dtype=complex)
+            d[self.free_dofs] = vec
+            ax = np.sum(np.abs(d[self.beam.node_dofs[:, 0]]) ** 2, axis=0)
+            tr = np.sum(np.abs(d[self.beam.node_dofs[:, 1]]) ** 2, axis=0)
+            sel = tr > ax
+            lam, vec = lam[sel], vec[:, sel]
+        if lam.size < n_modes:
+            raise ValueError(f"only {lam.size} modes available, asked for {n_modes}")
+        shapes = np.real(vec[:, :n_modes] * np.exp(-1j * np.angle(vec[np.argmax(np.abs(vec[:, :n_modes]), axis=0),
+                                                                        np.arange(n_modes)])))
+        shapes /= np.abs(shapes).max(axis=0)
+        return lam.imag[:n_modes].copy(), shapes
+
+
+def _dense(a):
+    return a.toarray() if sps.issparse(a) else np.asarray(a)
+
+
+class _BeamPoint(BodyPoint):
+    """Material point of the axis of a :class:`FloatingBeam`: r = R + A(θ)(x0 + S(x) q_f)."""
+
+    has_angle = True
+
+    def __init__(self, body, x):
+        self.body, self.x = body, x
+        self.S, self.Nphi = body.shape_at(x)
+        self.y0 = np.array([x, 0.0])
+        grad = np.zeros(body.n_dofs)
+        grad[2] = 1.0
+        grad[3:] = self.Nphi
+        self._angle_grad = grad
+
+    def position(self, q):
+        return q[:2] + _rot(q[2]) @ (self.y0 + self.S @ q[3:])
+
+    def position_jacobian(self, q):
+        A = _rot(q[2])
+        s = self.y0 + self.S @ q[3:]
+        J = np.empty((2, self.body.n_dofs))
+        J[:, :2] = np.eye(2)
+        J[:, 2] = A @ (E2 @ s)
+        J[:, 3:] = A @ self.S
+        return J
+
+    def position_hessian_product(self, q, f):
+        return self.body._map_hessian(q, np.asarray(f, dtype=float), self.y0, self.S)
+
+    def position_discrete_gradient(self, q0, q1):
+        return self.body._map_dg(q0, q1, self.y0, self.S)
+
+    def position_discrete_gradient_jacobian(self, q0, q1, f):
+        return self.body._map_dg_jacobian(q0, q1, np.asarray(f, dtype=float), self.y0, self.S)
+
+    def angle(self, q):
+        return float(q[2] + self.Nphi @ q[3:])
+
+    def angle_jacobian(self, q):
+        return self._angle_grad.copy()
+
+
+class DistributedLoad(ForceElement):
+    """Loads of eq. (43) on a :class:`FloatingBeam`, in the body frame or in the global frame.
+
+    Generalized force Q = ∫ (∂r/∂q)ᵀ F dx (+ point terms), i.e. Q_R = ∫F, Q_θ = moment about the
+    frame origin, Q_f = ∫Sᵀ F_body (eq. 43); eq. (44) rotates global loads into the body frame.
+    All integrals are assembled once with ``TimoshenkoBeam.load``.
+
+    Parameters
+    ----------
+    body : FloatingBeam
+    f, p : float or callable of x, optional
+        Distributed load, N/m. ``frame="body"``: axial f and transverse p along the body-frame
+        axes (they turn with the frame). ``frame="global"``: f along global x, p along global y.
+    h, Q : (x, value) or sequence of (x, value), optional
+        Point forces, N, in the same components as (f, p).
+    M : (x, value) or sequence of (x, value), optional
+        Point moments, N m (frame-independent in the plane).
+    frame : {"body", "global"}
+    time_function : callable t -> float, optional
+        Scales the load in time (default 1).
+    name : str
+
+    Notes
+    -----
+    Body frame: Q_R = A F̄, Q_θ = m_0 + g_θᵀ q_f, Q_f = L. Global frame, (c, s) = (cos θ, sin θ):
+    Q_R = F̄, Q_f = L_M + c L_1 + s L_2, Q_θ = ΣM + c (m_y + L_2·q_f) − s (m_x + L_1·q_f).
+    The element is non-conservative; its work enters ``Result.external_work``.
+    """
+
+    conservative = False
+
+    def __init__(self, body, f=None, p=None, h=None, Q=None, M=None, frame="body", time_function=None,
+                 name="distributed load"):
+        if not isinstance(body, FloatingBeam):
+            raise ValueError(f"DistributedLoad needs a FloatingBeam, got {body!r}")
+        if frame not in ("body", "global"):
+            raise ValueError(f"frame must be 'body' or 'global', got {frame!r}")
+        if time_function is not None and not callable(time_function):
+            raise ValueError(f"time_function must be callable, got {time_function!r}")
+        self.body, self.bodies, self.frame, self.name = body, (body,), frame, name
+        self.time_function = time_function
+        beam, free = body.beam, body.free_dofs
+        qd = beam.quadrature
+        pairs = {k: beam._pairs(k, v) for k, v in (("h", h), ("Q", Q), ("M", M))}
+        for k, arr in pairs.items():
+            for x, _ in arr:
+                body._check_x(x, f"point load {k}")
+
+        def field(load):
+            if load is None:
+                return np.zeros_like(qd.x)
+            val = load(qd.x) if callable(load) else load
+            val = np.broadcast_to(np.asarray(val, dtype=float), qd.x.shape)
+            if not np.all(np.isfinite(val)):
+                raise ValueError(f"distributed load must be finite, got {load!r}")
+            return val
+
+        fx, px = field(f), field(p)
+        hh, QQ, MM = pairs["h"], pairs["Q"], pairs["M"]
+        self._Fbar = np.array([np.sum(fx * qd.dx) + hh[:, 1].sum(), np.sum(px * qd.dx) + QQ[:, 1].sum()])
+        self._mx = float(np.sum(qd.x * fx * qd.dx) + np.sum(hh[:, 0] * hh[:, 1]))
+        self._my = float(np.sum(qd.x * px * qd.dx) + np.sum(QQ[:, 0] * QQ[:, 1]))
+        self._M = float(MM[:, 1].sum())
+
+        def neg(load):
+            if load is None:
+                return None
+            return (lambda x: -np.asarray(load(x), dtype=float)) if callable(load) else -float(load)
+
+        swap = lambda arr: None if arr.size == 0 else [(x, -v) for x, v in arr]  # noqa: E731
+        self._L1 = beam.load(f=f, p=p, h=hh if hh.size else None, Q=QQ if QQ.size else None)[free]
+        self._L2 = beam.load(f=p, p=neg(f), h=QQ if QQ.size else None, Q=swap(hh))[free]
+        self._LM = beam.load(M=MM if MM.size else None)[free]
+
+    def _scale(self, t):
+        if self.time_function is None:
+            return 1.0
+        s = float(self.time_function(t))
+        if not np.isfinite(s):
+            raise ValueError(f"time_function({t}) is not finite: {s!r}")
+        return s
+
+    def generalized_force(self, q, v, t):
+        body = self.body
+        k = self._scale(t)
+        n = body.n_dofs
+        qf = q[3:]
+        c, s = math.cos(q[2]), math.sin(q[2])
+        out = np.empty(n)
+        top = np.zeros((3, n))
+        left = np.zeros((body.n_elastic, 3))
+        if self.frame == "body":
+            A = _rot(q[2])
+            out[:2] = A @ self._Fbar
+            out[2] = self._my + self._M + float(self._L2 @ qf)
+            out[3:] = self._LM + self._L1
+            top[:2, 2] = A @ (E2 @ self._Fbar)
+            top[2, 3:] = self._L2
+        else:
+            a2, a1 = self._my + float(self._L2 @ qf), self._mx + float(self._L1 @ qf)
+            out[:2] = self._Fbar
+            out[2] = self._M + c * a2 - s * a1
+            out[3:] = self._LM + c * self._L1 + s * self._L2
+            top[2, 2] = -s * a2 - c * a1
+            top[2, 3:] = c * self._L2 - s * self._L1
+            left[:, 2] = -s * self._L1 + c * self._L2
+        return k * out, k * body._compose(top, left, None), None

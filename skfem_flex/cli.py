@@ -1,0 +1,390 @@
+"""The ``skfem-flex`` command.
+
+::
+
+    skfem-flex run [SCENE] [--set key=value ...] [--t-end T] [--dt DT]
+                   [--integrator NAME] [--rho-inf R] [--out DIR] [--every N]
+                   [--no-vtk] [--quiet]
+    skfem-flex list
+
+``run`` builds a catalogue scene (default :data:`DEFAULT_SCENE`), integrates
+it and writes into DIR (default ``results/SCENE``): the VTK time series
+(``SCENE.pvd``, ``SCENE.vtu.series``, ``SCENE_NNNNNN.vtu``), ``summary.json``,
+``result.npz`` (:meth:`skfem_flex.Result.load`), ``probes.csv`` and PNG plots.
+
+Exit status: 0 on success, 2 on bad input (unknown scene or parameter, a
+value of the wrong type, dt ≤ 0, an unwritable output directory; one line on
+stderr, no traceback), 1 when the run stops early (Newton failure): the
+outputs written up to the last good step are kept and the summary says why.
+
+The parser is built from subcommands (:data:`SUBCOMMANDS`); a later
+``study`` command adds itself there.
+"""
+from __future__ import annotations
+
+import argparse
+import inspect
+import json
+import math
+import os
+import sys
+import time
+from pathlib import Path
+
+__all__ = ["main", "build_parser", "UsageError", "convert_setting", "DEFAULT_SCENE", "SUBCOMMANDS"]
+
+#: scene run by ``skfem-flex run`` without a SCENE argument
+DEFAULT_SCENE = "spin_up_beam"
+#: end time and step (s) for scenes that register no defaults of their own
+FALLBACK_T_END, FALLBACK_DT = 1.0, 0.01
+#: without --every, VTK output is thinned to at most about this many files
+MAX_FRAMES = 200
+
+
+class UsageError(Exception):
+    """Bad command-line input: reported in one line, exit status 2."""
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse parser whose errors are one line (raised as UsageError, reported by :func:`main`)."""
+
+    def error(self, message):
+        raise UsageError(f"{message} (see '{self.prog} --help')")
+
+
+def _positive_int(text):
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return n
+
+
+def _number(text):
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+
+
+# --------------------------------------------------------------------- settings
+_TRUE = {"1", "true", "yes", "on", "y", "t"}
+_FALSE = {"0", "false", "no", "off", "n", "f"}
+
+
+def convert_setting(key, text, default):
+    """Convert ``text`` to the type of the parameter's ``default`` (bool, int, float or str).
+
+    A parameter without a default (or with default None) takes an int, a
+    float or, failing both, the string.
+
+    Raises
+    ------
+    UsageError
+        Naming the parameter and the value.
+    """
+    if isinstance(default, bool):
+        low = text.strip().lower()
+        if low in _TRUE:
+            return True
+        if low in _FALSE:
+            return False
+        raise UsageError(f"--set {key}={text}: {key} is a yes/no parameter (true/false, 1/0), got {text!r}")
+    if isinstance(default, int):
+        try:
+            return int(text)
+        except ValueError:
+            pass
+        try:
+            x = float(text)
+        except ValueError:
+            x = math.nan
+        if math.isfinite(x) and x == int(x):
+            return int(x)
+        raise UsageError(f"--set {key}={text}: {key} needs an integer, got {text!r}")
+    if isinstance(default, float):
+        try:
+            x = float(text)
+        except ValueError:
+            raise UsageError(f"--set {key}={text}: {key} needs a number, got {text!r}") from None
+        if not math.isfinite(x):
+            raise UsageError(f"--set {key}={text}: {key} needs a finite number, got {text!r}")
+        return x
+    if isinstance(default, str):
+        return text
+    for kind in (int, float):
+        try:
+            return kind(text)
+        except ValueError:
+            pass
+    return text
+
+
+def _scene_settings(name, items):
+    """{parameter: value} from ``--set`` items, converted with the defaults' types."""
+    from . import scenes
+
+    params = {p: d for p, d, _ in scenes.parameters(name)}
+    out = {}
+    for item in items or ():
+        key, sep, text = item.partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise UsageError(f"--set expects key=value, got {item!r} (give the scene name before --set)")
+        if key not in params:
+            raise UsageError(f"scene {name!r} has no parameter {key!r}; it has: {', '.join(params) or 'none'}")
+        default = params[key]
+        out[key] = convert_setting(key, text, None if default is inspect.Parameter.empty else default)
+    missing = [p for p, d in params.items() if d is inspect.Parameter.empty and p not in out]
+    if missing:
+        raise UsageError(f"scene {name!r} needs --set {missing[0]}=VALUE")
+    return out
+
+
+# ------------------------------------------------------------------- helpers
+def _one_line(text):
+    return " ".join(str(text).split())
+
+
+def _jsonable(x):
+    """x with numpy scalars/arrays made plain and non-finite floats made strings (strict JSON)."""
+    import numpy as np
+
+    if isinstance(x, dict):
+        return {str(k): _jsonable(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_jsonable(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return _jsonable(x.tolist())
+    if isinstance(x, np.generic):
+        x = x.item()
+    if isinstance(x, float) and not math.isfinite(x):
+        return str(x)
+    if isinstance(x, (bool, int, float, str)) or x is None:
+        return x
+    return str(x)
+
+
+def _prepare_out(out):
+    """Create the output directory and check that it is writable (UsageError otherwise)."""
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"--out {str(out)!r} is a file, not a directory")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        probe = out / f".skfem-flex-write-test-{os.getpid()}"
+        probe.write_bytes(b"")
+        probe.unlink()
+    except OSError as exc:
+        raise UsageError(f"cannot write to --out {str(out)!r}: {exc.strerror or exc}") from None
+
+
+def _summary(name, scene, params, args, t_end, dt, result, error, files, wall):
+    import numpy as np
+
+    s = {"scene": name, "parameters": dict(scene.parameters) if scene.parameters else params,
+         "integrator": args.integrator, "t_end": t_end, "dt": dt,
+         "bodies": [getattr(b, "name", f"body{i}") for i, b in enumerate(scene.bodies)],
+         "completed": error is None, "error": error, "wall_time_s": wall}
+    if result is not None and len(result.t):
+        its = np.asarray(result.newton_iterations)
+        steps = int(result.steps)
+        bal = np.abs(result.energy_balance_error)
+        s.update({
+            "steps": steps, "t_reached": float(result.t[-1]), "simulation_time_s": float(result.wall_time),
+            "energy": {"initial_J": float(result.total_energy[0]), "final_J": float(result.total_energy[-1]),
+                       "external_work_J": float(result.external_work[-1]),
+                       "max_balance_error_J": float(bal.max()),
+                       "relative_balance_error": result.relative_energy_error()},
+            "max_constraint_residual": float(np.max(result.constraint_residual)),
+            "max_velocity_constraint_residual": float(np.max(result.velocity_constraint_residual)),
+            "newton": {"total_iterations": int(its.sum()),
+                       "mean_iterations_per_step": float(its.sum() / steps) if steps else 0.0,
+                       "max_iterations_per_recorded_step": int(its.max()) if its.size else 0,
+                       "halved_steps": int(result.halvings)},
+        })
+    s["outputs"] = {k: (str(v) if not isinstance(v, (list, int)) else v) for k, v in files.items()}
+    return _jsonable(s)
+
+
+# ----------------------------------------------------------------------- run
+def _cmd_run(args):
+    from . import scenes
+    from .integrators import SimulationError
+    from .output import VTKSeries, _atomic_write_text
+    from .simulate import simulate
+
+    name = args.scene if args.scene is not None else DEFAULT_SCENE
+    if name not in scenes.CATALOGUE:
+        known = ", ".join(sorted(scenes.CATALOGUE))
+        if args.scene is None:
+            raise UsageError(f"the default scene {DEFAULT_SCENE!r} is not in this catalogue; name one of: {known}")
+        raise UsageError(f"unknown scene {name!r}; known scenes: {known}")
+    factory = scenes.get(name)
+    params = _scene_settings(name, args.set)
+    defaults = getattr(factory, "defaults", {}) or {}
+    t_end = args.t_end if args.t_end is not None else defaults.get("t_end", FALLBACK_T_END)
+    dt = args.dt if args.dt is not None else defaults.get("dt", FALLBACK_DT)
+    if not math.isfinite(dt) or dt <= 0:
+        raise UsageError(f"--dt must be a positive number of seconds, got {dt!r}")
+    if not math.isfinite(t_end) or t_end < 0:
+        raise UsageError(f"--t-end must be a non-negative number of seconds, got {t_end!r}")
+    out = Path(args.out) if args.out is not None else Path("results") / name
+    try:
+        scene = factory(**params)
+    except (ValueError, TypeError) as exc:
+        raise UsageError(f"scene {name!r}: {_one_line(exc)}") from None
+    _prepare_out(out)
+    effective = {p: d for p, d, _ in scenes.parameters(name)}
+    effective.update(params)
+
+    n_steps = int(math.ceil(t_end / dt - 1e-9)) if t_end > 0 else 0
+    every = args.every if args.every is not None else max(1, math.ceil(n_steps / MAX_FRAMES))
+    sinks = [] if args.no_vtk else [VTKSeries(out, name, every=every)]
+    error, result = None, None
+    start = time.perf_counter()
+    try:
+        result = simulate(scene, t_end, dt, integrator=args.integrator, rho_inf=args.rho_inf, output=sinks,
+                          progress=not args.quiet)
+    except SimulationError as exc:
+        result, error = exc.result, _one_line(exc)
+    except ValueError as exc:
+        raise UsageError(_one_line(exc)) from None
+    wall = time.perf_counter() - start
+
+    files = {}
+    if sinks and sinks[0].written:
+        files.update(pvd=sinks[0].pvd_path, series=sinks[0].series_path, vtu_files=len(sinks[0].written))
+    if result is not None and len(result.t):
+        files["result"] = result.save(out / "result.npz")
+        if result.probes:
+            files["probes_csv"] = result.probes_to_csv(out / "probes.csv")
+        from .plots import save_plots
+        for k, p in save_plots(scene, result, out).items():
+            files[f"plot_{k}"] = p
+    files["summary"] = out / "summary.json"
+    summary = _summary(name, scene, effective, args, t_end, dt, result, error, files, wall)
+    _atomic_write_text(out / "summary.json", json.dumps(summary, indent=2) + "\n")
+
+    if error is not None:
+        print(f"skfem-flex: run stopped early: {error}; outputs up to the last good step are in {out}",
+              file=sys.stderr)
+        return 1
+    if not args.quiet:
+        _report(name, summary, files, out)
+    return 0
+
+
+def _report(name, summary, files, out):
+    e = summary.get("energy", {})
+    nw = summary.get("newton", {})
+    print(f"{name}: {summary.get('steps', 0)} steps of {summary['dt']:.4g} s to t = {summary['t_end']:.4g} s "
+          f"with {summary['integrator']} in {summary['wall_time_s']:.2f} s")
+    print(f"  energy balance error {e.get('max_balance_error_J', 0.0):.3g} J "
+          f"(relative {e.get('relative_balance_error', 0.0):.3g}), "
+          f"max |constraint| {summary.get('max_constraint_residual', 0.0):.3g}, "
+          f"Newton {nw.get('mean_iterations_per_step', 0.0):.2f} iterations/step")
+    print(f"outputs in {out.resolve()}/")
+    if "pvd" in files:
+        print(f"  {Path(files['pvd']).name:<22} VTK time series, {files['vtu_files']} steps "
+              f"(open in ParaView; also {Path(files['series']).name})")
+    print(f"  {'summary.json':<22} run summary")
+    if "result" in files:
+        print(f"  {'result.npz':<22} all histories (skfem_flex.Result.load)")
+    if "probes_csv" in files:
+        print(f"  {'probes.csv':<22} probe histories")
+    plots = [Path(v).name for k, v in files.items() if k.startswith("plot_")]
+    if plots:
+        print(f"  {' '.join(plots)}")
+
+
+def _add_run(sub):
+    from .integrators import INTEGRATORS
+
+    p = sub.add_parser("run", help="run a catalogue scene and write VTK series, plots and a summary",
+                       description="Run a catalogue scene; write the VTK time series (.vtu + .pvd), "
+                                   "PNG plots, result.npz, probes.csv and summary.json into --out.")
+    p.add_argument("scene", nargs="?", default=None, metavar="SCENE",
+                   help=f"scene name from 'skfem-flex list' (default: {DEFAULT_SCENE})")
+    p.add_argument("--set", action="extend", nargs="+", metavar="KEY=VALUE", default=[],
+                   help="scene parameter, converted to the type of its default (repeatable)")
+    p.add_argument("--t-end", type=_number, default=None, metavar="T",
+                   help=f"end time, s (default: the scene's, else {FALLBACK_T_END:g})")
+    p.add_argument("--dt", type=_number, default=None, metavar="DT",
+                   help=f"time step, s (default: the scene's, else {FALLBACK_DT:g})")
+    p.add_argument("--integrator", choices=sorted(INTEGRATORS), default="energy-momentum",
+                   help="time integrator (default: energy-momentum)")
+    p.add_argument("--rho-inf", type=_number, default=None, metavar="R",
+                   help="spectral radius of generalized-alpha (default 0.9)")
+    p.add_argument("--out", default=None, metavar="DIR", help="output directory (default: results/SCENE)")
+    p.add_argument("--every", type=_positive_int, default=None, metavar="N",
+                   help=f"write a VTK file every N steps (default: at most about {MAX_FRAMES} files)")
+    p.add_argument("--no-vtk", action="store_true", help="skip the VTK series")
+    p.add_argument("--quiet", action="store_true", help="no progress bar and no report")
+    p.set_defaults(func=_cmd_run)
+
+
+# ---------------------------------------------------------------------- list
+def _cmd_list(args):
+    from . import scenes
+
+    for name in sorted(scenes.CATALOGUE):
+        fn = scenes.get(name)
+        doc = (inspect.getdoc(fn) or "").strip().splitlines()
+        d = getattr(fn, "defaults", {}) or {}
+        run = (f"t_end {d.get('t_end', FALLBACK_T_END):g} s, dt {d.get('dt', FALLBACK_DT):g} s"
+               + ("" if d else " (generic)"))
+        print(f"{name}{'  (default)' if name == DEFAULT_SCENE else ''}")
+        if doc:
+            print(f"    {doc[0]}")
+        print(f"    run: {run}")
+        for p, default, unit in scenes.parameters(name):
+            shown = "(required)" if default is inspect.Parameter.empty else repr(default)
+            print(f"    {p:<16} = {shown:<12} {unit}")
+    return 0
+
+
+def _add_list(sub):
+    p = sub.add_parser("list", help="list the scenes with their parameters, defaults and units",
+                       description="List the catalogue scenes with their parameters, defaults and units.")
+    p.set_defaults(func=_cmd_list)
+
+
+#: functions adding one subcommand each to the subparsers (a ``study`` command appends itself here)
+SUBCOMMANDS = [_add_run, _add_list]
+
+
+def build_parser():
+    """The argparse parser of ``skfem-flex`` with one subparser per entry of :data:`SUBCOMMANDS`."""
+    from . import __version__
+
+    parser = _Parser(prog="skfem-flex",
+                     description="Planar flexible multibody dynamics on scikit-fem: run catalogue scenes "
+                                 "and write VTK time series, plots and summaries.")
+    parser.add_argument("--version", action="version", version=f"skfem-flex {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for add in SUBCOMMANDS:
+        add(sub)
+    return parser
+
+
+def main(argv=None):
+    """Entry point of the ``skfem-flex`` console script; returns the exit status."""
+    try:
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        if args.command is None:
+            parser.print_help(sys.stderr)
+            return 2
+        return args.func(args)
+    except UsageError as exc:
+        print(f"skfem-flex: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("skfem-flex: interrupted; outputs written so far are kept", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

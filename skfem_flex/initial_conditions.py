@@ -1,0 +1,248 @@
+r"""Consistent initial conditions and redundant-constraint detection.
+
+Before a run, the initial state must satisfy the constraints at position
+and velocity level,
+
+.. math::  Φ(q_0, 0) = 0, \qquad Φ_q(q_0, 0)\, v_0 = −Φ_t(q_0, 0),
+
+and the constraint Jacobian must have full row rank (otherwise the
+multipliers are not unique and the bordered Newton matrix is singular).
+
+:func:`find_redundant` reads the rank of Φ_q (restricted to the free
+coordinates; rows scaled to unit length) from its singular values and names
+the joints whose equations are linearly dependent (those with weight in the
+left null space). :func:`consistent_initial_state` projects q0 by
+minimum-norm Gauss–Newton, Δq = −Φ_q⁺ Φ (the smallest change of the free
+coordinates that satisfies Φ = 0), then v0 by the minimum-norm correction
+Δv = −Φ_q⁺ (Φ_q v0 + Φ_t); prescribed coordinates and their rates are kept.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["RedundantConstraintsError", "InconsistentInitialConditionsError", "constraint_rows",
+           "find_redundant", "consistent_initial_state"]
+
+
+class RedundantConstraintsError(ValueError):
+    """Φ_q has dependent rows at the start. ``names`` lists the joints involved."""
+
+    def __init__(self, message, names=(), rank=None, n_equations=None):
+        super().__init__(message)
+        self.names, self.rank, self.n_equations = tuple(names), rank, n_equations
+
+
+class InconsistentInitialConditionsError(ValueError):
+    """The initial state cannot be brought onto Φ = 0 (or only by a large change). ``names`` lists the joints."""
+
+    def __init__(self, message, names=()):
+        super().__init__(message)
+        self.names = tuple(names)
+
+
+def _dense(a):
+    return a.toarray() if hasattr(a, "toarray") else np.asarray(a, dtype=float)
+
+
+def constraint_rows(scene):
+    """[(constraint name, row indices)] in the order of the scene's multipliers."""
+    out, row = [], 0
+    for c in scene.constraints:
+        out.append((c.name, np.arange(row, row + c.n_equations)))
+        row += c.n_equations
+    return out
+
+
+def _names_of_rows(scene, mask):
+    names = []
+    for name, rows in constraint_rows(scene):
+        if np.any(mask[rows]) and name not in names:
+            names.append(name)
+    return names
+
+
+def find_redundant(scene, q, t=0.0, rtol=1e-9):
+    """Dependent constraint equations at q.
+
+    Parameters
+    ----------
+    scene : Scene
+    q : ndarray
+        Global coordinates.
+    t : float
+        Time, s.
+    rtol : float
+        A singular value below ``rtol`` times the largest counts as zero.
+
+    Returns
+    -------
+    rank : int
+        Rank of Φ_q restricted to the free coordinates.
+    names : list of str
+        Names of the constraints with equations in the left null space
+        (empty when Φ_q has full row rank).
+    """
+    m = scene.n_constraints
+    if m == 0:
+        return 0, []
+    cq = _dense(scene.constraint_jacobian(q, t))[:, scene.free_index]
+    norms = np.linalg.norm(cq, axis=1)
+    empty = norms == 0.0
+    scaled = cq / np.where(empty, 1.0, norms)[:, None]
+    if cq.shape[1] == 0:
+        return 0, _names_of_rows(scene, np.ones(m, dtype=bool))
+    u, sv, _ = np.linalg.svd(scaled, full_matrices=True)
+    smax = sv[0] if sv.size else 0.0
+    rank = int(np.sum(sv > rtol * max(smax, 1e-300)))
+    if rank == m:
+        return rank, []
+    null = u[:, rank:]
+    weight = np.sqrt(np.sum(null ** 2, axis=1))
+    involved = (weight > 1e-6) | empty
+    return rank, _names_of_rows(scene, involved)
+
+
+def _check_rank(scene, q, t, rtol):
+    rank, names = find_redundant(scene, q, t, rtol)
+    if names:
+        m = scene.n_constraints
+        raise RedundantConstraintsError(
+            f"redundant constraints: the constraint Jacobian has rank {rank} for {m} equations at t = {t:g} s "
+            f"({m - rank} dependent equation(s)) among the joints {', '.join(repr(n) for n in names)}; remove "
+            f"or replace the duplicated conditions (or move away from a singular configuration)",
+            names, rank, m)
+
+
+def _scale(scene, q, t):
+    cq = _dense(scene.constraint_jacobian(q, t))
+    return np.maximum(np.abs(cq) @ np.abs(q), 1e-12), cq
+
+
+def consistent_initial_state(scene, q, v, t=0.0, project=True, tol=1e-12, max_iterations=50,
+                             max_correction=1e-2, rank_rtol=1e-9):
+    """Bring (q, v) onto the constraints, or check them; detect redundant joints.
+
+    Parameters
+    ----------
+    scene : Scene
+    q, v : ndarray
+        Initial coordinates and velocities (global vectors); prescribed
+        entries already set by their laws.
+    t : float
+        Initial time, s.
+    project : bool
+        True (default): project q onto Φ = 0 by minimum-norm Gauss–Newton
+        and v onto Φ_q v = −Φ_t by a minimum-norm correction, changing only
+        the free coordinates. False: only check, raising on a violation
+        larger than 1e-8 of the constraint's scale.
+    tol : float
+        Position projection ends when |Φ_i| ≤ tol · (|Φ_q| |q|)_i for every row.
+    max_iterations : int
+        Gauss–Newton iterations before giving up.
+    max_correction : float or None
+        Largest accepted change of any coordinate, relative to the larger of
+        max|q| and the scene's ``length_scale`` (default 1 %). A larger correction means the given q0 is not what
+        the user meant, and raises; ``None`` accepts any correction.
+    rank_rtol : float
+        Relative singular-value threshold of the rank test.
+
+    Returns
+    -------
+    q, v : ndarray
+        Consistent copies.
+
+    Raises
+    ------
+    RedundantConstraintsError
+        (a ``ValueError``) when Φ_q does not have full row rank; the message
+        names the joints involved.
+    InconsistentInitialConditionsError
+        (a ``ValueError``) when Φ = 0 cannot be reached from q (the
+        mechanism cannot be assembled) or only by more than ``max_correction``.
+    """
+    q = np.array(q, dtype=float)
+    v = np.array(v, dtype=float)
+    if not np.all(np.isfinite(q)) or not np.all(np.isfinite(v)):
+        raise ValueError("initial state is not finite (NaN or inf in q0 or v0)")
+    m = scene.n_constraints
+    if m == 0:
+        return q, v
+    _check_rank(scene, q, t, rank_rtol)
+    free = scene.free_index
+    rows = constraint_rows(scene)
+
+    if not project:
+        _check_only(scene, q, v, t, rows)
+        return q, v
+
+    q_start = q.copy()
+    phi = scene.constraint_value(q, t)
+    qsize = max(float(np.max(np.abs(q[free]))) if free.size else 0.0, 1e-3)
+    for it in range(max_iterations):
+        scale, cq = _scale(scene, q, t)
+        if np.all(np.abs(phi) <= tol * scale):
+            break
+        step = np.linalg.lstsq(cq[:, free], -phi, rcond=None)[0]
+        if not np.all(np.isfinite(step)) or np.max(np.abs(step)) <= 4 * np.finfo(float).eps * qsize:
+            break
+        # damped Gauss–Newton: halve the step while ‖Φ‖ grows
+        norm0 = float(np.linalg.norm(phi / scale))
+        for _ in range(30):
+            q_try = q.copy()
+            q_try[free] += step
+            phi_try = scene.constraint_value(q_try, t)
+            if np.all(np.isfinite(phi_try)) and np.linalg.norm(phi_try / scale) < norm0:
+                break
+            step *= 0.5
+        else:
+            break
+        q, phi = q_try, phi_try
+    scale, cq = _scale(scene, q, t)
+    ratio = np.abs(phi) / np.maximum(scale, 1.0e-3)
+    accept = 1e-8
+    if not np.all(ratio <= accept):
+        bad = ratio > accept
+        names = _names_of_rows(scene, bad)
+        worst = {name: float(np.max(np.abs(phi[r]))) for name, r in rows if np.any(bad[r])}
+        detail = ", ".join(f"{k!r} (|Φ| = {val:.3g})" for k, val in worst.items())
+        raise InconsistentInitialConditionsError(
+            f"inconsistent initial conditions: the constraints cannot be satisfied near the given q0 — "
+            f"the Gauss–Newton projection stalled with {detail}; the mechanism cannot be assembled from this "
+            f"configuration (check lengths, anchors and the initial coordinates)", names)
+    dq = q - q_start
+    size = max(float(np.max(np.abs(q_start))) if q_start.size else 0.0, float(getattr(scene, "length_scale", 0.0)),
+               1e-12)
+    if max_correction is not None and np.max(np.abs(dq)) > max_correction * size:
+        phi0 = scene.constraint_value(q_start, t)
+        bad = np.abs(phi0) > 1e-8 * _scale(scene, q_start, t)[0]
+        names = _names_of_rows(scene, bad)
+        raise InconsistentInitialConditionsError(
+            f"inconsistent initial conditions: satisfying the constraints {', '.join(repr(n) for n in names)} "
+            f"would move the coordinates by up to {np.max(np.abs(dq)):.3g} (more than max_correction = "
+            f"{max_correction:g} of the configuration's size {size:.3g}); fix q0, or pass a larger "
+            f"max_correction to accept the projection", names)
+
+    # velocities: minimum-norm correction of the free rates
+    vel = cq @ v + scene.constraint_time_derivative(q, t)
+    if np.any(vel != 0.0):
+        dv = np.linalg.lstsq(cq[:, free], -vel, rcond=None)[0]
+        v[free] += dv
+    return q, v
+
+
+def _check_only(scene, q, v, t, rows, tol=1e-8):
+    phi = scene.constraint_value(q, t)
+    cq = _dense(scene.constraint_jacobian(q, t))
+    vel = cq @ v + scene.constraint_time_derivative(q, t)
+    acq = np.abs(cq)
+    pos_scale = np.maximum(acq @ np.abs(q), 1.0)
+    vel_scale = np.maximum(acq @ np.abs(v), 1.0)
+    for name, r in rows:
+        if np.any(np.abs(phi[r]) > tol * pos_scale[r]):
+            raise InconsistentInitialConditionsError(
+                f"inconsistent initial conditions: constraint {name!r} has |Φ| = {np.max(np.abs(phi[r])):.3g} "
+                f"at t = {t:g} s (simulate with project=True to project q0 onto the constraints)", [name])
+        if np.any(np.abs(vel[r]) > tol * vel_scale[r]):
+            raise InconsistentInitialConditionsError(
+                f"inconsistent initial velocities: constraint {name!r} has |Φ_q v + Φ_t| = "
+                f"{np.max(np.abs(vel[r])):.3g} at t = {t:g} s (simulate with project=True to project v0)", [name])

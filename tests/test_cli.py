@@ -1,0 +1,172 @@
+"""Issue 7: the skfem-flex command (run, list, bad input, failed runs)."""
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import skfem_flex as sf
+from skfem_flex import cli
+from skfem_flex.output import read_pvd
+from skfem_flex.scenes import CATALOGUE, register
+
+PNG = b"\x89PNG\r\n\x1a\n"
+
+
+def command():
+    """The installed console script if there is one, else the module."""
+    exe = shutil.which("skfem-flex")
+    return [exe] if exe else [sys.executable, "-m", "skfem_flex.cli"]
+
+
+def run_process(args, cwd, timeout=120):
+    env = dict(os.environ)
+    env.pop("DISPLAY", None)
+    return subprocess.run(command() + args, cwd=cwd, capture_output=True, text=True, timeout=timeout, env=env)
+
+
+def check_outputs(out, name):
+    summary = json.loads((out / "summary.json").read_text())
+    listed = read_pvd(out / f"{name}.pvd")
+    assert listed and all(p.exists() for _, p in listed)
+    assert sorted(p.name for p in out.glob(f"{name}_*.vtu")) == [p.name for _, p in listed]
+    for png in out.glob("*.png"):
+        assert png.read_bytes()[:8] == PNG
+    assert (out / "energy.png").exists() and (out / "snapshots.png").exists()
+    return summary, listed
+
+
+def test_run_without_arguments_runs_the_default_scene(tmp_path):
+    if cli.DEFAULT_SCENE not in CATALOGUE:
+        pytest.skip(f"default scene {cli.DEFAULT_SCENE!r} is not in the catalogue yet")
+    proc = run_process(["run"], tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    out = tmp_path / "results" / cli.DEFAULT_SCENE
+    summary, _ = check_outputs(out, cli.DEFAULT_SCENE)
+    assert summary["completed"] and summary["scene"] == cli.DEFAULT_SCENE
+    assert str(out.resolve()) in proc.stdout
+
+
+def test_run_pendulum_with_settings(tmp_path):
+    proc = run_process(["run", "pendulum", "--set", "length=0.7", "--dt", "0.01", "--out", "o"], tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "Traceback" not in proc.stderr
+    out = tmp_path / "o"
+    summary, listed = check_outputs(out, "pendulum")
+    assert summary["parameters"]["length"] == 0.7
+    assert summary["dt"] == 0.01 and summary["steps"] == round(summary["t_end"] / 0.01)
+    assert summary["completed"] and summary["error"] is None
+    assert summary["max_constraint_residual"] < 1e-10
+    assert summary["energy"]["relative_balance_error"] < 1e-10
+    assert summary["newton"]["total_iterations"] > 0
+    assert len(listed) == summary["steps"] + 1
+    res = sf.Result.load(out / "result.npz")
+    # the bob hangs at distance 0.7 from the pivot
+    np.testing.assert_allclose(np.hypot(res.q[:, 0], res.q[:, 1]), 0.7, rtol=1e-12)
+    assert (out / "probes.csv").read_text().startswith("t,position[0],position[1]")
+    assert str(out.resolve()) in proc.stdout and "pendulum.pvd" in proc.stdout
+
+
+@pytest.mark.parametrize("args, message", [
+    (["run", "no_such_scene"], "unknown scene 'no_such_scene'"),
+    (["run", "pendulum", "--set", "colour=red"], "has no parameter 'colour'"),
+    (["run", "pendulum", "--set", "length=abc"], "length needs a number"),
+    (["run", "pendulum", "--set", "length"], "expects key=value"),
+    (["run", "pendulum", "--set", "length=-1"], "length"),
+    (["run", "pendulum", "--dt", "0"], "--dt must be a positive"),
+    (["run", "pendulum", "--dt", "-0.01"], "--dt must be a positive"),
+    (["run", "pendulum", "--dt", "fast"], "--dt"),
+    (["run", "pendulum", "--t-end", "nan"], "--t-end"),
+    (["run", "pendulum", "--every", "0"], "--every"),
+    (["run", "pendulum", "--integrator", "euler"], "--integrator"),
+    (["run", "pendulum", "--unknown-flag"], "unrecognized arguments"),
+    (["frobnicate"], "invalid choice"),
+])
+def test_bad_input_exits_2_with_one_line(args, message, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(args) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("skfem-flex: error:"), err
+    assert message in err
+    assert not (tmp_path / "results").exists()
+
+
+def test_unwritable_out_exits_2(tmp_path, capsys):
+    blocker = tmp_path / "a_file"
+    blocker.write_text("not a directory")
+    for out in (blocker, blocker / "sub"):
+        assert cli.main(["run", "pendulum", "--out", str(out), "--quiet"]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and "--out" in err, err
+
+
+def test_bad_input_in_a_process_has_no_traceback(tmp_path):
+    proc = run_process(["run", "pendulum", "--dt", "0"], tmp_path)
+    assert proc.returncode == 2
+    assert proc.stderr.strip().count("\n") == 0 and "Traceback" not in proc.stderr
+    assert "dt" in proc.stderr
+
+
+def test_failed_run_exits_1_and_keeps_its_outputs(tmp_path, capsys):
+    # V = ½ u³ is unbounded below: the mass escapes to −∞ and Newton gives up
+    out = tmp_path / "escape"
+    rc = cli.main(["run", "spring_mass", "--set", "exponent=1.5", "--t-end", "100", "--dt", "0.1",
+                   "--out", str(out), "--quiet"])
+    assert rc == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Newton" in err and "Traceback" not in err
+    summary, listed = check_outputs(out, "spring_mass")
+    assert summary["completed"] is False and "Newton" in summary["error"]
+    assert 0 < summary["steps"] < 1000
+    res = sf.Result.load(out / "result.npz")
+    assert not res.completed
+    assert listed[-1][0] == pytest.approx(res.t[-1])
+
+
+def test_scene_defaults_every_and_no_vtk(tmp_path, capsys):
+    def tiny_pendulum(length=0.5, damped=False, label="x", count=3):
+        return sf.scenes.pendulum(length=length)
+
+    register(t_end=0.05, dt=0.01, length="m")(tiny_pendulum)
+    try:
+        assert tiny_pendulum.defaults == {"t_end": 0.05, "dt": 0.01}
+        assert cli.main(["run", "tiny_pendulum", "--out", str(tmp_path / "a"), "--every", "2", "--quiet",
+                         "--set", "damped=yes", "count=4.0", "label=abc"]) == 0
+        assert capsys.readouterr().out == ""
+        summary = json.loads((tmp_path / "a" / "summary.json").read_text())
+        assert summary["t_end"] == 0.05 and summary["steps"] == 5
+        # steps 0, 2, 4 and the last one
+        assert len(read_pvd(tmp_path / "a" / "tiny_pendulum.pvd")) == 4
+        assert cli.main(["run", "tiny_pendulum", "--out", str(tmp_path / "b"), "--no-vtk", "--quiet"]) == 0
+        assert not list((tmp_path / "b").glob("*.vtu")) and (tmp_path / "b" / "summary.json").exists()
+    finally:
+        CATALOGUE.pop("tiny_pendulum", None)
+
+
+def test_convert_setting_uses_the_type_of_the_default():
+    assert cli.convert_setting("a", "0.7", 0.5) == 0.7
+    assert cli.convert_setting("n", "8", 4) == 8 and isinstance(cli.convert_setting("n", "8.0", 4), int)
+    assert cli.convert_setting("b", "false", True) is False and cli.convert_setting("b", "1", False) is True
+    assert cli.convert_setting("s", "exact", "linear") == "exact"
+    for text, default in [("1.5", 4), ("maybe", True), ("inf", 1.0)]:
+        with pytest.raises(cli.UsageError):
+            cli.convert_setting("x", text, default)
+
+
+def test_list_shows_scenes_parameters_defaults_and_units(capsys):
+    assert cli.main(["list"]) == 0
+    out = capsys.readouterr().out
+    assert "pendulum" in out and "spring_mass" in out
+    lines = out.splitlines()
+    start = lines.index("pendulum")
+    line = next(ln for ln in lines[start:] if ln.strip().startswith("length"))
+    assert "0.5" in line and line.rstrip().endswith("m")
+
+
+def test_parser_has_subcommands():
+    parser = cli.build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command")
+    assert {"run", "list"} <= set(sub.choices)
