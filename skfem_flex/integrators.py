@@ -18,8 +18,8 @@ itself, so that v_{n+1} keeps its digits as q grows; see
 
     with D_V a discrete gradient of V (stress at the mean strain), D_G one of
     G(q) = ½ v0ᵀ M(q) v1 (zero for constant mass) and D_Φ one of Φ; μ = Δt λ̄.
-    Then E1 − E0 = Δq·Q − μ·(Φ(q1) − Φ(q0)) + v̄·r exactly, where r is the
-    Newton residual: the energy balance holds to the Newton tolerance for
+    Then E1 − E0 = Δq·Q − λ̄·(Φ(q1) − Φ(q0)) + v̄·r exactly (λ̄ = μ/Δt), where r is
+    the Newton residual: the energy balance holds to the Newton tolerance for
     nonlinear, constrained systems.
 ``trapezoidal``
     Average-acceleration Newmark (β = ¼, γ = ½), equilibrium at t_{n+1}.
@@ -37,24 +37,13 @@ import scipy.linalg as sla
 import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 
+from .errors import ConvergenceError, SimulationError
+
 __all__ = ["SimulationError", "ConvergenceError", "NewtonSettings", "State", "Integrator",
            "EnergyMomentum", "Newmark", "Trapezoidal", "GeneralizedAlpha", "make_integrator", "INTEGRATORS"]
 
 _EPS = np.finfo(float).eps
 _TINY = 1e-300
-
-
-class SimulationError(RuntimeError):
-    """A run that could not go on. ``result`` holds the steps done so far (set by ``simulate``)."""
-
-    def __init__(self, message, **info):
-        super().__init__(message)
-        self.info = info
-        self.result = None
-
-
-class ConvergenceError(SimulationError):
-    """Newton–Raphson failed: the message names scheme, time, step, residual and iterations."""
 
 
 @dataclass(frozen=True)
@@ -331,7 +320,9 @@ class EnergyMomentum(Integrator):
             g, g_q = scene.potential_discrete_gradient(q0, q1)
             r += dt * g
             jac = _add(jac, dt * g_q)
-            scale = max(scale, dt * _inf(g))
+            # round-off floor of the stiff internal forces (K q cancels: |K||q| >> |K q| in slender beams)
+            floor = dt * (abs(g_q) @ (np.abs(q0) + np.abs(q1))) if g_q is not None else np.zeros(scene.n)
+            scale = max(scale, dt * _inf(g), _inf(floor))
             ext = scene.external_force(q0 + 0.5 * dq, dq / dt, tm) if scene.loads else None
             if ext is not None:
                 r -= dt * ext[0]
@@ -345,7 +336,7 @@ class EnergyMomentum(Integrator):
                 jac = _add(jac, scene.constraint_discrete_gradient_jacobian(q0, q1, mu, tm))
                 c = scene.constraint_value(q1, t1)
                 cq = scene.constraint_jacobian(q1, t1)
-                c_scale = max(_inf(abs(cq) @ np.abs(q1)), _TINY)
+                c_scale = max(_inf(abs(cq) @ np.abs(q1)), _inf(abs(cq)) * scene.length_scale, _TINY)
                 full = _bordered(_sub_block(jac, free, free), _sub_block(d, rows_c, free).T,
                                  _sub_block(cq, rows_c, free), scene.dense)
                 res = np.concatenate([r[free], c])
@@ -355,8 +346,9 @@ class EnergyMomentum(Integrator):
                 d = None
             vbar = dq / dt
             e_scale = max(e_scale0, abs(scene.kinetic_energy(q1, v1)), abs(float(dq @ g)), _TINY)
+            e_floor = 32 * _EPS * float(np.abs(vbar[free]) @ floor[free])    # what round-off lets v̄·r reach
             err = max(_inf(r[free]) / (s.rtol * max(scale, _TINY)), err_c,
-                      abs(float(vbar[free] @ r[free])) / (s.etol * e_scale))
+                      abs(float(vbar[free] @ r[free])) / max(s.etol * e_scale, e_floor))
             cache.update(dq=dq, mu=mu, q1=q1, v1=v1, r=r, d=d, ext=ext)
             return res, full, err
 
@@ -367,7 +359,7 @@ class EnergyMomentum(Integrator):
         if ext is not None:
             work += float(dq @ ext[0])
         if m:
-            work -= float(mu @ (d @ dq))
+            work -= float(mu @ (d @ dq)) / dt        # μ = Δt λ̄: the work is −λ̄·ΔΦ
         reaction = np.zeros(0)
         if pres.size:
             reaction = r[pres] / dt
@@ -446,7 +438,7 @@ class Newmark(Integrator):
                 scale = max(scale, _inf(ctmu))
                 jac = _add(jac, scene.constraint_hessian_product(q1, mu, t1))
                 c = scene.constraint_value(q1, t1)
-                c_scale = max(_inf(abs(cq) @ np.abs(q1)), _TINY)
+                c_scale = max(_inf(abs(cq) @ np.abs(q1)), _inf(abs(cq)) * scene.length_scale, _TINY)
                 cq_f = _sub_block(cq, rows_c, free)
                 full = _bordered(_sub_block(jac, free, free), cq_f.T, cq_f, scene.dense)
                 res = np.concatenate([r[free], c])

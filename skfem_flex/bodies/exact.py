@@ -92,7 +92,7 @@ from skfem import Basis, ElementLineP1, ElementLineP2, MeshLine
 
 from ..beam import ElementQuadrature, TimoshenkoBeam, gauss_line
 from ..forces import ForceElement
-from ..integrators import ConvergenceError
+from ..errors import ConvergenceError
 from ..section import Section
 from .base import Body, BodyGeometry, BodyPoint, check_finite_vector
 
