@@ -6,6 +6,8 @@
                    [--integrator NAME] [--rho-inf R] [--out DIR] [--every N]
                    [--no-vtk] [--quiet]
     skfem-flex list
+    skfem-flex study work-precision [CASE] [--schemes ...] [--quick] [--out DIR]
+    skfem-flex study stability [--cases ...] [--schemes ...] [--quick] [--out DIR]
 
 ``run`` builds a catalogue scene (default :data:`DEFAULT_SCENE`), integrates
 it and writes into DIR (default ``results/SCENE``): the VTK time series
@@ -17,8 +19,7 @@ value of the wrong type, dt ≤ 0, an unwritable output directory; one line on
 stderr, no traceback), 1 when the run stops early (Newton failure): the
 outputs written up to the last good step are kept and the summary says why.
 
-The parser is built from subcommands (:data:`SUBCOMMANDS`); a later
-``study`` command adds itself there.
+The parser is built from subcommands (:data:`SUBCOMMANDS`).
 """
 from __future__ import annotations
 
@@ -351,8 +352,62 @@ def _add_list(sub):
     p.set_defaults(func=_cmd_list)
 
 
-#: functions adding one subcommand each to the subparsers (a ``study`` command appends itself here)
-SUBCOMMANDS = [_add_run, _add_list]
+# --------------------------------------------------------------------- study
+def _cmd_study(args):
+    from . import studies
+
+    out = Path(args.out or f"results/study-{args.kind}")
+    _prepare_out(out)
+    say = (lambda line: None) if args.quiet else (lambda line: print(line, file=sys.stderr))
+    try:
+        if args.kind == "work-precision":
+            names = [args.scene] if args.scene else sorted(studies.WORK_PRECISION_CASES)
+            rows = []
+            for name in names:
+                if name not in studies.WORK_PRECISION_CASES:
+                    raise UsageError(f"no work-precision case {name!r}; known: "
+                                     f"{', '.join(sorted(studies.WORK_PRECISION_CASES))}")
+                case = studies.WORK_PRECISION_CASES[name]()
+                dts = case.dts[:2] if args.quick else case.dts
+                rows += studies.work_precision(case, schemes=args.schemes, dts=dts, out_dir=out, name=name,
+                                               progress=say)
+            stem = out / "work_precision"
+            figure = studies.plot_work_precision(rows, stem.with_suffix(".png"))
+        else:
+            if args.scene:
+                raise UsageError("'study stability' takes no SCENE; choose cases with --cases")
+            rows = studies.stability(cases=args.cases, schemes=args.schemes, progress=say, quick=args.quick)
+            stem = out / "stability"
+            figure = studies.plot_stability(rows, stem.with_suffix(".png"))
+    except ValueError as exc:
+        raise UsageError(_one_line(str(exc))) from None
+    csv_path, md_path = studies.write_table(rows, stem)
+    if not args.quiet:
+        print(md_path.read_text())
+        print(f"wrote {md_path}, {csv_path} and {figure}")
+    return 0
+
+
+def _add_study(sub):
+    from .integrators import INTEGRATORS
+
+    p = sub.add_parser("study", help="work-precision or stability study: Markdown, CSV and PNG into --out",
+                       description="Run a study over the catalogue scenes and write its table as Markdown "
+                                   "and CSV plus a PNG plot into --out.")
+    p.add_argument("kind", choices=["work-precision", "stability"], help="which study")
+    p.add_argument("scene", nargs="?", default=None, metavar="SCENE",
+                   help="work-precision: one case (default: all cases)")
+    p.add_argument("--schemes", nargs="+", choices=sorted(INTEGRATORS), default=list(INTEGRATORS),
+                   help="integrators to compare (default: all)")
+    p.add_argument("--cases", nargs="+", default=None, metavar="CASE", help="stability: case names (default: all)")
+    p.add_argument("--quick", action="store_true", help="short runs (a smoke test of the study)")
+    p.add_argument("--out", default=None, metavar="DIR", help="output directory (default: results/study-KIND)")
+    p.add_argument("--quiet", action="store_true", help="no progress lines and no table on stdout")
+    p.set_defaults(func=_cmd_study)
+
+
+#: functions adding one subcommand each to the subparsers
+SUBCOMMANDS = [_add_run, _add_list, _add_study]
 
 
 def build_parser():

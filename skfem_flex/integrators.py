@@ -322,7 +322,7 @@ class EnergyMomentum(Integrator):
             jac = _add(jac, dt * g_q)
             # round-off floor of the stiff internal forces (K q cancels: |K||q| >> |K q| in slender beams)
             floor = dt * (abs(g_q) @ (np.abs(q0) + np.abs(q1))) if g_q is not None else np.zeros(scene.n)
-            scale = max(scale, dt * _inf(g), _inf(floor))
+            scale = max(scale, dt * _inf(g))
             ext = scene.external_force(q0 + 0.5 * dq, dq / dt, tm) if scene.loads else None
             if ext is not None:
                 r -= dt * ext[0]
@@ -346,9 +346,13 @@ class EnergyMomentum(Integrator):
                 d = None
             vbar = dq / dt
             e_scale = max(e_scale0, abs(scene.kinetic_energy(q1, v1)), abs(float(dq @ g)), _TINY)
-            e_floor = 32 * _EPS * float(np.abs(vbar[free]) @ floor[free])    # what round-off lets v̄·r reach
             err = max(_inf(r[free]) / (s.rtol * max(scale, _TINY)), err_c,
-                      abs(float(vbar[free] @ r[free])) / max(s.etol * e_scale, e_floor))
+                      abs(float(vbar[free] @ r[free])) / (s.etol * e_scale))
+            # within what round-off lets r and v̄·r reach (measured: ≈ 0.5 ε |floor|, ≤ 0.3 ε |v̄|·|floor|),
+            # the core may accept the step once Newton stagnates (start from rest, very stiff beams)
+            if err > 1.0 and err_c <= 1.0 and _inf(r[free]) <= 16 * _EPS * _inf(floor[free]) and \
+                    abs(float(vbar[free] @ r[free])) <= 2 * _EPS * float(np.abs(vbar[free]) @ floor[free]):
+                err = min(err, 1e3)
             cache.update(dq=dq, mu=mu, q1=q1, v1=v1, r=r, d=d, ext=ext)
             return res, full, err
 

@@ -22,7 +22,7 @@ from .integrators import SimulationError
 from .simulate import simulate
 
 __all__ = ["WorkPrecisionRow", "StabilityRow", "work_precision", "stability", "write_table",
-           "plot_work_precision", "WORK_PRECISION_CASES", "STABILITY_CASES", "oscillator_period",
+           "plot_work_precision", "plot_stability", "WORK_PRECISION_CASES", "STABILITY_CASES", "oscillator_period",
            "pendulum_period", "upward_crossings", "period_error", "history_error"]
 
 SCHEMES = ("energy-momentum", "trapezoidal", "generalized-alpha")
@@ -338,6 +338,34 @@ def stability(cases=None, schemes=SCHEMES, progress=None, quick=False):
             if progress:
                 progress(f"{n} / {scheme}: {'bounded' if bounded else 'NOT bounded'}, energy error {e_err:.2g}")
     return rows
+
+
+def plot_stability(rows, path):
+    """The stability matrix as a picture: log10 of the energy error, crossed where not bounded."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    cases = list(dict.fromkeys(r.case for r in rows))
+    schemes = list(dict.fromkeys(r.scheme for r in rows))
+    grid = np.full((len(cases), len(schemes)), np.nan)
+    fig, ax = plt.subplots(figsize=(2.2 + 1.8 * len(schemes), 1.2 + 0.45 * len(cases)), constrained_layout=True)
+    for r in rows:
+        i, j = cases.index(r.case), schemes.index(r.scheme)
+        grid[i, j] = np.log10(max(r.max_energy_error, 1e-17)) if np.isfinite(r.max_energy_error) else 2.0
+        label = f"{r.max_energy_error:.1e}" if r.bounded else ("failed" if not r.completed else "unbounded")
+        ax.text(j, i, label, ha="center", va="center", fontsize=8,
+                color="black" if r.bounded else "red", fontweight="normal" if r.bounded else "bold")
+    im = ax.imshow(grid, cmap="viridis", vmin=-16, vmax=1, aspect="auto")
+    ax.set_xticks(range(len(schemes)), schemes)
+    ax.set_yticks(range(len(cases)), cases)
+    fig.colorbar(im, ax=ax, label="log10 max relative energy error")
+    ax.set_title("stability matrix")
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
 
 
 # ---------------------------------------------------------------- tables

@@ -45,7 +45,14 @@ elements on the beam's precomputed quadrature arrays; nothing is assembled in th
 
 Discrete gradients for the energy-conserving scheme (``shared/notes/ENERGY_SCHEME.md``) are
 exact closed forms: stress at the mean strain for V, and for G(q) = ½ v₀ᵀ M(q) v₁ the identities
-A(θ₁) − A(θ₀) = sinc(Δθ/2) A(θ_m) E Δθ and (A(θ₀) + A(θ₁))/2 = cos(Δθ/2) A(θ_m).
+A(θ₁) − A(θ₀) = sinc(Δθ/2) A(θ_m) E Δθ and (A(θ₀) + A(θ₁))/2 = cos(Δθ/2) A(θ_m). Energy and
+linear momentum are then conserved to round-off; angular momentum only to O(Δt²) (bounded, about
+1e-6 relative at Δt = 1e-3 s): the frozen-velocity G is not invariant under rotations of the whole
+system. The analytic tangents include the derivatives of sinc and cos.
+
+Choice of frame: the clamped (root-tangent) frame has a stiff "frame turns, root counter-turns"
+mode of little inertia; a free-flying body integrates with fewer Newton iterations and larger steps
+in the chord frame (``reference="pinned"``).
 """
 from __future__ import annotations
 
@@ -260,6 +267,12 @@ class FloatingBeam(Body):
         self._D = D if self.sparse else D.toarray()
         self._DT = self._D.T.tocsr() if self.sparse else np.ascontiguousarray(self._D.T)
         self._wq = (sec.EA * self._dx).ravel()                           # EA dx per point
+        self._dNt = np.ascontiguousarray(self._dN.transpose(1, 2, 0))     # (nel, nqp, nl)
+        self._loc = red[np.concatenate([self._eu, self._ew], axis=1)]     # (nel, 2 nl), −1 = eliminated
+        if self.sparse:
+            self._build_pattern()
+        else:
+            self._ffd = dict(MA=self._MA, H=self._H, Mff=self._Mff, K=self._K)
 
         # ------------------------------------------------ initial state
         qf0 = np.zeros(nf) if elastic is None else check_finite_vector("elastic", elastic, nf)
@@ -360,37 +373,71 @@ class FloatingBeam(Body):
         return self.beam.x_nodes.copy(), d[nd[:, 0]], d[nd[:, 1]], d[nd[:, 2]]
 
     # ================================================================ matrix composition
-    def _compose(self, top, left, ff):
+    def _compose(self, top, left, terms=(), extra=None, loc=None):
         """n × n matrix from its reference rows ``top`` (3, n), the block ``left`` (nf, 3) below
-        them and the elastic block ``ff`` (nf, nf) (None = 0)."""
-        n = self.n_dofs
-        if not self.sparse:
-            out = np.zeros((n, n))
-            out[:3] = top
-            out[3:, :3] = left
-            if ff is not None:
-                out[3:, 3:] = ff.toarray() if sps.issparse(ff) else ff
-            return out
-        border = np.zeros((n, 3))
-        border[3:] = left
-        r1, c1 = np.nonzero(top)
-        r2, c2 = np.nonzero(border)
-        rows, cols, vals = [r1, r2], [c1, c2], [top[r1, c1], border[r2, c2]]
-        if ff is not None:
-            c = sps.coo_matrix(ff)
-            rows.append(c.row + 3)
-            cols.append(c.col + 3)
-            vals.append(c.data)
-        return sps.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n, n))
+        them and an elastic block Σ coef · X[key] for ``terms`` = [(coef, key)], key in
+        {"MA", "H", "Mff", "K"}, plus ``extra`` (dense (nf, nf), dense bodies) or ``loc``
+        (element matrices of the axial kernel, sparse bodies). ``top``/``left`` None mean zero.
 
-    def _ff_only(self, ff):
+        Sparse bodies fill one fixed CSR pattern through precomputed index maps (no sorting or
+        COO conversion per call)."""
         n = self.n_dofs
         if not self.sparse:
             out = np.zeros((n, n))
-            out[3:, 3:] = ff.toarray() if sps.issparse(ff) else ff
+            if top is not None:
+                out[:3] = top
+            if left is not None:
+                out[3:, :3] = left
+            ff = out[3:, 3:]
+            for coef, key in terms:
+                ff += coef * self._ffd[key]
+            if extra is not None:
+                ff += extra
             return out
-        c = sps.coo_matrix(ff)
-        return sps.csr_matrix((c.data, (c.row + 3, c.col + 3)), shape=(n, n))
+        data = np.zeros(self._pat_nnz)
+        if top is not None:
+            data[self._map_top] = top.ravel()
+        if left is not None:
+            data[self._map_left] = left.ravel()
+        for coef, key in terms:
+            data[self._map_ff[key]] += coef * self._ffs_data[key]
+        if loc is not None:
+            data += np.bincount(self._map_loc, weights=loc[self._loc_mask], minlength=self._pat_nnz)
+        return sps.csr_matrix((data, self._pat_indices, self._pat_indptr), shape=(n, n))
+
+    def _build_pattern(self):
+        """The CSR pattern of every sparse body matrix and the maps into it."""
+        n, nf = self.n_dofs, self.n_elastic
+        rows, cols = [], []
+        r, c = np.divmod(np.arange(3 * n), n)
+        rows.append(r), cols.append(c)
+        r, c = np.divmod(np.arange(nf * 3), 3)
+        rows.append(r + 3), cols.append(c)
+        self._ffs_data = {}
+        ff_keys = {}
+        for key in ("MA", "H", "Mff", "K"):
+            X = sps.csr_matrix(getattr(self, "_" + key), copy=True)
+            X.sum_duplicates()
+            X.sort_indices()
+            xc = X.tocoo()
+            self._ffs_data[key] = X.data.copy()
+            ff_keys[key] = (xc.row + 3) * n + xc.col + 3
+            rows.append(xc.row + 3), cols.append(xc.col + 3)
+        lr = np.broadcast_to(self._loc[:, :, None], (self._loc.shape[0],) + (self._loc.shape[1],) * 2)
+        lc = np.broadcast_to(self._loc[:, None, :], lr.shape)
+        self._loc_mask = (lr >= 0) & (lc >= 0)
+        loc_keys = (lr[self._loc_mask] + 3) * n + lc[self._loc_mask] + 3
+        keys = np.unique(np.concatenate([np.asarray(r) * n + np.asarray(c) for r, c in zip(rows, cols)]
+                                        + [loc_keys]))
+        prow, pcol = np.divmod(keys, n)
+        self._pat_nnz = keys.size
+        self._pat_indices = pcol.astype(np.int32)
+        self._pat_indptr = np.searchsorted(prow, np.arange(n + 1)).astype(np.int32)
+        self._map_top = np.searchsorted(keys, np.arange(3 * n))
+        r, c = np.divmod(np.arange(nf * 3), 3)
+        self._map_left = np.searchsorted(keys, (r + 3) * n + c)
+        self._map_ff = {k: np.searchsorted(keys, v) for k, v in ff_keys.items()}
+        self._map_loc = np.searchsorted(keys, loc_keys)
 
     # ================================================================ kinetic
     def _parts(self, q):
@@ -424,7 +471,7 @@ class FloatingBeam(Body):
         left = np.empty((self.n_elastic, 3))
         left[:, :2] = ASb.T
         left[:, 2] = a
-        return self._compose(top, left, self._Mff)
+        return self._compose(top, left, [(1.0, "Mff")])
 
     def momentum(self, q, v):
         """p = M(q) v."""
@@ -461,7 +508,7 @@ class FloatingBeam(Body):
         top[2, 3:] = SbEb + 2.0 * om * cm - self._H @ f
         left = np.zeros((self.n_elastic, 3))
         left[:, 2] = SbEb
-        return self._compose(top, left, om * self._H)
+        return self._compose(top, left, [(om, "H")])
 
     def quadratic_velocity_force(self, q, v):
         """Q_v = ∂T/∂q − Ṁ v (eq. 26) with ∂Q_v/∂q and ∂Q_v/∂v."""
@@ -480,7 +527,7 @@ class FloatingBeam(Body):
         tq[:2, 2] = AE @ inner
         tq[:2, 3:] = om * om * (A @ self._Sbar)
         tq[2, 3:] = -2.0 * om * (self._MA @ f)
-        gq = self._compose(tq, np.zeros((self.n_elastic, 3)), om * om * self._MA)
+        gq = self._compose(tq, None, [(om * om, "MA")])
         tv = np.zeros((3, n))
         tv[:2, 2] = A @ (2.0 * om * sbar - 2.0 * (E2 @ Sf))
         tv[:2, 3:] = -2.0 * om * (AE @ self._Sbar)
@@ -488,7 +535,7 @@ class FloatingBeam(Body):
         tv[2, 3:] = -2.0 * om * cm
         lv = np.zeros((self.n_elastic, 3))
         lv[:, 2] = 2.0 * om * cm - 2.0 * Hf
-        gv = self._compose(tv, lv, -2.0 * om * self._H)
+        gv = self._compose(tv, lv, [(-2.0 * om, "H")])
         return g, gq, gv
 
     def kinetic_discrete_gradient(self, q0, q1, v0, v1):
@@ -529,7 +576,7 @@ class FloatingBeam(Body):
         tq[2, 3:] = -0.25 * sig * SbTwb
         lq = np.zeros((nf, 3))
         lq[:, 2] = 0.5 * dkap * SbEwb - 0.25 * kap * SbTwb
-        gq = self._compose(tq, lq, (0.5 * w0 * w1) * self._MA)
+        gq = self._compose(tq, lq, [(0.5 * w0 * w1, "MA")])
         SbEb0 = self._SbEt @ np.array([b0x, b0y])
         tv = np.zeros((3, n))
         e0x, e0y = -c0y, c0x                                       # E c_0, then A_m E c_0
@@ -540,7 +587,7 @@ class FloatingBeam(Body):
         lv = np.zeros((nf, 3))
         lv[:, :2] = (0.5 * kap * w0) * (self._SbEt @ np.array([[ca, sa], [-sa, ca]]))
         lv[:, 2] = 0.5 * kap * SbEb0 + w0 * cmm - 0.5 * Hf0
-        gv = self._compose(tv, lv, (-0.5 * w0) * self._H)
+        gv = self._compose(tv, lv, [(-0.5 * w0, "H")])
         return g, gq, gv
 
     # ================================================================ strain energy
@@ -550,18 +597,29 @@ class FloatingBeam(Body):
         return y[:self._nq], y[self._nq:]
 
     def _deps(self, up, wp):
-        """dε/dq_f at the quadrature points, shape (n_q, n_elastic): diag(1 + u') D_u + diag(w') D_w."""
+        """dε/dq_f at the quadrature points (dense bodies), shape (n_q, n_elastic):
+        diag(1 + u') D_u + diag(w') D_w."""
         nq = self._nq
-        if self.sparse:
-            return (sps.diags(1.0 + up) @ self._D[:nq] + sps.diags(wp) @ self._D[nq:]).tocsr()
         return (1.0 + up)[:, None] * self._D[:nq] + wp[:, None] * self._D[nq:]
 
-    def _tangent(self, w, de_a, de_b, weps):
-        """Σ_k w_k de_a,kᵀ de_b,k + Σ_k weps_k d²ε_k, with d²ε = D_uᵀD_u + D_wᵀD_w per point."""
-        w2 = np.concatenate([weps, weps])
-        if self.sparse:
-            return (de_a.T @ sps.diags(w) @ de_b + self._DT @ sps.diags(w2) @ self._D).tocsr()
-        return (de_a.T * w) @ de_b + (self._DT * w2) @ self._D
+    def _axial_tangent(self, w, a, b, weps):
+        """Σ_k w_k dε_k(a)ᵀ dε_k(b) + Σ_k weps_k d²ε_k, d²ε = D_uᵀD_u + D_wᵀD_w, for the strain states
+        a = (u', w') and b: ``dict(extra=...)`` (dense) or ``dict(loc=...)`` (element matrices, sparse)."""
+        if not self.sparse:
+            da, db = self._deps(*a), self._deps(*b)
+            w2 = np.concatenate([weps, weps])
+            return dict(extra=(da.T * w) @ db + (self._DT * w2) @ self._D)
+        nel, nqp = self._dx.shape
+        sh = (nel, nqp, 1)
+        dn = self._dNt                                                   # (nel, nqp, nl)
+        de_a = np.concatenate([(1.0 + a[0]).reshape(sh) * dn, a[1].reshape(sh) * dn], axis=2)
+        de_b = np.concatenate([(1.0 + b[0]).reshape(sh) * dn, b[1].reshape(sh) * dn], axis=2)
+        out = np.matmul((de_a * w.reshape(sh)).transpose(0, 2, 1), de_b)
+        blk = np.matmul((dn * weps.reshape(sh)).transpose(0, 2, 1), dn)
+        nl = dn.shape[2]
+        out[:, :nl, :nl] += blk
+        out[:, nl:, nl:] += blk
+        return dict(loc=out)
 
     def _gl(self, qf):
         """(u', w', ε) at the quadrature points; two-entry cache (q0 is reused through a step)."""
@@ -598,10 +656,10 @@ class FloatingBeam(Body):
     def potential_hessian(self, q):
         qf = q[3:]
         if self.strain == "linear":
-            return self._ff_only(self._K)
+            return self._compose(None, None, [(1.0, "K")])
         up, wp, eps = self._gl(qf)
-        de = self._deps(up, wp)
-        return self._ff_only(self._K + self._tangent(self._wq, de, de, self._wq * eps))
+        return self._compose(None, None, [(1.0, "K")], **self._axial_tangent(self._wq, (up, wp), (up, wp),
+                                                                             self._wq * eps))
 
     def potential_discrete_gradient(self, q0, q1):
         """Stress at the mean strain: g · (q1 − q0) = V(q1) − V(q0) exactly; with ∂g/∂q1.
@@ -615,14 +673,14 @@ class FloatingBeam(Body):
         g = np.zeros(self.n_dofs)
         g[3:] = self._K @ qm
         if self.strain == "linear":
-            return g, self._ff_only(0.5 * self._K)
+            return g, self._compose(None, None, [(0.5, "K")])
         up0, wp0, e0 = self._gl(q0[3:])
         up1, wp1, e1 = self._gl(q1[3:])
         upm, wpm = 0.5 * (up0 + up1), 0.5 * (wp0 + wp1)
         t = self._wq * (0.5 * (e0 + e1))
         g[3:] += self._DT @ np.concatenate([t * (1.0 + upm), t * wpm])
-        dem, de1 = self._deps(upm, wpm), self._deps(up1, wp1)
-        return g, self._ff_only(0.5 * self._K + self._tangent(0.5 * self._wq, dem, de1, 0.5 * t))
+        return g, self._compose(None, None, [(0.5, "K")], **self._axial_tangent(0.5 * self._wq, (upm, wpm),
+                                                                                (up1, wp1), 0.5 * t))
 
     def strains(self, q):
         """Axial strain ε and force N (exact rule), curvature κ and moment M (exact rule), shear strain
@@ -659,7 +717,7 @@ class FloatingBeam(Body):
         top[2, 3:] = row
         left = np.zeros((self.n_elastic, 3))
         left[:, 2] = row
-        return self._compose(top, left, None)
+        return self._compose(top, left)
 
     def _map_dg(self, q0, q1, y0, Y, mR=1.0):
         """D (2, n) with D (q1 − q0) = r(q1) − r(q0), r = mR R + A(θ)(y0 + Y q_f)."""
@@ -686,7 +744,7 @@ class FloatingBeam(Body):
         top[2, 3:] = 0.5 * sig * ((fA @ E2) @ Y)
         left = np.zeros((self.n_elastic, 3))
         left[:, 2] = -0.5 * math.sin(0.5 * d) * (Y.T @ fA) + 0.5 * kap * (Y.T @ (E2.T @ fA))
-        return self._compose(top, left, None)
+        return self._compose(top, left)
 
     # ================================================================ gravity
     def mass_moment(self):
@@ -750,7 +808,7 @@ class FloatingBeam(Body):
         S, _ = self.shape_at(self.x_max if x is None else x)
         return S @ q[3:]
 
-    def displacement_probe(self, x=None, scene_body=None):
+    def displacement_probe(self, x=None):
         """Probe ``(scene, t, q, v) -> (u, w)`` of the body-frame displacement at x (default: tip).
 
         Raises ``ValueError`` if x lies outside the beam."""
@@ -1022,4 +1080,4 @@ class DistributedLoad(ForceElement):
             top[2, 2] = -s * a2 - c * a1
             top[2, 3:] = c * self._L2 - s * self._L1
             left[:, 2] = -s * self._L1 + c * self._L2
-        return k * out, k * body._compose(top, left, None), None
+        return k * out, k * body._compose(top, left), None
