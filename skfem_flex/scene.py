@@ -193,6 +193,10 @@ class Scene:
 
     def _add(self, acc, block, idx):
         """acc += block at (idx, idx), with the index mesh built once per index set."""
+        if block is not None and acc.dense and idx.size == self.n:
+            # one block covering the whole system (a single-body scene): no scatter needed
+            acc.a += block.toarray() if sps.issparse(block) else block
+            return
         key = id(idx)
         if key not in self._ix:
             self._ix[key] = np.ix_(idx, idx)
