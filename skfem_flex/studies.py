@@ -141,8 +141,31 @@ def _quartic_case():
                              description="period error against the Gamma-function period")
 
 
+def _spin_up_case():
+    from .scenes import spin_up_beam
+    return WorkPrecisionCase(spin_up_beam, 10.0, (0.05, 0.02, 0.01, 0.005), probe="tip", reference_dt=0.005 / 8,
+                             description="tip history (hub frame) against a run at Δt/8, ω = 4 rad/s, 8 elements, "
+                                         "first 10 s")
+
+
+def _rotating_beam_case():
+    from .scenes import rotating_beam, rotating_beam_frequencies
+    omega = 4.0
+    period = 2.0 * math.pi / float(rotating_beam_frequencies(omega, n_modes=1)[0])
+
+    def err(result):
+        tc = upward_crossings(result.t, result.probes["tip"][:, 1], np.gradient(result.probes["tip"][:, 1], result.t))
+        if tc.size < 2:
+            return float("nan")
+        return abs((tc[-1] - tc[0]) / (tc.size - 1) - period) / period
+    return WorkPrecisionCase(lambda: rotating_beam(omega), 8 * period, tuple(period / f for f in (10, 20, 40, 80)),
+                             error=err, description="period of the first in-plane bending mode at ω = 4 rad/s "
+                                                    "against the linearised modal analysis")
+
+
 #: name -> callable returning a WorkPrecisionCase (built lazily so that imports stay light)
-WORK_PRECISION_CASES = {"spring_mass": _quartic_case, "pendulum": _pendulum_case}
+WORK_PRECISION_CASES = {"spring_mass": _quartic_case, "pendulum": _pendulum_case, "spin_up_beam": _spin_up_case,
+                        "rotating_beam": _rotating_beam_case}
 
 
 def work_precision(case, schemes=SCHEMES, dts=None, out_dir=None, name="case", progress=None):
@@ -281,6 +304,27 @@ def _long_pendulum():
     return StabilityCase(pendulum, 1000.0, 0.01, "pendulum, 10⁵ steps, Δt = 0.01 s")
 
 
+def _spin_up_stability(omega, dt):
+    from .scenes import spin_up_beam
+    return StabilityCase(lambda: spin_up_beam(omega=omega), 30.0, dt,
+                         f"spin-up ω = {omega:g} rad/s, 8 elements, Δt = {dt:g} s, 30 s")
+
+
+def _slender_beam():
+    from .scenes import rotating_beam
+    h = 0.01                     # m: L/h = 1000 for L = 10 m
+    ea = 2.8e7
+    return StabilityCase(lambda: rotating_beam(0.0, EI=ea * h * h / 12.0, rhoI=1.2 * h * h / 12.0, n_elements=16,
+                                               perturbation=0.5),
+                         5.0, 0.01, "slender cantilever (L/h = 1000, 16 elements) in free vibration, Δt = 0.01 s, "
+                                    "25× its shortest period, 5 s")
+
+
+def _free_beam():
+    from .scenes import free_beam
+    return StabilityCase(free_beam, 20.0, 5e-3, "free-flying beam after a tip pulse, Δt = 5 ms, 20 s")
+
+
 #: name -> callable returning a StabilityCase
 STABILITY_CASES = {
     "quartic T/2": lambda: _quartic_stability(2),
@@ -289,6 +333,10 @@ STABILITY_CASES = {
     "quartic T/50": lambda: _quartic_stability(50),
     "pendulum near upright": _upright_pendulum,
     "pendulum 1e5 steps": _long_pendulum,
+    **{f"spin-up ω={w:g} Δt={dt:g}": (lambda w=w, dt=dt: _spin_up_stability(w, dt))
+       for w in (4.0, 10.0) for dt in (0.005, 0.01, 0.02, 0.05)},
+    "slender beam L/h=1000": _slender_beam,
+    "free beam": _free_beam,
 }
 
 

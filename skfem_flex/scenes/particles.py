@@ -10,7 +10,7 @@ from ._registry import register
 __all__ = ["spring_mass", "pendulum"]
 
 
-@register(exponent="-", m="kg", k="N/m^(2n-1)", u0="m", v0="m/s")
+@register(t_end=20.0, dt=0.05, exponent="-", m="kg", k="N/m^(2n-1)", u0="m", v0="m/s")
 def spring_mass(exponent=2.0, m=1.0, k=1.0, u0=1.0, v0=0.0):
     """One-dof spring–mass system with strain ε = u^n and V = ½ k ε².
 
@@ -27,7 +27,7 @@ def spring_mass(exponent=2.0, m=1.0, k=1.0, u0=1.0, v0=0.0):
                  parameters=dict(exponent=exponent, m=m, k=k, u0=u0, v0=v0))
 
 
-@register(length="m", mass="kg", v0="m/s", g="m/s^2")
+@register(t_end=5.0, dt=0.01, length="m", mass="kg", v0="m/s", g="m/s^2")
 def pendulum(length=0.5, mass=1.0, v0=1.695, g=9.81):
     """Simple pendulum in Cartesian coordinates with the constraint C = (x·x − l²)/2 = 0.
 
