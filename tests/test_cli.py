@@ -51,7 +51,7 @@ def test_run_without_arguments_runs_the_default_scene(tmp_path):
 
 
 def test_run_pendulum_with_settings(tmp_path):
-    proc = run_process(["run", "pendulum", "--set", "length=0.7", "--dt", "0.01", "--out", "o"], tmp_path)
+    proc = run_process(["run", "pendulum", "--set", "length=0.7", "--dt", "0.01", "--t-end", "1", "--out", "o"], tmp_path)
     assert proc.returncode == 0, proc.stderr
     assert "Traceback" not in proc.stderr
     out = tmp_path / "o"
