@@ -44,6 +44,8 @@ __all__ = ["SimulationError", "ConvergenceError", "NewtonSettings", "State", "In
 
 _EPS = np.finfo(float).eps
 _TINY = 1e-300
+#: scaled residuals at or below this count as 'at the round-off floor' (no line search there)
+_NEAR_FLOOR = 1e4
 
 
 @dataclass(frozen=True)
@@ -262,7 +264,11 @@ class Integrator:
             for _ in range(7 if s.line_search else 1):
                 x_try = x + step * dx
                 r_try, jac_try, err_try = fun(x_try)
-                if (np.isfinite(err_try) and err_try < max(err, 1.0)) or not s.line_search:
+                # backtrack only on a real increase far from convergence: near the round-off floor
+                # (err_try ≤ _NEAR_FLOOR) the scaled residual jitters by factors of a few between
+                # equally good iterates, and halving would only burn residual evaluations
+                if not s.line_search or (np.isfinite(err_try) and (err_try < max(err, 1.0)
+                                                                   or err_try <= _NEAR_FLOOR)):
                     break
                 step *= 0.5
             x, r, jac, err = x_try, r_try, jac_try, err_try
