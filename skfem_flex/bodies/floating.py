@@ -273,6 +273,11 @@ class FloatingBeam(Body):
             self._build_pattern()
         else:
             self._ffd = dict(MA=self._MA, H=self._H, Mff=self._Mff, K=self._K)
+            # element matrices of the axial kernel -> flat (n_elastic²) positions of the elastic block
+            lr = np.broadcast_to(self._loc[:, :, None], (self._loc.shape[0],) + (self._loc.shape[1],) * 2)
+            lc = np.broadcast_to(self._loc[:, None, :], lr.shape)
+            self._loc_mask = (lr >= 0) & (lc >= 0)
+            self._loc_flat = lr[self._loc_mask] * nf + lc[self._loc_mask]
 
         # ------------------------------------------------ initial state
         qf0 = np.zeros(nf) if elastic is None else check_finite_vector("elastic", elastic, nf)
@@ -605,10 +610,16 @@ class FloatingBeam(Body):
     def _axial_tangent(self, w, a, b, weps):
         """Σ_k w_k dε_k(a)ᵀ dε_k(b) + Σ_k weps_k d²ε_k, d²ε = D_uᵀD_u + D_wᵀD_w, for the strain states
         a = (u', w') and b: ``dict(extra=...)`` (dense) or ``dict(loc=...)`` (element matrices, sparse)."""
+        out = self._axial_loc(w, a, b, weps)
         if not self.sparse:
-            da, db = self._deps(*a), self._deps(*b)
-            w2 = np.concatenate([weps, weps])
-            return dict(extra=(da.T * w) @ db + (self._DT * w2) @ self._D)
+            # element matrices scattered into the elastic block: O(n) work, not the O(n³) of dense dεᵀ dε
+            nf = self.n_elastic
+            return dict(extra=np.bincount(self._loc_flat, weights=out[self._loc_mask],
+                                          minlength=nf * nf).reshape(nf, nf))
+        return dict(loc=out)
+
+    def _axial_loc(self, w, a, b, weps):
+        """Element matrices (n_el, 2 n_l, 2 n_l) of :meth:`_axial_tangent` on the local (u, w) DOFs."""
         nel, nqp = self._dx.shape
         sh = (nel, nqp, 1)
         dn = self._dNt                                                   # (nel, nqp, nl)
@@ -619,7 +630,7 @@ class FloatingBeam(Body):
         nl = dn.shape[2]
         out[:, :nl, :nl] += blk
         out[:, nl:, nl:] += blk
-        return dict(loc=out)
+        return out
 
     def _gl(self, qf):
         """(u', w', ε) at the quadrature points; two-entry cache (q0 is reused through a step)."""
@@ -681,6 +692,115 @@ class FloatingBeam(Body):
         g[3:] += self._DT @ np.concatenate([t * (1.0 + upm), t * wpm])
         return g, self._compose(None, None, [(0.5, "K")], **self._axial_tangent(0.5 * self._wq, (upm, wpm),
                                                                                 (up1, wp1), 0.5 * t))
+
+    def energy_momentum_terms(self, q0, q1, v0, v1, dt):
+        """Everything one Newton evaluation of the energy-momentum scheme needs, in one call.
+
+        Optional fused form of the body contract (the scene uses it when present): the same
+        numbers as :meth:`momentum`, :meth:`mass_matrix`, :meth:`momentum_jacobian`,
+        :meth:`kinetic_discrete_gradient` and :meth:`potential_discrete_gradient` (to round-off),
+        sharing A(θ), s̄ and the strains and filling one matrix.
+
+        Returns
+        -------
+        p1 : ndarray (n,)
+            M(q1) v1.
+        g_kin, g_pot : ndarray (n,)
+            Discrete gradients of G(q) = ½ v0ᵀ M(q) v1 and of the strain energy V.
+        jac : ndarray or csr_matrix (n, n)
+            (2/Δt) M(q1) + B(q1, v1) − Δt ∂g_kin/∂q1 − 2 ∂g_kin/∂v1 + Δt ∂g_pot/∂q1.
+        floor : ndarray (n,)
+            Δt |∂g_pot/∂q1| (|q0| + |q1|): round-off floor of the internal forces.
+        """
+        n, nf = self.n_dofs, self.n_elastic
+        c2 = 2.0 / dt
+        A, qf1, sbar, cm, a, J = self._parts(q1)
+        # ---- kinetic discrete gradient (as kinetic_discrete_gradient)
+        d = float(q1[2] - q0[2])
+        tm = 0.5 * float(q0[2] + q1[2])
+        ca, sa = math.cos(tm), math.sin(tm)
+        sig, dsig = _sinc_half(d)
+        kap, dkap = math.cos(0.5 * d), -0.5 * math.sin(0.5 * d)
+        qfm = 0.5 * (q0[3:] + q1[3:])
+        y = self._Pq @ qfm
+        smx, smy = self._S0[0] + y[0], y[1]
+        cmm = self._c + y[2:2 + nf]
+        w0, w1 = float(v0[2]), float(v1[2])
+        b0x, b0y = ca * v0[0] + sa * v0[1], -sa * v0[0] + ca * v0[1]
+        b1x, b1y = ca * v1[0] + sa * v1[1], -sa * v1[0] + ca * v1[1]
+        f = v1[3:]
+        yf = self._Pf @ np.stack([v0[3:], f], axis=1)       # (2 + nf, 2): S̄ f_i, H f_i
+        Hf0, Hf1 = yf[2:, 0], yf[2:, 1]
+        c0x, c0y = -w0 * smy + yf[0, 0], w0 * smx + yf[1, 0]
+        c1x, c1y = -w1 * smy + yf[0, 1], w1 * smx + yf[1, 1]
+        X = (-b0x * c1y + b0y * c1x) + (-b1x * c0y + b1y * c0x)
+        wb = np.array([w1 * b0x + w0 * b1x, w1 * b0y + w0 * b1y])
+        SbEwb = self._SbEt @ wb
+        SbTwb = self._SbarT @ wb
+        gk = np.zeros(n)
+        gk[2] = 0.5 * sig * X
+        gk[3:] = 0.5 * kap * SbEwb + (w0 * w1) * cmm - 0.5 * (w0 * Hf1 + w1 * Hf0)
+        SbEb0 = self._SbEt @ np.array([b0x, b0y])
+        # ---- momentum, mass matrix and momentum Jacobian at (q1, v1)
+        V = v1[:2]
+        AE = A @ E2
+        AEs = A @ (E2 @ sbar)
+        ASb = A @ self._Sbar
+        Sf = yf[:2, 1]
+        b = A.T @ V
+        SbEb = self._SbEt @ b
+        p = np.empty(n)
+        p[:2] = self.mass_total * V + w1 * AEs + A @ Sf
+        p[2] = AEs @ V + J * w1 + a @ f
+        p[3:] = self._SbarT @ b + w1 * a + self._Mff @ f
+        self._pcache = (self._cache_val, v1.tobytes(), p.copy())
+        # ---- reference rows / columns of the tangent: c2 M + B − dt g_q − 2 g_v
+        top = self._top_template * c2
+        top[:2, 2] = c2 * AEs - w1 * (A @ sbar) + AE @ Sf
+        top[:2, 3:] = (c2 + w1) * ASb if False else c2 * ASb + w1 * (AE @ self._Sbar)
+        top[2, 0] = c2 * AEs[0] - sig * (ca * (-c0y) - sa * c0x)
+        top[2, 1] = c2 * AEs[1] - sig * (sa * (-c0y) + ca * c0x)
+        top[2, 2] = (c2 * J - float(b @ sbar)
+                     - dt * (0.5 * dsig * X - 0.25 * sig * (b0x * c1x + b0y * c1y + b1x * c0x + b1y * c0y))
+                     + sig * (b0x * smx + b0y * smy))
+        top[2, 3:] = c2 * a + SbEb + 2.0 * w1 * cm - Hf1 + (0.25 * dt * sig) * SbTwb - sig * SbEb0
+        left = np.empty((nf, 3))
+        left[:, :2] = c2 * ASb.T - (kap * w0) * (self._SbEt @ np.array([[ca, sa], [-sa, ca]]))
+        left[:, 2] = (c2 * a + SbEb - dt * (0.5 * dkap * SbEwb - 0.25 * kap * SbTwb)
+                      - (kap * SbEb0 + 2.0 * w0 * cmm - Hf0))
+        terms = [(c2, "Mff"), (w1 + w0, "H"), (-0.5 * dt * w0 * w1, "MA")]
+        # ---- strain energy: stress at the mean strain (as potential_discrete_gradient)
+        gp = np.zeros(n)
+        gp[3:] = self._K @ qfm
+        qa = np.abs(q0[3:]) + np.abs(q1[3:])
+        floor = np.zeros(n)
+        if self.strain == "linear":
+            if self.sparse:
+                floor[3:] = dt * (abs(self._K) @ qa) * 0.5
+            else:
+                floor[3:] = dt * (np.abs(0.5 * self._K) @ qa)
+            jac = self._compose(top, left, terms + [(0.5 * dt, "K")])
+            return p, gk, gp, jac, floor
+        up0, wp0, e0 = self._gl(q0[3:])
+        up1, wp1, e1 = self._gl(q1[3:])
+        upm, wpm = 0.5 * (up0 + up1), 0.5 * (wp0 + wp1)
+        t = self._wq * (0.5 * (e0 + e1))
+        gp[3:] += self._DT @ np.concatenate([t * (1.0 + upm), t * wpm])
+        loc = self._axial_loc(0.5 * self._wq, (upm, wpm), (up1, wp1), 0.5 * t)
+        if self.sparse:
+            hv = np.zeros(self._pat_nnz)
+            hv[self._map_ff["K"]] = 0.5 * self._ffs_data["K"]
+            hv += np.bincount(self._map_loc, weights=loc[self._loc_mask], minlength=self._pat_nnz)
+            floor = dt * (sps.csr_matrix((np.abs(hv), self._pat_indices, self._pat_indptr), shape=(n, n))
+                          @ np.concatenate([np.zeros(3), qa]))
+            jac = self._compose(top, left, terms)
+            jac.data += dt * hv
+            return p, gk, gp, jac, floor
+        hv = 0.5 * self._K + np.bincount(self._loc_flat, weights=loc[self._loc_mask],
+                                         minlength=nf * nf).reshape(nf, nf)
+        floor[3:] = dt * (np.abs(hv) @ qa)
+        jac = self._compose(top, left, terms, extra=dt * hv)
+        return p, gk, gp, jac, floor
 
     def strains(self, q):
         """Axial strain ε and force N (exact rule), curvature κ and moment M (exact rule), shear strain
