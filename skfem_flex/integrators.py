@@ -135,12 +135,57 @@ def _add(a, b):
     return a + b
 
 
+class _PatternCache:
+    """Small cache of work that depends only on a sparsity pattern (and index sets).
+
+    The time loop produces matrices with the same CSR pattern at every Newton evaluation; the
+    maps that restrict them to the free coordinates or lay them out for a banded solver are
+    built once per pattern and then applied as plain gathers."""
+
+    def __init__(self, size=4):
+        self.size, self.entries = size, []
+
+    def get(self, mat, extra, build):
+        for e in self.entries:
+            if (e[0] == mat.shape and all(x is y for x, y in zip(e[1], extra))
+                    and e[2].shape == mat.indptr.shape and e[3].shape == mat.indices.shape
+                    and np.array_equal(e[2], mat.indptr) and np.array_equal(e[3], mat.indices)):
+                return e[4]
+        val = build()
+        self.entries.insert(0, (mat.shape, extra, mat.indptr.copy(), mat.indices.copy(), val))
+        del self.entries[self.size:]
+        return val
+
+
+_SUB_PLANS = _PatternCache()
+_SOLVE_PLANS = _PatternCache()
+_IX = {}
+#: a sparse system is solved as a banded one (LAPACK gbsv) when its bandwidth l + u is at most this
+_MAX_BANDWIDTH = 64
+
+
 def _sub_block(mat, rows, cols):
     if rows.size == mat.shape[0] and cols.size == mat.shape[1]:
         return mat                      # rows and cols are sorted index sets: all of them
     if sps.issparse(mat):
-        return mat.tocsr()[rows][:, cols]
-    return mat[np.ix_(rows, cols)]
+        mat = mat.tocsr()
+        if not mat.has_canonical_format:
+            return mat[rows][:, cols]
+
+        def build():
+            tag = sps.csr_matrix((np.arange(1.0, mat.nnz + 1.0), mat.indices, mat.indptr), shape=mat.shape)
+            sub = tag[rows][:, cols].tocsr()
+            sub.sort_indices()
+            return (sub.data.astype(np.int64) - 1, sub.indices.copy(), sub.indptr.copy(), sub.shape)
+        take, indices, indptr, shape = _SUB_PLANS.get(mat, (rows, cols), build)
+        return sps.csr_matrix((mat.data[take], indices, indptr), shape=shape)
+    key = (id(rows), id(cols))
+    hit = _IX.get(key)
+    if hit is None or hit[0] is not rows or hit[1] is not cols:
+        if len(_IX) > 16:
+            _IX.clear()
+        hit = _IX[key] = (rows, cols, np.ix_(rows, cols))
+    return mat[hit[2]]
 
 
 def _bordered(jff, d_t, c_q, dense):
@@ -161,9 +206,35 @@ def _bordered(jff, d_t, c_q, dense):
     return sps.bmat([[sps.csr_matrix(jff), sps.csr_matrix(d_t)], [sps.csr_matrix(c_q), None]], format="csc")
 
 
+def _banded_plan(a):
+    """(l, u, flat positions in the LAPACK band storage) for the CSR matrix ``a``, or None if wide."""
+    n = a.shape[0]
+    if a.shape[1] != n or n == 0:
+        return None
+    rows = np.repeat(np.arange(n), np.diff(a.indptr))
+    off = a.indices - rows                              # j − i
+    lo, up = int(max(0, -off.min())), int(max(0, off.max()))
+    if lo + up > _MAX_BANDWIDTH:
+        return None
+    return lo, up, (up - off) * n + a.indices          # ab[u + i − j, j] = a[i, j]
+
+
 def _solve(a, b):
     if sps.issparse(a):
-        x = spla.spsolve(a.tocsc(), b)
+        if a.format == "csr" and a.has_canonical_format:
+            plan = _SOLVE_PLANS.get(a, (), lambda: _banded_plan(a))
+            if plan is not None:                       # banded (free coordinates of a beam): LAPACK gbsv
+                lo, up, pos = plan
+                ab = np.zeros((lo + up + 1, a.shape[0]))
+                ab.flat[pos] = a.data
+                x = sla.solve_banded((lo, up), ab, b, overwrite_ab=True, check_finite=False)
+            else:                                      # Aᵀ of a CSR matrix is CSC without a copy
+                try:
+                    x = spla.splu(a.T, permc_spec="COLAMD").solve(np.asarray(b, dtype=float), trans="T")
+                except RuntimeError as exc:            # "Factor is exactly singular"
+                    raise np.linalg.LinAlgError(str(exc)) from None
+        else:
+            x = spla.spsolve(a.tocsc(), b)
         if not np.all(np.isfinite(x)):
             raise np.linalg.LinAlgError("singular sparse matrix")
         return x
@@ -301,7 +372,7 @@ class EnergyMomentum(Integrator):
         if pres.size:
             dq_base[pres] = scene.prescribed_state(t1)[0] - q0[pres]
         p0 = scene.momentum(q0, v0)
-        variable = bool(scene.variable_mass_bodies)
+        p0_inf = _inf(p0)
         e_scale0 = abs(scene.kinetic_energy(q0, v0))
         rows_c = np.arange(m)
         s = self.newton
@@ -313,21 +384,16 @@ class EnergyMomentum(Integrator):
             mu = x[nf:]
             q1 = q0 + dq
             v1 = (2.0 / dt) * dq - v0
-            p1 = scene.momentum(q1, v1)
+            # one fused scene call: p1 = M(q1) v1, the discrete gradients of G and V, the tangent
+            # (2/Δt) M + B − Δt ∂g_G/∂q1 − 2 ∂g_G/∂v1 + Δt ∂g_V/∂q1, and the round-off floor
+            # Δt |∂g_V/∂q1| (|q0| + |q1|) of the stiff internal forces (K q cancels: |K||q| >> |K q|)
+            p1, g_kin, g, jac, floor, kin1 = scene.energy_momentum_terms(q0, q1, v0, v1, dt)
             r = p1 - p0
-            jac = scene.mass_matrix(q1) * (2.0 / dt)
-            scale = max(_inf(p1), _inf(p0))
-            if variable:
-                jac = _add(jac, scene.momentum_jacobian(q1, v1))
-                g, g_q, g_v = scene.kinetic_discrete_gradient(q0, q1, v0, v1)
-                r -= dt * g
-                jac = _add(jac, -(dt * g_q + 2.0 * g_v))
-                scale = max(scale, dt * _inf(g))
-            g, g_q = scene.potential_discrete_gradient(q0, q1)
+            scale = max(_inf(p1), p0_inf)
+            if g_kin is not None:
+                r -= dt * g_kin
+                scale = max(scale, dt * _inf(g_kin))
             r += dt * g
-            jac = _add(jac, dt * g_q)
-            # round-off floor of the stiff internal forces (K q cancels: |K||q| >> |K q| in slender beams)
-            floor = dt * (abs(g_q) @ (np.abs(q0) + np.abs(q1))) if g_q is not None else np.zeros(scene.n)
             scale = max(scale, dt * _inf(g))
             ext = scene.external_force(q0 + 0.5 * dq, dq / dt, tm) if scene.loads else None
             if ext is not None:
@@ -351,7 +417,7 @@ class EnergyMomentum(Integrator):
                 full, res, err_c = _sub_block(jac, free, free), r[free], 0.0
                 d = None
             vbar = dq / dt
-            e_scale = max(e_scale0, abs(scene.kinetic_energy(q1, v1)), abs(float(dq @ g)), _TINY)
+            e_scale = max(e_scale0, abs(kin1), abs(float(dq @ g)), _TINY)
             err = max(_inf(r[free]) / (s.rtol * max(scale, _TINY)), err_c,
                       abs(float(vbar[free] @ r[free])) / (s.etol * e_scale))
             # within what round-off lets r and v̄·r reach (measured: ≈ 0.5 ε |floor|, ≤ 0.3 ε |v̄|·|floor|),

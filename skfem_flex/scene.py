@@ -21,6 +21,17 @@ __all__ = ["Scene", "DENSE_LIMIT"]
 DENSE_LIMIT = 400
 
 
+def _msum(a, b):
+    """a + b for dense/sparse mixtures (None counts as zero)."""
+    if b is None:
+        return a
+    if a is None:
+        return b
+    if sps.issparse(a) and not sps.issparse(b):
+        return a.toarray() + b
+    return a + b
+
+
 class _Accumulator:
     """Sum of blocks placed at index sets, dense or sparse."""
 
@@ -145,6 +156,7 @@ class Scene:
         self.potential_bodies = [(b, i) for b, i in zip(self.bodies, self._body_idx) if b.has_potential]
         self.conservative_forces = [(f, i) for f, i in zip(self.forces, self._force_idx) if f.conservative]
         self.loads = [(f, i) for f, i in zip(self.forces, self._force_idx) if not f.conservative]
+        self._fused = None
 
     # ---------------------------------------------------------------- layout
     def _indices(self, bodies, what):
@@ -260,6 +272,62 @@ class Scene:
             self._add(gq, gbq, i)
             self._add(gv, gbv, i)
         return g, gq.result(), gv.result()
+
+    def energy_momentum_terms(self, q0, q1, v0, v1, dt):
+        """What one Newton evaluation of the energy-momentum scheme needs from the scene.
+
+        Returns
+        -------
+        p1 : ndarray (n,)
+            M(q1) v1.
+        g_kin : ndarray (n,) or None
+            Discrete gradient of G(q) = ½ v0ᵀ M(q) v1 (None when all masses are constant).
+        g_pot : ndarray (n,)
+            Discrete gradient of V (bodies and conservative force elements).
+        jac : matrix (n, n)
+            (2/Δt) M(q1) + B(q1, v1) − Δt ∂g_kin/∂q1 − 2 ∂g_kin/∂v1 + Δt ∂g_pot/∂q1.
+        floor : ndarray (n,)
+            Δt |∂g_pot/∂q1| (|q0| + |q1|), the round-off floor of the internal forces.
+        kinetic : float
+            T(q1, v1).
+
+        Bodies that implement the optional fused ``energy_momentum_terms(q0, q1, v0, v1, dt)``
+        (e.g. :class:`~skfem_flex.bodies.FloatingBeam`) are evaluated in one call; otherwise
+        (or with conservative force elements) the terms come from the separate contract methods.
+        """
+        if self._fused is None:
+            self._fused = (not self.conservative_forces and all(
+                hasattr(b, "energy_momentum_terms") for b, _ in self.variable_mass_bodies + self.potential_bodies)
+                and {id(b) for b, _ in self.potential_bodies} <= {id(b) for b, _ in self.variable_mass_bodies})
+        if not self._fused:
+            p1 = self.momentum(q1, v1)
+            jac = _msum(self.mass_matrix(q1) * (2.0 / dt), None)
+            g_kin = None
+            if self.variable_mass_bodies:
+                jac = _msum(jac, self.momentum_jacobian(q1, v1))
+                g_kin, g_q, g_v = self.kinetic_discrete_gradient(q0, q1, v0, v1)
+                jac = _msum(jac, -(dt * g_q + 2.0 * g_v))
+            g_pot, h = self.potential_discrete_gradient(q0, q1)
+            jac = _msum(jac, dt * h)
+            floor = dt * (abs(h) @ (np.abs(q0) + np.abs(q1)))
+            return p1, g_kin, g_pot, jac, floor, self.kinetic_energy(q1, v1)
+        single = len(self.bodies) == 1
+        if single:
+            b = self.bodies[0]
+            p1, g_kin, g_pot, jac, floor = b.energy_momentum_terms(q0, q1, v0, v1, dt)
+            return p1, g_kin, g_pot, jac, floor, 0.5 * float(v1 @ p1)
+        p1 = self._constant_mass @ v1
+        g_kin, g_pot, floor = np.zeros(self.n), np.zeros(self.n), np.zeros(self.n)
+        acc = self._zeros()
+        for b, i in self.variable_mass_bodies:
+            pb, gkb, gpb, jb, fb = b.energy_momentum_terms(q0[i], q1[i], v0[i], v1[i], dt)
+            p1[i] += pb
+            g_kin[i] += gkb
+            g_pot[i] += gpb
+            floor[i] += fb
+            self._add(acc, jb, i)
+        jac = _msum(self._constant_mass * (2.0 / dt), acc.result())
+        return p1, g_kin, g_pot, jac, floor, 0.5 * float(v1 @ p1)
 
     # ------------------------------------------------------------- potential
     def potential_energy(self, q):

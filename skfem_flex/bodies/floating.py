@@ -757,7 +757,7 @@ class FloatingBeam(Body):
         # ---- reference rows / columns of the tangent: c2 M + B − dt g_q − 2 g_v
         top = self._top_template * c2
         top[:2, 2] = c2 * AEs - w1 * (A @ sbar) + AE @ Sf
-        top[:2, 3:] = (c2 + w1) * ASb if False else c2 * ASb + w1 * (AE @ self._Sbar)
+        top[:2, 3:] = c2 * ASb + w1 * (AE @ self._Sbar)
         top[2, 0] = c2 * AEs[0] - sig * (ca * (-c0y) - sa * c0x)
         top[2, 1] = c2 * AEs[1] - sig * (sa * (-c0y) + ca * c0x)
         top[2, 2] = (c2 * J - float(b @ sbar)
