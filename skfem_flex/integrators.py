@@ -494,7 +494,10 @@ class Newmark(Integrator):
             grad = scene.potential_gradient(q1)
             r = dt * (inertia + grad)
             jac = _add(mass * (dt * c_a), dt * scene.potential_hessian(q1))
-            scale = max(_inf(inertia), _inf(grad))
+            # the acceleration is a difference of O(|Δq|/(βΔt²)) terms that cancel when q̈ is small:
+            # their size, not the net inertia force, sets the round-off floor of the residual
+            terms = np.abs(dq) + dt * np.abs(v0) + dt * dt * abs(0.5 - beta) * np.abs(a0)
+            scale = max(_inf(inertia), _inf(grad), c_a * _inf(abs(mass) @ terms))
             qv = scene.quadratic_velocity_force(q1, v1)
             if qv is not None:
                 r -= dt * qv[0]

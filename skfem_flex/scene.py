@@ -17,8 +17,9 @@ from .motion import Prescribed
 
 __all__ = ["Scene", "DENSE_LIMIT"]
 
-#: scenes with at most this many coordinates use dense matrices
-DENSE_LIMIT = 400
+#: scenes with at most this many coordinates use dense matrices (measured crossover of the time loop:
+#: dense LAPACK wins below ~100 coordinates, banded/sparse LU above ~150; examples/benchmark.py)
+DENSE_LIMIT = 150
 
 
 def _msum(a, b):
@@ -42,6 +43,7 @@ class _Accumulator:
         else:
             self.rows, self.cols, self.vals = [], [], []
             self.extra = []
+            self.whole = None           # sum of blocks that cover the whole system (no scatter)
 
     def add(self, block, rows, cols, ix=None):
         """Add ``block`` at (rows, cols); ``None`` is a zero block; ``ix`` a precomputed ``np.ix_``."""
@@ -64,13 +66,23 @@ class _Accumulator:
             self.cols.append(cols[c])
             self.vals.append(block[r, c])
 
+    def add_whole(self, block):
+        """Add a block that covers the whole matrix (identity index sets)."""
+        if self.dense:
+            self.a += block.toarray() if sps.issparse(block) else block
+        elif self.whole is None:
+            self.whole = sps.csr_matrix(block)
+        else:
+            self.whole = self.whole + sps.csr_matrix(block)
+
     def result(self):
         if self.dense:
             return self.a
         if not self.vals:
-            return sps.csr_matrix(self.shape)
-        return sps.csr_matrix((np.concatenate(self.vals), (np.concatenate(self.rows), np.concatenate(self.cols))),
-                              shape=self.shape)
+            return self.whole if self.whole is not None else sps.csr_matrix(self.shape)
+        out = sps.csr_matrix((np.concatenate(self.vals), (np.concatenate(self.rows), np.concatenate(self.cols))),
+                             shape=self.shape)
+        return out if self.whole is None else out + self.whole
 
 
 class Scene:
@@ -205,9 +217,9 @@ class Scene:
 
     def _add(self, acc, block, idx):
         """acc += block at (idx, idx), with the index mesh built once per index set."""
-        if block is not None and acc.dense and idx.size == self.n:
+        if block is not None and idx.size == self.n and acc.shape == (self.n, self.n):
             # one block covering the whole system (a single-body scene): no scatter needed
-            acc.a += block.toarray() if sps.issparse(block) else block
+            acc.add_whole(block)
             return
         key = id(idx)
         if key not in self._ix:

@@ -73,8 +73,8 @@ __all__ = ["FloatingBeam", "DistributedLoad"]
 
 #: E = [[0, −1], [1, 0]]: E a is a turned by +90°
 E2 = np.array([[0.0, -1.0], [1.0, 0.0]])
-#: bodies with more coordinates than this use scipy.sparse matrices
-SPARSE_LIMIT = 400
+#: bodies with more coordinates than this use scipy.sparse matrices (same crossover as scene.DENSE_LIMIT)
+SPARSE_LIMIT = 150
 _FIELDS = {"u": 0, "w": 1, "theta": 2, "th": 2, "phi": 2}
 _FIELD_NAMES = ("u", "w", "th")
 
@@ -149,7 +149,7 @@ class FloatingBeam(Body):
         Initial q_f and q̇_f (length ``n_elastic``; see :meth:`elastic_vector`).
     name : str
     sparse : bool, optional
-        Matrix format; default: sparse when the body has more than 400 coordinates.
+        Matrix format; default: sparse when the body has more than 150 coordinates.
 
     Raises
     ------
@@ -231,6 +231,7 @@ class FloatingBeam(Body):
         self._top_template[:2, :2] = self.mass_total * np.eye(2)
         self._cache_key, self._cache_val = None, None
         self._pcache = (None, None, None)
+        self._v0cache = (None, None)
 
         # ------------------------------------------------ stiffness
         if strain == "linear":
@@ -271,6 +272,9 @@ class FloatingBeam(Body):
         self._loc = red[np.concatenate([self._eu, self._ew], axis=1)]     # (nel, 2 nl), −1 = eliminated
         if self.sparse:
             self._build_pattern()
+            self._Wax = self._axial_map(self._map_loc, self._pat_nnz)
+            self._Kh_data = np.zeros(self._pat_nnz)
+            self._Kh_data[self._map_ff["K"]] = 0.5 * self._ffs_data["K"]
         else:
             self._ffd = dict(MA=self._MA, H=self._H, Mff=self._Mff, K=self._K)
             # element matrices of the axial kernel -> flat (n_elastic²) positions of the elastic block
@@ -278,6 +282,9 @@ class FloatingBeam(Body):
             lc = np.broadcast_to(self._loc[:, None, :], lr.shape)
             self._loc_mask = (lr >= 0) & (lc >= 0)
             self._loc_flat = lr[self._loc_mask] * nf + lc[self._loc_mask]
+            self._ff_stack = np.stack([self._Mff, self._H, self._MA]).reshape(3, nf * nf)
+            self._K_half = 0.5 * self._K
+            self._Wax = self._axial_map(self._loc_flat, nf * nf)
 
         # ------------------------------------------------ initial state
         qf0 = np.zeros(nf) if elastic is None else check_finite_vector("elastic", elastic, nf)
@@ -601,12 +608,6 @@ class FloatingBeam(Body):
         y = self._D @ qf
         return y[:self._nq], y[self._nq:]
 
-    def _deps(self, up, wp):
-        """dε/dq_f at the quadrature points (dense bodies), shape (n_q, n_elastic):
-        diag(1 + u') D_u + diag(w') D_w."""
-        nq = self._nq
-        return (1.0 + up)[:, None] * self._D[:nq] + wp[:, None] * self._D[nq:]
-
     def _axial_tangent(self, w, a, b, weps):
         """Σ_k w_k dε_k(a)ᵀ dε_k(b) + Σ_k weps_k d²ε_k, d²ε = D_uᵀD_u + D_wᵀD_w, for the strain states
         a = (u', w') and b: ``dict(extra=...)`` (dense) or ``dict(loc=...)`` (element matrices, sparse)."""
@@ -631,6 +632,27 @@ class FloatingBeam(Body):
         out[:, :nl, :nl] += blk
         out[:, nl:, nl:] += blk
         return out
+
+    def _axial_map(self, target, size):
+        """Sparse W (size, 4 n_q) with W c = the axial tangent of :meth:`_axial_loc` scattered to ``target``
+        (flat positions of the element entries kept by ``_loc_mask``), for the per-point coefficients
+        c = (c_uu, c_uw, c_wu, c_ww) of :meth:`_axial_coefficients`: one sparse product per evaluation."""
+        dn = self._dNt
+        nel, nqp, nl = dn.shape
+        loc = np.arange(2 * nl)
+        E, Ia, Ib = np.meshgrid(np.arange(nel), loc, loc, indexing="ij")
+        m = self._loc_mask
+        e, ia, ib = (np.repeat(x[m], nqp) for x in (E, Ia, Ib))
+        k = np.tile(np.arange(nqp), int(m.sum()))
+        cols = ((ia // nl) * 2 + ib // nl) * self._nq + e * nqp + k
+        vals = dn[e, k, ia % nl] * dn[e, k, ib % nl]
+        return sps.csr_matrix((vals, (np.repeat(target, nqp), cols)), shape=(size, 4 * self._nq))
+
+    def _axial_coefficients(self, w, a, b, weps):
+        """Per-point coefficients (uu, uw, wu, ww blocks) of Σ_k w_k dε_k(a)ᵀ dε_k(b) + weps_k d²ε_k."""
+        wa0, wa1 = w * (1.0 + a[0]), w * a[1]
+        b0 = 1.0 + b[0]
+        return np.concatenate([wa0 * b0 + weps, wa0 * b[1], wa1 * b0, wa1 * b[1] + weps])
 
     def _gl(self, qf):
         """(u', w', ε) at the quadrature points; two-entry cache (q0 is reused through a step)."""
@@ -729,10 +751,14 @@ class FloatingBeam(Body):
         b0x, b0y = ca * v0[0] + sa * v0[1], -sa * v0[0] + ca * v0[1]
         b1x, b1y = ca * v1[0] + sa * v1[1], -sa * v1[0] + ca * v1[1]
         f = v1[3:]
-        yf = self._Pf @ np.stack([v0[3:], f], axis=1)       # (2 + nf, 2): S̄ f_i, H f_i
-        Hf0, Hf1 = yf[2:, 0], yf[2:, 1]
-        c0x, c0y = -w0 * smy + yf[0, 0], w0 * smx + yf[1, 0]
-        c1x, c1y = -w1 * smy + yf[0, 1], w1 * smx + yf[1, 1]
+        key0 = v0.tobytes()
+        if self._v0cache[0] != key0:                        # v0 is fixed through a step's Newton iteration
+            self._v0cache = (key0, self._Pf @ v0[3:])
+        yf0 = self._v0cache[1]
+        yf1 = self._Pf @ f                                  # (2 + nf,): S̄ f_i, H f_i
+        Hf0, Hf1 = yf0[2:], yf1[2:]
+        c0x, c0y = -w0 * smy + yf0[0], w0 * smx + yf0[1]
+        c1x, c1y = -w1 * smy + yf1[0], w1 * smx + yf1[1]
         X = (-b0x * c1y + b0y * c1x) + (-b1x * c0y + b1y * c0x)
         wb = np.array([w1 * b0x + w0 * b1x, w1 * b0y + w0 * b1y])
         SbEwb = self._SbEt @ wb
@@ -746,7 +772,7 @@ class FloatingBeam(Body):
         AE = A @ E2
         AEs = A @ (E2 @ sbar)
         ASb = A @ self._Sbar
-        Sf = yf[:2, 1]
+        Sf = yf1[:2]
         b = A.T @ V
         SbEb = self._SbEt @ b
         p = np.empty(n)
@@ -786,20 +812,22 @@ class FloatingBeam(Body):
         upm, wpm = 0.5 * (up0 + up1), 0.5 * (wp0 + wp1)
         t = self._wq * (0.5 * (e0 + e1))
         gp[3:] += self._DT @ np.concatenate([t * (1.0 + upm), t * wpm])
-        loc = self._axial_loc(0.5 * self._wq, (upm, wpm), (up1, wp1), 0.5 * t)
+        hv = self._Wax @ self._axial_coefficients(0.5 * self._wq, (upm, wpm), (up1, wp1), 0.5 * t)
         if self.sparse:
-            hv = np.zeros(self._pat_nnz)
-            hv[self._map_ff["K"]] = 0.5 * self._ffs_data["K"]
-            hv += np.bincount(self._map_loc, weights=loc[self._loc_mask], minlength=self._pat_nnz)
+            hv += self._Kh_data
             floor = dt * (sps.csr_matrix((np.abs(hv), self._pat_indices, self._pat_indptr), shape=(n, n))
                           @ np.concatenate([np.zeros(3), qa]))
             jac = self._compose(top, left, terms)
             jac.data += dt * hv
             return p, gk, gp, jac, floor
-        hv = 0.5 * self._K + np.bincount(self._loc_flat, weights=loc[self._loc_mask],
-                                         minlength=nf * nf).reshape(nf, nf)
+        hv = hv.reshape(nf, nf)
+        hv += self._K_half
         floor[3:] = dt * (np.abs(hv) @ qa)
-        jac = self._compose(top, left, terms, extra=dt * hv)
+        jac = np.empty((n, n))
+        jac[:3] = top
+        jac[3:, :3] = left
+        # Σ coef · (M_ff, H, M_A) in one product with the stacked constant blocks
+        jac[3:, 3:] = (np.array([c for c, _ in terms]) @ self._ff_stack).reshape(nf, nf) + dt * hv
         return p, gk, gp, jac, floor
 
     def strains(self, q):
