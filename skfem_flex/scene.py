@@ -217,14 +217,17 @@ class Scene:
 
     def _add(self, acc, block, idx):
         """acc += block at (idx, idx), with the index mesh built once per index set."""
-        if block is not None and idx.size == self.n and acc.shape == (self.n, self.n):
-            # one block covering the whole system (a single-body scene): no scatter needed
-            acc.add_whole(block)
-            return
         key = id(idx)
         if key not in self._ix:
-            self._ix[key] = np.ix_(idx, idx)
-        acc.add(block, idx, idx, self._ix[key])
+            # an index set that is exactly 0, 1, …, n−1 (a single-body scene) needs no scatter;
+            # one covering every body in another order does
+            identity = idx.size == self.n and bool(np.array_equal(idx, np.arange(self.n)))
+            self._ix[key] = None if identity else np.ix_(idx, idx)
+        ix = self._ix[key]
+        if ix is None and block is not None and acc.shape == (self.n, self.n):
+            acc.add_whole(block)
+            return
+        acc.add(block, idx, idx, ix)
 
     # --------------------------------------------------------------- kinetic
     def kinetic_energy(self, q, v):
@@ -308,7 +311,7 @@ class Scene:
         (or with conservative force elements) the terms come from the separate contract methods.
         """
         if self._fused is None:
-            self._fused = (not self.conservative_forces and all(
+            self._fused = (bool(self.variable_mass_bodies) and not self.conservative_forces and all(
                 hasattr(b, "energy_momentum_terms") for b, _ in self.variable_mass_bodies + self.potential_bodies)
                 and {id(b) for b, _ in self.potential_bodies} <= {id(b) for b, _ in self.variable_mass_bodies})
         if not self._fused:
