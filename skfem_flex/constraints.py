@@ -27,16 +27,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from .bodies.base import BodyPoint, check_finite_vector
+from .bodies.base import BodyPoint, check_finite_vector, to_dense
 from .bodies.rigid import E_MATRIX, dsinc, rotation, sinc
 from .motion import MotionLaw
 
 __all__ = ["Constraint", "Distance", "UserConstraint", "Pin", "Revolute", "Slider", "Prismatic", "Weld",
            "Driver", "PointLayout"]
-
-
-def _dense(a):
-    return a.toarray() if hasattr(a, "toarray") else np.asarray(a, dtype=float)
 
 
 # ============================================================== point layout
@@ -156,22 +152,22 @@ class _Position(_Term):
 
     def jacobian(self, q):
         out = np.zeros((2, self.n))
-        out[:, self.sl] = _dense(self.point.position_jacobian(q[self.sl]))
+        out[:, self.sl] = to_dense(self.point.position_jacobian(q[self.sl]))
         return out
 
     def hessian(self, q, f):
         out = self._zero()
-        out[self.sl, self.sl] = _dense(self.point.position_hessian_product(q[self.sl], f))
+        out[self.sl, self.sl] = to_dense(self.point.position_hessian_product(q[self.sl], f))
         return out
 
     def dgrad(self, q0, q1):
         out = np.zeros((2, self.n))
-        out[:, self.sl] = _dense(self.point.position_discrete_gradient(q0[self.sl], q1[self.sl]))
+        out[:, self.sl] = to_dense(self.point.position_discrete_gradient(q0[self.sl], q1[self.sl]))
         return out
 
     def dgrad_jacobian(self, q0, q1, f):
         out = self._zero()
-        out[self.sl, self.sl] = _dense(self.point.position_discrete_gradient_jacobian(q0[self.sl], q1[self.sl], f))
+        out[self.sl, self.sl] = to_dense(self.point.position_discrete_gradient_jacobian(q0[self.sl], q1[self.sl], f))
         return out
 
 
@@ -193,30 +189,30 @@ class _Difference(_Term):
 
     def jacobian(self, q):
         out = np.zeros((2, self.n))
-        out[:, self.sa] = _dense(self.pa.position_jacobian(q[self.sa]))
+        out[:, self.sa] = to_dense(self.pa.position_jacobian(q[self.sa]))
         if self.pb is not None:
-            out[:, self.sb] -= _dense(self.pb.position_jacobian(q[self.sb]))
+            out[:, self.sb] -= to_dense(self.pb.position_jacobian(q[self.sb]))
         return out
 
     def hessian(self, q, f):
         out = self._zero()
-        out[self.sa, self.sa] = _dense(self.pa.position_hessian_product(q[self.sa], f))
+        out[self.sa, self.sa] = to_dense(self.pa.position_hessian_product(q[self.sa], f))
         if self.pb is not None:
-            out[self.sb, self.sb] -= _dense(self.pb.position_hessian_product(q[self.sb], f))
+            out[self.sb, self.sb] -= to_dense(self.pb.position_hessian_product(q[self.sb], f))
         return out
 
     def dgrad(self, q0, q1):
         out = np.zeros((2, self.n))
-        out[:, self.sa] = _dense(self.pa.position_discrete_gradient(q0[self.sa], q1[self.sa]))
+        out[:, self.sa] = to_dense(self.pa.position_discrete_gradient(q0[self.sa], q1[self.sa]))
         if self.pb is not None:
-            out[:, self.sb] -= _dense(self.pb.position_discrete_gradient(q0[self.sb], q1[self.sb]))
+            out[:, self.sb] -= to_dense(self.pb.position_discrete_gradient(q0[self.sb], q1[self.sb]))
         return out
 
     def dgrad_jacobian(self, q0, q1, f):
         out = self._zero()
-        out[self.sa, self.sa] = _dense(self.pa.position_discrete_gradient_jacobian(q0[self.sa], q1[self.sa], f))
+        out[self.sa, self.sa] = to_dense(self.pa.position_discrete_gradient_jacobian(q0[self.sa], q1[self.sa], f))
         if self.pb is not None:
-            out[self.sb, self.sb] -= _dense(self.pb.position_discrete_gradient_jacobian(q0[self.sb], q1[self.sb], f))
+            out[self.sb, self.sb] -= to_dense(self.pb.position_discrete_gradient_jacobian(q0[self.sb], q1[self.sb], f))
         return out
 
 
@@ -251,7 +247,7 @@ def _angle_term(n, point, sl):
         point.angle(point.body.q0)          # raises the body's own "has no angle" ValueError
     q0 = np.asarray(point.body.q0, dtype=float)
     grad = np.zeros(n)
-    grad[sl] = _dense(point.angle_jacobian(q0)).ravel()
+    grad[sl] = to_dense(point.angle_jacobian(q0)).ravel()
     return _Linear(n, lambda q: point.angle(q[sl]), grad)
 
 

@@ -10,6 +10,7 @@ external work.
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sps
 
 from .bodies.base import BodyPoint, check_finite_vector
 from .bodies.rigid import E_MATRIX, rotation
@@ -108,29 +109,28 @@ class Gravity(ForceElement):
     def potential_hessian(self, q):
         if self._linear:
             return None
-        out = np.zeros((self._n, self._n))
-        for b, s, c in zip(self.bodies, self._slices, self._const_grad):
-            if c is None:
-                out[s, s] = _dense(b.gravity_potential(q[s], self.g)[2])
-        return out
+        return self._block_diagonal([None if c is not None else b.gravity_potential(q[s], self.g)[2]
+                                     for b, s, c in zip(self.bodies, self._slices, self._const_grad)])
 
     def potential_discrete_gradient(self, q0, q1):
         if self._linear:
             return self.potential_gradient(q0), None
         g = np.empty(self._n)
-        h = np.zeros((self._n, self._n))
+        blocks = []
         for b, s, c in zip(self.bodies, self._slices, self._const_grad):
             if c is not None:
                 g[s] = c
+                blocks.append(None)
             else:
                 gb, hb = b.gravity_discrete_gradient(q0[s], q1[s], self.g)
                 g[s] = gb
-                h[s, s] = _dense(hb)
-        return g, h
+                blocks.append(hb)
+        return g, self._block_diagonal(blocks)
 
-
-def _dense(a):
-    return a.toarray() if hasattr(a, "toarray") else np.asarray(a)
+    def _block_diagonal(self, blocks):
+        """Sparse block diagonal of the bodies' blocks (None: zero block of that body's size)."""
+        return sps.block_diag([sps.csr_matrix((b.n_dofs, b.n_dofs)) if blk is None else sps.csr_matrix(blk)
+                               for b, blk in zip(self.bodies, blocks)], format="csr")
 
 
 class NonlinearSpring(ForceElement):
@@ -222,7 +222,10 @@ def time_function(value, size, name="load"):
             raise ValueError(f"{name}(t) must return {size} value(s), got {probe.size}")
 
         def fun(t):
-            return np.atleast_1d(np.asarray(value(t), dtype=float)).ravel()
+            out = np.atleast_1d(np.asarray(value(t), dtype=float)).ravel()
+            if not np.all(np.isfinite(out)):
+                raise ValueError(f"{name}({t!r}) is not finite: {out!r}")
+            return out
         return fun
     const = check_finite_vector(name, value, size)
     return lambda t: const

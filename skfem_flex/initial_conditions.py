@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .bodies.base import to_dense
+
 __all__ = ["RedundantConstraintsError", "InconsistentInitialConditionsError", "constraint_rows",
            "find_redundant", "consistent_initial_state"]
 
@@ -38,10 +40,6 @@ class InconsistentInitialConditionsError(ValueError):
     def __init__(self, message, names=()):
         super().__init__(message)
         self.names = tuple(names)
-
-
-def _dense(a):
-    return a.toarray() if hasattr(a, "toarray") else np.asarray(a, dtype=float)
 
 
 def constraint_rows(scene):
@@ -85,7 +83,7 @@ def find_redundant(scene, q, t=0.0, rtol=1e-9):
     m = scene.n_constraints
     if m == 0:
         return 0, []
-    cq = _dense(scene.constraint_jacobian(q, t))[:, scene.free_index]
+    cq = to_dense(scene.constraint_jacobian(q, t))[:, scene.free_index]
     norms = np.linalg.norm(cq, axis=1)
     empty = norms == 0.0
     scaled = cq / np.where(empty, 1.0, norms)[:, None]
@@ -114,7 +112,7 @@ def _check_rank(scene, q, t, rtol):
 
 
 def _scale(scene, q, t):
-    cq = _dense(scene.constraint_jacobian(q, t))
+    cq = to_dense(scene.constraint_jacobian(q, t))
     return np.maximum(np.abs(cq) @ np.abs(q), 1e-12), cq
 
 
@@ -232,7 +230,7 @@ def consistent_initial_state(scene, q, v, t=0.0, project=True, tol=1e-12, max_it
 
 def _check_only(scene, q, v, t, rows, tol=1e-8):
     phi = scene.constraint_value(q, t)
-    cq = _dense(scene.constraint_jacobian(q, t))
+    cq = to_dense(scene.constraint_jacobian(q, t))
     vel = cq @ v + scene.constraint_time_derivative(q, t)
     acq = np.abs(cq)
     pos_scale = np.maximum(acq @ np.abs(q), 1.0)

@@ -418,12 +418,13 @@ class EnergyMomentum(Integrator):
                 d = None
             vbar = dq / dt
             e_scale = max(e_scale0, abs(kin1), abs(float(dq @ g)), _TINY)
-            err = max(_inf(r[free]) / (s.rtol * max(scale, _TINY)), err_c,
-                      abs(float(vbar[free] @ r[free])) / (s.etol * e_scale))
+            r_free, vbar_free = r[free], vbar[free]
+            r_inf, vr = _inf(r_free), abs(float(vbar_free @ r_free))
+            err = max(r_inf / (s.rtol * max(scale, _TINY)), err_c, vr / (s.etol * e_scale))
             # within what round-off lets r and v̄·r reach (measured: ≈ 0.5 ε |floor|, ≤ 0.3 ε |v̄|·|floor|),
             # the core may accept the step once Newton stagnates (start from rest, very stiff beams)
-            if err > 1.0 and err_c <= 1.0 and _inf(r[free]) <= 16 * _EPS * _inf(floor[free]) and \
-                    abs(float(vbar[free] @ r[free])) <= 2 * _EPS * float(np.abs(vbar[free]) @ floor[free]):
+            if err > 1.0 and err_c <= 1.0 and r_inf <= 16 * _EPS * _inf(floor[free]) and \
+                    vr <= 2 * _EPS * float(np.abs(vbar_free) @ floor[free]):
                 err = min(err, 1e3)
             cache.update(dq=dq, mu=mu, q1=q1, v1=v1, r=r, d=d, ext=ext)
             return res, full, err

@@ -403,11 +403,6 @@ class Scene:
         return f, fq.result(), fv.result()
 
     # ------------------------------------------------------------ constraints
-    def _con_matrix(self):
-        if self.dense:
-            return np.zeros((self.n_constraints, self.n))
-        return _Accumulator((self.n_constraints, self.n), False)
-
     def constraint_value(self, q, t):
         """Φ(q, t), shape (n_constraints,)."""
         phi = np.zeros(self.n_constraints)
@@ -419,7 +414,10 @@ class Scene:
         if self.dense:
             out = np.zeros((self.n_constraints, self.n))
             for blk, i, r in blocks:
-                out[np.ix_(r, i)] += blk
+                key = (id(r), id(i))                   # the scene's own index arrays: built once
+                if key not in self._ix:
+                    self._ix[key] = np.ix_(r, i)
+                out[self._ix[key]] += blk
             return out
         acc = _Accumulator((self.n_constraints, self.n), False)
         for blk, i, r in blocks:

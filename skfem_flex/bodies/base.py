@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Body", "BodyGeometry", "BodyPoint", "check_finite_vector"]
+__all__ = ["Body", "BodyGeometry", "BodyPoint", "check_finite_vector", "to_dense"]
 
 
 def check_finite_vector(name, value, size=None):
@@ -47,6 +47,11 @@ def check_finite_vector(name, value, size=None):
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} must be finite, got {value!r}")
     return arr
+
+
+def to_dense(a):
+    """``a`` as a dense ndarray (bodies may return scipy.sparse blocks)."""
+    return a.toarray() if hasattr(a, "toarray") else np.asarray(a)
 
 
 @dataclass

@@ -3,7 +3,9 @@ from __future__ import annotations
 
 import inspect
 
-__all__ = ["CATALOGUE", "register", "get", "parameters"]
+import math
+
+__all__ = ["CATALOGUE", "register", "get", "parameters", "positive_count", "positive_value"]
 
 #: name -> scene factory
 CATALOGUE = {}
@@ -45,3 +47,22 @@ def parameters(name):
     for p in inspect.signature(fn).parameters.values():
         out.append((p.name, p.default, fn.units.get(p.name, "")))
     return out
+
+
+def positive_count(name, value):
+    """``value`` as a positive int, or ``ValueError`` naming the scene parameter."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
+            or int(value) != value or value < 1:
+        raise ValueError(f"{name} must be a positive integer, got {value!r}")
+    return int(value)
+
+
+def positive_value(name, value):
+    """``value`` as a finite positive float, or ``ValueError`` naming the scene parameter."""
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a finite positive number, got {value!r}") from None
+    if not math.isfinite(value) or value <= 0:
+        raise ValueError(f"{name} must be finite and positive, got {value!r}")
+    return value

@@ -26,26 +26,13 @@ from ..forces import Gravity, PointForce, half_sine_pulse
 from ..motion import MotionLaw, spin_up_law
 from ..scene import Scene
 from ..section import Section
-from ._registry import register
+from ._registry import positive_count as _count, positive_value as _positive, register
 from .rotating import hub_beam
 
 __all__ = ["flexible_pendulum", "double_pendulum", "slider_crank", "free_beam", "spin_up_pinned",
            "SIMEON_REFERENCE", "SIMEON_INIT", "chord_deflection"]
 
 _SECTION_UNITS = dict(EA="N", EI="N m^2", kGA="N", rhoA="kg/m", rhoI="kg m", n_elements="-")
-
-
-def _count(name, value):
-    if isinstance(value, bool) or int(value) != value or value < 1:
-        raise ValueError(f"{name} must be a positive integer, got {value!r}")
-    return int(value)
-
-
-def _positive(name, value):
-    value = float(value)
-    if not np.isfinite(value) or value <= 0:
-        raise ValueError(f"{name} must be finite and positive, got {value!r}")
-    return value
 
 
 def _beam(length, section, n_elements, reference="clamped", name="beam", strain="green-lagrange", **kwargs):

@@ -94,6 +94,9 @@ def rotating_beam(omega=4.0, length=10.0, EA=2.8e7, EI=1.4e4, kGA=1e7, rhoA=1.2,
 
     Probes: ``"tip"`` = tip displacement in the rotating frame (axial, transverse), m.
     """
+    for name, value in (("omega", omega), ("perturbation", perturbation)):
+        if not np.isfinite(float(value)):
+            raise ValueError(f"{name} must be finite, got {value!r}")
     body = hub_beam(length, EA, EI, kGA, rhoA, rhoI, n_elements, order, strain)
     om = float(omega)
     qf = body.centrifugal_equilibrium(om)
