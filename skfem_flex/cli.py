@@ -376,7 +376,8 @@ def _cmd_study(args):
         else:
             if args.scene:
                 raise UsageError("'study stability' takes no SCENE; choose cases with --cases")
-            rows = studies.stability(cases=args.cases, schemes=args.schemes, progress=say, quick=args.quick)
+            rows = studies.stability(cases=args.cases, schemes=args.schemes, progress=say, quick=args.quick,
+                                     budget=args.budget)
             stem = out / "stability"
             figure = studies.plot_stability(rows, stem.with_suffix(".png"))
     except ValueError as exc:
@@ -401,6 +402,8 @@ def _add_study(sub):
                    help="integrators to compare (default: all)")
     p.add_argument("--cases", nargs="+", default=None, metavar="CASE", help="stability: case names (default: all)")
     p.add_argument("--quick", action="store_true", help="short runs (a smoke test of the study)")
+    p.add_argument("--budget", type=_number, default=300.0, metavar="S",
+                   help="stability: wall-clock seconds per run before it is stopped and reported (default 300)")
     p.add_argument("--out", default=None, metavar="DIR", help="output directory (default: results/study-KIND)")
     p.add_argument("--quiet", action="store_true", help="no progress lines and no table on stdout")
     p.set_defaults(func=_cmd_study)

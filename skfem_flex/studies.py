@@ -340,7 +340,21 @@ STABILITY_CASES = {
 }
 
 
-def stability(cases=None, schemes=SCHEMES, progress=None, quick=False):
+class _WallClockBudget:
+    """Output sink that stops a run once it has used ``seconds`` of wall time (the result is kept)."""
+
+    def __init__(self, seconds):
+        self.seconds, self.start = float(seconds), time.perf_counter()
+
+    def write(self, scene, t, q, v):
+        if time.perf_counter() - self.start > self.seconds:
+            raise SimulationError(f"stopped: wall-clock budget of {self.seconds:g} s used up at t = {t:.6g} s")
+
+    def close(self):
+        pass
+
+
+def stability(cases=None, schemes=SCHEMES, progress=None, quick=False, budget=300.0):
     """The stability matrix: every case under every scheme.
 
     Parameters
@@ -351,6 +365,9 @@ def stability(cases=None, schemes=SCHEMES, progress=None, quick=False):
     progress : callable(str), optional
     quick : bool
         Shorten every run to 1/20 of its length (for tests and smoke runs).
+    budget : float
+        Wall-clock seconds a single run may use; a slower run is stopped and
+        reported as not completed, with the time it reached.
 
     Returns
     -------
@@ -370,7 +387,8 @@ def stability(cases=None, schemes=SCHEMES, progress=None, quick=False):
         for scheme in schemes:
             start = time.perf_counter()
             try:
-                res, msg = simulate(case.scene(), t_end, case.dt, integrator=scheme), ""
+                res, msg = simulate(case.scene(), t_end, case.dt, integrator=scheme,
+                                    output=[_WallClockBudget(budget)]), ""
             except SimulationError as exc:
                 res, msg = exc.result, str(exc)
             wall = time.perf_counter() - start

@@ -64,3 +64,22 @@ def test_stability_matrix_reports_failures_as_rows(monkeypatch):
         assert "t = " in r.message and np.isfinite(r.t_reached) and r.t_reached > 1.0
     with pytest.raises(ValueError, match="no stability case"):
         studies.stability(cases=["nope"])
+
+
+def test_stability_budget_stops_slow_runs_and_keeps_the_history():
+    rows = studies.stability(cases=["pendulum 1e5 steps"], schemes=["energy-momentum"], budget=0.5)
+    row = rows[0]
+    assert not row.completed and "wall-clock budget" in row.message
+    assert 0.0 < row.t_reached < 1000.0 and row.max_energy_error < 1e-10
+
+
+def test_study_command_writes_tables_and_plot(tmp_path):
+    from skfem_flex.cli import main
+    assert main(["study", "stability", "--cases", "quartic T/4", "--schemes", "energy-momentum", "--quick",
+                 "--quiet", "--out", str(tmp_path / "s")]) == 0
+    for name in ("stability.md", "stability.csv", "stability.png"):
+        assert (tmp_path / "s" / name).stat().st_size > 0
+    assert main(["study", "work-precision", "spring_mass", "--schemes", "energy-momentum", "--quick", "--quiet",
+                 "--out", str(tmp_path / "w")]) == 0
+    assert "energy-momentum" in (tmp_path / "w" / "work_precision.md").read_text()
+    assert main(["study", "work-precision", "nope", "--quiet", "--out", str(tmp_path / "x")]) == 2
