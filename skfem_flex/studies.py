@@ -233,23 +233,33 @@ def _reference(case, out_dir, name):
 
 
 def plot_work_precision(rows, path, title="work–precision"):
-    """Log–log plot of error against wall time, one line per (case, scheme); returns the path."""
+    """Log–log error against wall time: one panel per case, one line per scheme; returns the path."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(6.5, 4.5), constrained_layout=True)
-    keys = sorted({(r.case, r.scheme) for r in rows})
-    for case, scheme in keys:
-        sel = [r for r in rows if r.case == case and r.scheme == scheme and np.isfinite(r.error) and r.error > 0]
-        if sel:
-            ax.loglog([r.wall_time for r in sel], [r.error for r in sel], "o-",
-                      label=f"{case}: {scheme}" if len({k[0] for k in keys}) > 1 else scheme)
-    ax.set_xlabel("wall time (s)")
-    ax.set_ylabel("relative error")
-    ax.set_title(title)
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
+    cases = list(dict.fromkeys(r.case for r in rows))
+    schemes = list(dict.fromkeys(r.scheme for r in rows))
+    ncol = min(2, len(cases))
+    nrow = (len(cases) + ncol - 1) // ncol
+    fig, axes = plt.subplots(nrow, ncol, figsize=(5.2 * ncol, 3.8 * nrow), constrained_layout=True, squeeze=False)
+    for ax, case in zip(axes.flat, cases):
+        for k, scheme in enumerate(schemes):
+            sel = [r for r in rows if r.case == case and r.scheme == scheme]
+            good = [r for r in sel if np.isfinite(r.error) and r.error > 0]
+            line, = ax.loglog([r.wall_time for r in good], [r.error for r in good], "o-", color=f"C{k}",
+                              label=scheme)
+            failed = [r for r in sel if not np.isfinite(r.error)]
+            if failed:
+                line.set_label(f"{scheme} ({len(failed)} run(s) failed)")
+        ax.set_title(case)
+        ax.set_xlabel("wall time (s)")
+        ax.set_ylabel("relative error")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    for ax in list(axes.flat)[len(cases):]:
+        ax.set_visible(False)
+    fig.suptitle(title)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
