@@ -67,21 +67,15 @@ from skfem import BilinearForm, LinearForm, asm
 from ..beam import TimoshenkoBeam
 from ..forces import ForceElement
 from ..forms import bending, shear, translational_mass, rotary_mass
-from .base import Body, BodyGeometry, BodyPoint, check_finite_vector
+from .base import Body, BodyGeometry, BodyPoint, check_finite_vector, to_dense
+from .rigid import E_MATRIX as E2, rotation as _rot
 
 __all__ = ["FloatingBeam", "DistributedLoad"]
 
-#: E = [[0, −1], [1, 0]]: E a is a turned by +90°
-E2 = np.array([[0.0, -1.0], [1.0, 0.0]])
 #: bodies with more coordinates than this use scipy.sparse matrices (same crossover as scene.DENSE_LIMIT)
 SPARSE_LIMIT = 150
 _FIELDS = {"u": 0, "w": 1, "theta": 2, "th": 2, "phi": 2}
 _FIELD_NAMES = ("u", "w", "th")
-
-
-def _rot(th):
-    c, s = math.cos(th), math.sin(th)
-    return np.array([[c, -s], [s, c]])
 
 
 def _sinc_half(d):
@@ -1046,9 +1040,9 @@ class FloatingBeam(Body):
         q = self.q0.copy()
         q[3:] = qf
         K = self.potential_hessian(q)[3:, 3:]
-        K = (K.toarray() if sps.issparse(K) else K) - om * om * _dense(self._MA)
-        M = _dense(self._Mff)
-        G = 2.0 * om * _dense(self._H)
+        K = (K.toarray() if sps.issparse(K) else K) - om * om * to_dense(self._MA)
+        M = to_dense(self._Mff)
+        G = 2.0 * om * to_dense(self._H)
         nf = self.n_elastic
         I = np.eye(nf)
         Z = np.zeros((nf, nf))
@@ -1074,10 +1068,6 @@ class FloatingBeam(Body):
                                                                         np.arange(n_modes)])))
         shapes /= np.abs(shapes).max(axis=0)
         return lam.imag[:n_modes].copy(), shapes
-
-
-def _dense(a):
-    return a.toarray() if sps.issparse(a) else np.asarray(a)
 
 
 class _BeamPoint(BodyPoint):
