@@ -38,6 +38,7 @@ import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 
 from .errors import ConvergenceError, SimulationError
+from .scene import add_matrices
 
 __all__ = ["SimulationError", "ConvergenceError", "NewtonSettings", "State", "Integrator",
            "EnergyMomentum", "Newmark", "Trapezoidal", "GeneralizedAlpha", "make_integrator", "INTEGRATORS"]
@@ -122,17 +123,6 @@ class StepInfo:
     iterations: int
     work: float
     velocity_residual: float = 0.0
-
-
-def _add(a, b):
-    """a + b for dense/sparse mixtures (None counts as zero)."""
-    if b is None:
-        return a
-    if a is None:
-        return b
-    if sps.issparse(a) and not sps.issparse(b):
-        return a.toarray() + b
-    return a + b
 
 
 class _PatternCache:
@@ -398,14 +388,14 @@ class EnergyMomentum(Integrator):
             ext = scene.external_force(q0 + 0.5 * dq, dq / dt, tm) if scene.loads else None
             if ext is not None:
                 r -= dt * ext[0]
-                jac = _add(jac, -(0.5 * dt * ext[1] + ext[2]))
+                jac = add_matrices(jac, -(0.5 * dt * ext[1] + ext[2]))
                 scale = max(scale, dt * _inf(ext[0]))
             if m:
                 d = scene.constraint_discrete_gradient(q0, q1, tm)
                 dtmu = d.T @ mu
                 r += dtmu
                 scale = max(scale, _inf(dtmu))
-                jac = _add(jac, scene.constraint_discrete_gradient_jacobian(q0, q1, mu, tm))
+                jac = add_matrices(jac, scene.constraint_discrete_gradient_jacobian(q0, q1, mu, tm))
                 c = scene.constraint_value(q1, t1)
                 cq = scene.constraint_jacobian(q1, t1)
                 c_scale = max(_inf(abs(cq) @ np.abs(q1)), _inf(abs(cq)) * scene.length_scale, _TINY)
@@ -494,7 +484,7 @@ class Newmark(Integrator):
             inertia = mass @ acc1
             grad = scene.potential_gradient(q1)
             r = dt * (inertia + grad)
-            jac = _add(mass * (dt * c_a), dt * scene.potential_hessian(q1))
+            jac = add_matrices(mass * (dt * c_a), dt * scene.potential_hessian(q1))
             # the acceleration is a difference of O(|Δq|/(βΔt²)) terms that cancel when q̈ is small:
             # their size, not the net inertia force, sets the round-off floor of the residual
             terms = np.abs(dq) + dt * np.abs(v0) + dt * dt * abs(0.5 - beta) * np.abs(a0)
@@ -502,13 +492,13 @@ class Newmark(Integrator):
             qv = scene.quadratic_velocity_force(q1, v1)
             if qv is not None:
                 r -= dt * qv[0]
-                jac = _add(jac, dt * scene.momentum_jacobian(q1, acc1))
-                jac = _add(jac, -dt * (qv[1] + c_v * qv[2]))
+                jac = add_matrices(jac, dt * scene.momentum_jacobian(q1, acc1))
+                jac = add_matrices(jac, -dt * (qv[1] + c_v * qv[2]))
                 scale = max(scale, _inf(qv[0]))
             ext = scene.external_force(q1, v1, t1) if scene.loads else None
             if ext is not None:
                 r -= dt * ext[0]
-                jac = _add(jac, -dt * (ext[1] + c_v * ext[2]))
+                jac = add_matrices(jac, -dt * (ext[1] + c_v * ext[2]))
                 scale = max(scale, _inf(ext[0]))
             scale *= dt
             if m:
@@ -516,7 +506,7 @@ class Newmark(Integrator):
                 ctmu = cq.T @ mu
                 r += ctmu
                 scale = max(scale, _inf(ctmu))
-                jac = _add(jac, scene.constraint_hessian_product(q1, mu, t1))
+                jac = add_matrices(jac, scene.constraint_hessian_product(q1, mu, t1))
                 c = scene.constraint_value(q1, t1)
                 c_scale = max(_inf(abs(cq) @ np.abs(q1)), _inf(abs(cq)) * scene.length_scale, _TINY)
                 cq_f = _sub_block(cq, rows_c, free)

@@ -15,14 +15,14 @@ import scipy.sparse as sps
 from .forces import Gravity
 from .motion import Prescribed
 
-__all__ = ["Scene", "DENSE_LIMIT"]
+__all__ = ["Scene", "DENSE_LIMIT", "add_matrices"]
 
 #: scenes with at most this many coordinates use dense matrices (measured crossover of the time loop:
 #: dense LAPACK wins below ~100 coordinates, banded/sparse LU above ~150; examples/benchmark.py)
 DENSE_LIMIT = 150
 
 
-def _msum(a, b):
+def add_matrices(a, b):
     """a + b for dense/sparse mixtures (None counts as zero)."""
     if b is None:
         return a
@@ -316,14 +316,14 @@ class Scene:
                 and {id(b) for b, _ in self.potential_bodies} <= {id(b) for b, _ in self.variable_mass_bodies})
         if not self._fused:
             p1 = self.momentum(q1, v1)
-            jac = _msum(self.mass_matrix(q1) * (2.0 / dt), None)
+            jac = add_matrices(self.mass_matrix(q1) * (2.0 / dt), None)
             g_kin = None
             if self.variable_mass_bodies:
-                jac = _msum(jac, self.momentum_jacobian(q1, v1))
+                jac = add_matrices(jac, self.momentum_jacobian(q1, v1))
                 g_kin, g_q, g_v = self.kinetic_discrete_gradient(q0, q1, v0, v1)
-                jac = _msum(jac, -(dt * g_q + 2.0 * g_v))
+                jac = add_matrices(jac, -(dt * g_q + 2.0 * g_v))
             g_pot, h = self.potential_discrete_gradient(q0, q1)
-            jac = _msum(jac, dt * h)
+            jac = add_matrices(jac, dt * h)
             floor = dt * (abs(h) @ (np.abs(q0) + np.abs(q1)))
             return p1, g_kin, g_pot, jac, floor, self.kinetic_energy(q1, v1)
         single = len(self.bodies) == 1
@@ -341,7 +341,7 @@ class Scene:
             g_pot[i] += gpb
             floor[i] += fb
             self._add(acc, jb, i)
-        jac = _msum(self._constant_mass * (2.0 / dt), acc.result())
+        jac = add_matrices(self._constant_mass * (2.0 / dt), acc.result())
         return p1, g_kin, g_pot, jac, floor, 0.5 * float(v1 @ p1)
 
     # ------------------------------------------------------------- potential
