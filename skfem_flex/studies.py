@@ -429,7 +429,12 @@ def plot_stability(rows, path):
     for r in rows:
         i, j = cases.index(r.case), schemes.index(r.scheme)
         grid[i, j] = np.log10(max(r.max_energy_error, 1e-17)) if np.isfinite(r.max_energy_error) else 2.0
-        label = f"{r.max_energy_error:.1e}" if r.bounded else ("failed" if not r.completed else "unbounded")
+        if r.bounded:
+            label = f"{r.max_energy_error:.1e}"
+        elif r.message.startswith("stopped:"):
+            label = f"stopped at\nt = {r.t_reached:.3g} s"     # wall-clock budget, not a failure
+        else:
+            label = f"failed at\nt = {r.t_reached:.3g} s" if not r.completed else "unbounded"
         ax.text(j, i, label, ha="center", va="center", fontsize=8,
                 color="black" if r.bounded else "red", fontweight="normal" if r.bounded else "bold")
     im = ax.imshow(grid, cmap="viridis", vmin=-16, vmax=1, aspect="auto")
