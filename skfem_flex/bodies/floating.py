@@ -57,6 +57,7 @@ in the chord frame (``reference="pinned"``).
 from __future__ import annotations
 
 import math
+from collections import namedtuple
 
 import numpy as np
 import scipy.linalg as sla
@@ -71,6 +72,10 @@ from .base import Body, BodyGeometry, BodyPoint, check_finite_vector, to_dense
 from .rigid import E_MATRIX as E2, rotation as _rot
 
 __all__ = ["FloatingBeam", "DistributedLoad"]
+
+#: intermediates of the kinetic discrete gradient shared by the contract method and the fused time-loop call
+_KineticTerms = namedtuple("_KineticTerms", "g sig dsig kap dkap ca sa smx smy cmm w0 w1 b0x b0y b1x b1y "
+                                            "c0x c0y c1x c1y Hf0 Hf1 X SbEwb SbTwb")
 
 #: bodies with more coordinates than this use scipy.sparse matrices (same crossover as scene.DENSE_LIMIT)
 SPARSE_LIMIT = 150
@@ -544,17 +549,12 @@ class FloatingBeam(Body):
         gv = self._compose(tv, lv, [(-2.0 * om, "H")])
         return g, gq, gv
 
-    def kinetic_discrete_gradient(self, q0, q1, v0, v1):
-        """Exact discrete gradient of G(q) = ½ v0ᵀ M(q) v1 with its derivatives (ENERGY_SCHEME.md).
+    def _kinetic_terms(self, q0, q1, v0, v1, yf0, yf1):
+        """Value and intermediates of the kinetic discrete gradient (formulas in kinetic_discrete_gradient).
 
-        With b_i = A(θ_m)ᵀ Ṙ_i, s̄_m = s̄(q_f,m), c_i = ω_i E s̄_m + S̄ f_i, σ = sinc(Δθ/2), κ = cos(Δθ/2)::
-
-            g_R = 0,   g_θ = ½ σ (b_0·E c_1 + b_1·E c_0)
-            g_f = ½ κ S̄ᵀEᵀ(ω_1 b_0 + ω_0 b_1) + ω_0 ω_1 (c + M_A q_f,m) − ½ H (ω_0 f_1 + ω_1 f_0)
-
-        The derivatives include those of σ and κ (exact tangent).
+        ``yf_i`` = P_f f_i = (S̄ f_i, H f_i) for the elastic velocities f_i of v_i.
         """
-        n, nf = self.n_dofs, self.n_elastic
+        nf = self.n_elastic
         d = float(q1[2] - q0[2])
         tm = 0.5 * float(q0[2] + q1[2])
         ca, sa = math.cos(tm), math.sin(tm)
@@ -566,17 +566,33 @@ class FloatingBeam(Body):
         w0, w1 = float(v0[2]), float(v1[2])
         b0x, b0y = ca * v0[0] + sa * v0[1], -sa * v0[0] + ca * v0[1]
         b1x, b1y = ca * v1[0] + sa * v1[1], -sa * v1[0] + ca * v1[1]
-        yf = self._Pf @ np.stack([v0[3:], v1[3:]], axis=1)   # (2 + nf, 2): S̄ f_i, H f_i
-        Hf0, Hf1 = yf[2:, 0], yf[2:, 1]
-        c0x, c0y = -w0 * smy + yf[0, 0], w0 * smx + yf[1, 0]     # c_i = ω_i E s̄_m + S̄ f_i
-        c1x, c1y = -w1 * smy + yf[0, 1], w1 * smx + yf[1, 1]
+        Hf0, Hf1 = yf0[2:], yf1[2:]
+        c0x, c0y = -w0 * smy + yf0[0], w0 * smx + yf0[1]     # c_i = ω_i E s̄_m + S̄ f_i
+        c1x, c1y = -w1 * smy + yf1[0], w1 * smx + yf1[1]
         X = (-b0x * c1y + b0y * c1x) + (-b1x * c0y + b1y * c0x)  # b0·E c1 + b1·E c0
         wb = np.array([w1 * b0x + w0 * b1x, w1 * b0y + w0 * b1y])
         SbEwb = self._SbEt @ wb
         SbTwb = self._SbarT @ wb
-        g = np.zeros(n)
+        g = np.zeros(self.n_dofs)
         g[2] = 0.5 * sig * X
         g[3:] = 0.5 * kap * SbEwb + (w0 * w1) * cmm - 0.5 * (w0 * Hf1 + w1 * Hf0)
+        return _KineticTerms(g, sig, dsig, kap, dkap, ca, sa, smx, smy, cmm, w0, w1, b0x, b0y, b1x, b1y,
+                             c0x, c0y, c1x, c1y, Hf0, Hf1, X, SbEwb, SbTwb)
+
+    def kinetic_discrete_gradient(self, q0, q1, v0, v1):
+        """Exact discrete gradient of G(q) = ½ v0ᵀ M(q) v1 with its derivatives (ENERGY_SCHEME.md).
+
+        With b_i = A(θ_m)ᵀ Ṙ_i, s̄_m = s̄(q_f,m), c_i = ω_i E s̄_m + S̄ f_i, σ = sinc(Δθ/2), κ = cos(Δθ/2)::
+
+            g_R = 0,   g_θ = ½ σ (b_0·E c_1 + b_1·E c_0)
+            g_f = ½ κ S̄ᵀEᵀ(ω_1 b_0 + ω_0 b_1) + ω_0 ω_1 (c + M_A q_f,m) − ½ H (ω_0 f_1 + ω_1 f_0)
+
+        The derivatives include those of σ and κ (exact tangent).
+        """
+        n, nf = self.n_dofs, self.n_elastic
+        yf = self._Pf @ np.stack([v0[3:], v1[3:]], axis=1)   # (2 + nf, 2): S̄ f_i, H f_i
+        (g, sig, dsig, kap, dkap, ca, sa, smx, smy, cmm, w0, w1, b0x, b0y, b1x, b1y,
+         c0x, c0y, c1x, c1y, Hf0, Hf1, X, SbEwb, SbTwb) = self._kinetic_terms(q0, q1, v0, v1, yf[:, 0], yf[:, 1])
         tq = np.zeros((3, n))
         tq[2, 2] = 0.5 * dsig * X - 0.25 * sig * (b0x * c1x + b0y * c1y + b1x * c0x + b1y * c0y)
         tq[2, 3:] = -0.25 * sig * SbTwb
@@ -731,35 +747,16 @@ class FloatingBeam(Body):
         n, nf = self.n_dofs, self.n_elastic
         c2 = 2.0 / dt
         A, qf1, sbar, cm, a, J = self._parts(q1)
-        # ---- kinetic discrete gradient (as kinetic_discrete_gradient)
-        d = float(q1[2] - q0[2])
-        tm = 0.5 * float(q0[2] + q1[2])
-        ca, sa = math.cos(tm), math.sin(tm)
-        sig, dsig = _sinc_half(d)
-        kap, dkap = math.cos(0.5 * d), -0.5 * math.sin(0.5 * d)
+        # ---- kinetic discrete gradient (shared with kinetic_discrete_gradient)
         qfm = 0.5 * (q0[3:] + q1[3:])
-        y = self._Pq @ qfm
-        smx, smy = self._S0[0] + y[0], y[1]
-        cmm = self._c + y[2:2 + nf]
-        w0, w1 = float(v0[2]), float(v1[2])
-        b0x, b0y = ca * v0[0] + sa * v0[1], -sa * v0[0] + ca * v0[1]
-        b1x, b1y = ca * v1[0] + sa * v1[1], -sa * v1[0] + ca * v1[1]
         f = v1[3:]
         key0 = v0.tobytes()
         if self._v0cache[0] != key0:                        # v0 is fixed through a step's Newton iteration
             self._v0cache = (key0, self._Pf @ v0[3:])
         yf0 = self._v0cache[1]
         yf1 = self._Pf @ f                                  # (2 + nf,): S̄ f_i, H f_i
-        Hf0, Hf1 = yf0[2:], yf1[2:]
-        c0x, c0y = -w0 * smy + yf0[0], w0 * smx + yf0[1]
-        c1x, c1y = -w1 * smy + yf1[0], w1 * smx + yf1[1]
-        X = (-b0x * c1y + b0y * c1x) + (-b1x * c0y + b1y * c0x)
-        wb = np.array([w1 * b0x + w0 * b1x, w1 * b0y + w0 * b1y])
-        SbEwb = self._SbEt @ wb
-        SbTwb = self._SbarT @ wb
-        gk = np.zeros(n)
-        gk[2] = 0.5 * sig * X
-        gk[3:] = 0.5 * kap * SbEwb + (w0 * w1) * cmm - 0.5 * (w0 * Hf1 + w1 * Hf0)
+        (gk, sig, dsig, kap, dkap, ca, sa, smx, smy, cmm, w0, w1, b0x, b0y, b1x, b1y,
+         c0x, c0y, c1x, c1y, Hf0, Hf1, X, SbEwb, SbTwb) = self._kinetic_terms(q0, q1, v0, v1, yf0, yf1)
         SbEb0 = self._SbEt @ np.array([b0x, b0y])
         # ---- momentum, mass matrix and momentum Jacobian at (q1, v1)
         V = v1[:2]
