@@ -12,9 +12,9 @@ prints a summary and writes ``flying_beam_snapshots.png`` (shapes every 1 s) and
 ``flying_beam_conservation.png`` (energy, linear and angular momentum) to OUT_DIR (default
 ``examples/output``).
 
-Energy and linear momentum are conserved by the energy-momentum scheme to round-off after the load
-stops; angular momentum drifts slightly at O(Δt²) (see :mod:`skfem_flex.bodies.exact` for why an
-exact energy scheme with additive section angles cannot keep it exactly).
+Energy, linear and angular momentum are conserved by the energy-momentum scheme to the Newton
+tolerance after the load stops (section angles advance at their Cayley rate; see
+:mod:`skfem_flex.bodies.exact`).
 """
 import sys
 from pathlib import Path

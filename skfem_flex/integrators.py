@@ -38,6 +38,7 @@ import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 
 from .errors import ConvergenceError, SimulationError
+from .rotations import MAX_INCREMENT, cayley, cayley_derivative, cayley_ratio, cayley_ratio_derivative
 from .scene import add_matrices
 
 __all__ = ["SimulationError", "ConvergenceError", "NewtonSettings", "State", "Integrator",
@@ -358,6 +359,7 @@ class EnergyMomentum(Integrator):
         t1, tm = t0 + dt, t0 + 0.5 * dt
         free, pres = scene.free_index, scene.prescribed_index
         nf, m = free.size, scene.n_constraints
+        cay = getattr(scene, "cayley_index", _NO_INDEX)
         dq_base = np.zeros(scene.n)
         if pres.size:
             dq_base[pres] = scene.prescribed_state(t1)[0] - q0[pres]
@@ -373,29 +375,55 @@ class EnergyMomentum(Integrator):
             dq[free] = x[:nf]
             mu = x[nf:]
             q1 = q0 + dq
-            v1 = (2.0 / dt) * dq - v0
+            if cay.size:
+                z, cay_terms = _cayley_rates(dq, cay, t1, dt)
+            else:
+                z, cay_terms = dq, None
+            v1 = (2.0 / dt) * z - v0
             # one fused scene call: p1 = M(q1) v1, the discrete gradients of G and V, the tangent
             # (2/Δt) M + B − Δt ∂g_G/∂q1 − 2 ∂g_G/∂v1 + Δt ∂g_V/∂q1, and the round-off floor
             # Δt |∂g_V/∂q1| (|q0| + |q1|) of the stiff internal forces (K q cancels: |K||q| >> |K q|)
             p1, g_kin, g, jac, floor, kin1 = scene.energy_momentum_terms(q0, q1, v0, v1, dt)
+            if cay_terms is not None:
+                jac_mass = scene.mass_matrix(q1) * (2.0 / dt)
+                force_jac = add_matrices(jac, -jac_mass)
             r = p1 - p0
             scale = max(_inf(p1), p0_inf)
+            dg = dt * g
             if g_kin is not None:
-                r -= dt * g_kin
+                dg = dg - dt * g_kin
                 scale = max(scale, dt * _inf(g_kin))
-            r += dt * g
             scale = max(scale, dt * _inf(g))
-            ext = scene.external_force(q0 + 0.5 * dq, dq / dt, tm) if scene.loads else None
-            if ext is not None:
-                r -= dt * ext[0]
-                jac = add_matrices(jac, -(0.5 * dt * ext[1] + ext[2]))
-                scale = max(scale, dt * _inf(ext[0]))
             if m:
                 d = scene.constraint_discrete_gradient(q0, q1, tm)
                 dtmu = d.T @ mu
-                r += dtmu
+                dg = dg + dtmu
                 scale = max(scale, _inf(dtmu))
-                jac = add_matrices(jac, scene.constraint_discrete_gradient_jacobian(q0, q1, mu, tm))
+                dmu_jac = scene.constraint_discrete_gradient_jacobian(q0, q1, mu, tm)
+                if cay_terms is None:
+                    jac = add_matrices(jac, dmu_jac)
+                else:
+                    force_jac = add_matrices(force_jac, dmu_jac)
+            else:
+                d = None
+            if cay_terms is not None:
+                # discrete gradients are conjugate to Δq; conjugate to the Cayley rates z they are
+                # S·(·) with S = diag(Δψ/w) (same work S·f·z = f·Δq, now equivariant), and the
+                # mass part sees ∂v1/∂Δq = (2/Δt) diag(dz/dΔq)
+                ratio, dratio, dz = cay_terms
+                jac = add_matrices(_scale_columns(jac_mass, dz), _scale_rows(force_jac, ratio))
+                jac = add_matrices(jac, _diagonal(dg * dratio, scene.dense))
+                dg = ratio * dg
+                floor = ratio * floor
+                d = _scale_columns(d, ratio) if d is not None else None
+            r += dg
+            ext = scene.external_force(q0 + 0.5 * dq, z / dt, tm) if scene.loads else None
+            if ext is not None:
+                r -= dt * ext[0]
+                jac = add_matrices(jac, -(0.5 * dt * ext[1] + (ext[2] if cay_terms is None
+                                                               else _scale_columns(ext[2], cay_terms[2]))))
+                scale = max(scale, dt * _inf(ext[0]))
+            if m:
                 c = scene.constraint_value(q1, t1)
                 cq = scene.constraint_jacobian(q1, t1)
                 c_scale = max(_inf(abs(cq) @ np.abs(q1)), _inf(abs(cq)) * scene.length_scale, _TINY)
@@ -405,9 +433,8 @@ class EnergyMomentum(Integrator):
                 err_c = _inf(c) / (s.ctol * c_scale)
             else:
                 full, res, err_c = _sub_block(jac, free, free), r[free], 0.0
-                d = None
-            vbar = dq / dt
-            e_scale = max(e_scale0, abs(kin1), abs(float(dq @ g)), _TINY)
+            vbar = z / dt
+            e_scale = max(e_scale0, abs(kin1), abs(float(z @ (ratio * g if cay_terms is not None else g))), _TINY)
             r_free, vbar_free = r[free], vbar[free]
             r_inf, vr = _inf(r_free), abs(float(vbar_free @ r_free))
             err = max(r_inf / (s.rtol * max(scale, _TINY)), err_c, vr / (s.etol * e_scale))
@@ -416,26 +443,66 @@ class EnergyMomentum(Integrator):
             if err > 1.0 and err_c <= 1.0 and r_inf <= 16 * _EPS * _inf(floor[free]) and \
                     vr <= 2 * _EPS * float(np.abs(vbar_free) @ floor[free]):
                 err = min(err, 1e3)
-            cache.update(dq=dq, mu=mu, q1=q1, v1=v1, r=r, d=d, ext=ext)
+            cache.update(dq=dq, z=z, mu=mu, q1=q1, v1=v1, r=r, d=d, ext=ext)
             return res, full, err
 
-        x0 = np.concatenate([dt * v0[free], state.lam * dt if state.lam.size == m else np.zeros(m)])
+        dq_guess = dt * v0[free]
+        if cay.size:                    # the Cayley rate of the last step, continued: Δψ = 2 atan(Δt ω0/2)
+            on = np.isin(free, cay)
+            dq_guess[on] = 2.0 * np.arctan(0.5 * dq_guess[on])
+        x0 = np.concatenate([dq_guess, state.lam * dt if state.lam.size == m else np.zeros(m)])
         x, _, its = self._newton(fun, x0, f"t = {t1:.6g} s (dt = {dt:.3g} s)")
-        dq, mu, q1, v1, r, d, ext = (cache[k] for k in ("dq", "mu", "q1", "v1", "r", "d", "ext"))
+        dq, z, mu, q1, v1, r, d, ext = (cache[k] for k in ("dq", "z", "mu", "q1", "v1", "r", "d", "ext"))
         work = 0.0
         if ext is not None:
-            work += float(dq @ ext[0])
+            work += float(z @ ext[0])
         if m:
-            work -= float(mu @ (d @ dq)) / dt        # μ = Δt λ̄: the work is −λ̄·ΔΦ
+            work -= float(mu @ (d @ z)) / dt         # μ = Δt λ̄: the work is −λ̄·ΔΦ
         reaction = np.zeros(0)
         if pres.size:
             reaction = r[pres] / dt
-            work += float(dq[pres] @ reaction)
+            work += float(z[pres] @ reaction)
         new = State(t1, q1, v1, lam=mu / dt, prescribed_force=reaction)
         vres = 0.0
         if m:
             vres = _inf(scene.constraint_jacobian(q1, t1) @ v1 + scene.constraint_time_derivative(q1, t1))
         return new, StepInfo(its, work, vres)
+
+
+_NO_INDEX = np.zeros(0, dtype=int)
+
+
+def _cayley_rates(dq, cay, t1, dt):
+    """z = Δq with z = 2 tan(Δψ/2) on the Cayley coordinates, and (Δψ/w, d(Δψ/w)/dΔψ, dz/dΔq) as full vectors."""
+    x = dq[cay]
+    big = np.abs(x) >= MAX_INCREMENT
+    if np.any(big):
+        raise ConvergenceError(f"an angle with Cayley rate turns by {np.abs(x).max():.3g} rad in one step at "
+                               f"t = {t1:.6g} s (dt = {dt:.3g} s); 2 tan(Δψ/2) needs |Δψ| < π",
+                               iterations=0, residual=float("inf"))
+    z = dq.copy()
+    z[cay] = cayley(x)
+    ratio = np.ones(dq.size)
+    ratio[cay] = cayley_ratio(x)
+    dratio = np.zeros(dq.size)
+    dratio[cay] = cayley_ratio_derivative(x)
+    dz = np.ones(dq.size)
+    dz[cay] = cayley_derivative(x)
+    return z, (ratio, dratio, dz)
+
+
+def _scale_rows(a, s):
+    """diag(s) a (dense or sparse)."""
+    return sps.diags(s) @ a if sps.issparse(a) else a * s[:, None]
+
+
+def _scale_columns(a, s):
+    """a diag(s) (dense or sparse)."""
+    return a @ sps.diags(s) if sps.issparse(a) else a * s[None, :]
+
+
+def _diagonal(s, dense):
+    return np.diag(s) if dense else sps.diags(s, format="csr")
 
 
 class Newmark(Integrator):

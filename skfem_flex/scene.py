@@ -165,6 +165,16 @@ class Scene:
             if b.constant_mass:
                 self._add(acc, b.mass_matrix(b.q0), i)
         self._constant_mass = acc.result()
+        cay = []
+        for b, i in zip(self.bodies, self._body_idx):
+            local = np.asarray(getattr(b, "cayley_coordinates", ()), dtype=int)
+            if local.size:
+                if not b.constant_mass:
+                    raise ValueError(f"body {b.name!r} declares Cayley coordinates but has a variable mass "
+                                     f"matrix; only constant-mass bodies may")
+                cay.append(i[local])
+        #: global indices of the Cayley-rate angles (empty: the energy scheme's plain mid-point rates)
+        self.cayley_index = np.sort(np.concatenate(cay)) if cay else np.zeros(0, dtype=int)
         self.potential_bodies = [(b, i) for b, i in zip(self.bodies, self._body_idx) if b.has_potential]
         self.conservative_forces = [(f, i) for f, i in zip(self.forces, self._force_idx) if f.conservative]
         self.loads = [(f, i) for f, i in zip(self.forces, self._force_idx) if not f.conservative]

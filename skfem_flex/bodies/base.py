@@ -143,6 +143,11 @@ class Body:
     constant_mass: bool = True
     #: True when potential_energy is not identically zero
     has_potential: bool = False
+    #: local indices of angles whose mean rate in the energy-momentum scheme is the Cayley rate
+    #: 2 tan(Δφ/2)/Δt instead of Δφ/Δt (:mod:`skfem_flex.rotations`); a body that declares them
+    #: writes its potential discrete gradient so that, with its rows on these coordinates scaled
+    #: by Δφ/w, it is conjugate to those rates. Constant-mass bodies only.
+    cayley_coordinates: tuple = ()
     name: str = "body"
 
     # ----------------------------------------------------------------- state

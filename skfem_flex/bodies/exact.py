@@ -36,44 +36,51 @@ Energy-conserving discrete gradient
 Second seed paper, eqs. (3b), (17)–(22): the section forces are taken at the
 mean strain, f_m = C (e_0 + e_1)/2, and the strain increment is written
 exactly through the incremental rotation. In the plane the incremental
-rotation is the angle Δφ, with Rodrigues/Cayley parameter w = 2 tan(Δφ/2);
-with φ_m = (φ_0 + φ_1)/2 and h = Δφ/2,
+rotation is one angle Δφ with Rodrigues/Cayley parameter w = W(Δφ) =
+2 tan(Δφ/2) (:mod:`skfem_flex.rotations`); with \bar t = (t_0 + t_1)/2 and
+\bar r' = (r_0' + r_1')/2,
 
 .. math::
 
-    t_1 − t_0 = 2 \sin h \, n_m = \operatorname{sinc}(h) Δφ \, n_m, \qquad
-    n_1 − n_0 = −\operatorname{sinc}(h) Δφ \, t_m,
+    t_1 − t_0 = w \, E \bar t, \qquad
+    ε_1 − ε_0 = \bar t · Δr' + w_p \, (E \bar t · \bar r'), \qquad
+    γ_1 − γ_0 = E \bar t · Δr' − w_p \, (\bar t · \bar r')
 
-so that with \bar r' = (r_0' + r_1')/2 and \bar t = (t_0 + t_1)/2 = cos h\, t_m,
+exactly at every strain point p (Simo, Tarnow & Doblaré 1995: \bar Λᵀ(Δr' −
+w E \bar r')). The point's Cayley parameter w_p = W(Δφ_p), Δφ_p = Σ N_a Δφ_a,
+and the curvature increment Δκ_p = Σ N_a' Δφ_a are written *exactly and
+linearly* in the nodal parameters w_a = W(Δφ_a) by divided differences of W
+about the element's first node a = 0 (W[x, y] = (W(x) − W(y))/(x − y) =
+sinc((x − y)/2)/(cos(x/2) cos(y/2)), smooth at x = y):
 
 .. math::
 
-    ε_1 − ε_0 = \bar t · Δr' + \operatorname{sinc}(h) (n_m · \bar r') Δφ, \qquad
-    γ_1 − γ_0 = \bar n · Δr' − \operatorname{sinc}(h) (t_m · \bar r') Δφ
+    w_p = w_0 + W[Δφ_0, Δφ_p] \sum_{a ≥ 1} \frac{N_a}{W[Δφ_0, Δφ_a]} (w_a − w_0),
+    \qquad
+    Δκ_p = \sum_{a ≥ 1} \frac{N_a'}{W[Δφ_0, Δφ_a]} (w_a − w_0).
 
-exactly (equivalently \bar Λᵀ(Δr' − w E \bar r') with \bar Λ = (Λ_0 + Λ_1)/2,
-Simo, Tarnow & Doblaré 1995). The discrete gradient
-D V = Σ_points W f_mᵀ D e then satisfies D V · (q_1 − q_0) = V(q_1) − V(q_0)
-to round-off for any step, and the energy-momentum integrator conserves
-energy to the Newton tolerance. Only r' enters, so the total force of D V
-vanishes and linear momentum is conserved exactly.
+The coefficients of w_a sum to 1 in w_p and to 0 in Δκ_p. The discrete
+gradient D_w V = Σ_p W_p f_mᵀ ∂Δe_p/∂(Δr, w) is then (i) exact,
+D_w V · (Δr, w) = V_1 − V_0, and (ii) *equivariant*: orthogonal to the
+infinitesimal rotation ξ = (E \bar r_a, 1) at the mean configuration, because
+a step (Δr_a, w_a) = c ξ leaves every strain unchanged (Δr' = c E \bar r'
+and w_p = c turn r' and t alike). Only r' enters, so its force resultant
+vanishes too.
 
-Angular momentum is *not* conserved exactly by this (or any) exact discrete
-gradient in these coordinates: the integrator's mean velocity of an angle is
-Δφ/Δt, whereas the mid-point rule rotates positions by the Cayley angle
-2 atan(Δφ/2). The step Δq = c ξ(q_m) along the infinitesimal rotation
-ξ = (E r_m, 1) at the mid configuration turns every node about the origin
-by 2 atan(c/2) but every section by c, so it changes the shear angles by
-c − 2 atan(c/2) ≠ 0 and V by a nonzero amount, while a gradient with
-D V · ξ(q_m) = 0 (which exact angular momentum requires, see below) gives
-D V · Δq = 0: exact energy and exact angular momentum exclude each other
-here (Simo–Tarnow keep both by updating the rotation with the Cayley
-parameter, i.e. with a different kinematic relation for angles). With the constant mass matrix and v̄ = Δq/Δt, the
-angular momentum about the origin changes in a step exactly by
-ΔL = −Δt D V · ξ = −Δt Σ W (sinc(h) − cos h) (N̄ n_m − Q̄ t_m) · \bar r'
-≈ −Δt (Δφ²/12) Σ W (N̄ n_m − Q̄ t_m) · \bar r': O(Δt³) per step, a drift of
-O(Δt²) over a run (measured on the flying beam: 5e-4 relative at Δt = 0.1,
-6e-6 at Δt = 0.01 over 7.5 s of free flight).
+The energy-momentum integrator takes w_a/Δt as the mean angular velocity of
+the sections (the body declares its ψ coordinates as ``cayley_coordinates``)
+and this discrete gradient for the force; with the constant mass matrix both
+momenta then change only by external impulses, and energy by external work,
+to the Newton tolerance (flying beam: 1e-14). The body hands the gradient
+out conjugate to Δq (ψ rows times w/Δψ), so it is a valid exact discrete
+gradient for any caller; :meth:`ExactBeam.potential_discrete_gradient`
+differentiates it by complex steps.
+
+With the plain mid-point rate Δφ/Δt (``rotation_rate="mid-point"``)
+exact energy and exact angular momentum exclude each other: the step along
+ξ(q_m) turns nodes by 2 atan(c/2) but sections by c and changes V. Then the
+angular momentum changes per step by ΔL = −Δt D V · ξ(q_m) = O(Δt³), an
+O(Δt²) drift (flying beam: 5e-4 relative at Δt = 0.1, 6e-6 at Δt = 0.01).
 
 References
 ----------
@@ -93,6 +100,7 @@ from skfem import Basis, ElementLineP1, ElementLineP2, MeshLine
 from ..beam import ElementQuadrature, TimoshenkoBeam, gauss_line
 from ..forces import ForceElement
 from ..errors import ConvergenceError
+from ..rotations import MAX_INCREMENT as _MAX_INCREMENT, cayley_divided_difference, cayley_ratio
 from ..section import Section
 from .base import Body, BodyGeometry, BodyPoint, check_finite_vector
 
@@ -101,6 +109,8 @@ __all__ = ["ExactBeam", "NodalLoad", "ExactDistributedLoad", "ElementInversionEr
 #: bodies with at most this many coordinates hand out dense matrices
 DENSE_LIMIT = 400
 _E = np.array([[0.0, -1.0], [1.0, 0.0]])
+#: imaginary step of the complex-step tangent (any tiny value: no subtraction, no truncation error)
+_COMPLEX_STEP = 1e-30
 
 
 class ElementInversionError(ConvergenceError, ValueError):
@@ -111,22 +121,6 @@ class ElementInversionError(ConvergenceError, ValueError):
     (a Newton iterate of a too-large step may fold transiently) and finally
     reports the time, the step and this message, which names the element.
     """
-
-
-def _sinc(h):
-    """sin(h)/h, vectorised, 1 at 0."""
-    return np.sinc(h / np.pi)
-
-
-def _dsinc(h):
-    """d/dh sin(h)/h, by its Taylor series near 0 (no cancellation)."""
-    h = np.asarray(h, dtype=float)
-    h2 = h * h
-    small = np.abs(h) < 2e-2
-    safe = np.where(small, 1.0, h)
-    exact = (safe * np.cos(safe) - np.sin(safe)) / (safe * safe)
-    series = h * (-1.0 / 3.0 + h2 * (1.0 / 30.0 - h2 / 840.0))
-    return np.where(small, series, exact)
 
 
 def _finite(name, value):
@@ -163,6 +157,12 @@ class ExactBeam(Body):
     v0 : array_like, optional
         Initial velocities ẋ, ẏ (m/s), φ̇ (rad/s) (default: rest).
     name : str
+    rotation_rate : {"cayley", "mid-point"}
+        Mean angular velocity of the sections in the energy-momentum scheme:
+        ``"cayley"`` (default) 2 tan(Δψ/2)/Δt, which conserves angular
+        momentum exactly together with energy; ``"mid-point"`` Δψ/Δt, which
+        conserves energy exactly and angular momentum to O(Δt²) (kept for
+        comparison). The other integrators do not use it.
 
     Notes
     -----
@@ -198,7 +198,8 @@ class ExactBeam(Body):
     constant_mass = True
     has_potential = True
 
-    def __init__(self, beam, start=(0.0, 0.0), angle=0.0, q0=None, v0=None, name="exact_beam"):
+    def __init__(self, beam, start=(0.0, 0.0), angle=0.0, q0=None, v0=None, name="exact_beam",
+                 rotation_rate="cayley"):
         if not isinstance(beam, TimoshenkoBeam):
             raise ValueError(f"beam must be a skfem_flex TimoshenkoBeam, got {beam!r}")
         self.beam = beam
@@ -271,6 +272,10 @@ class ExactBeam(Body):
         self._gamma_c = gam @ xref             # ∫ ρA X ds
         self.total_mass = float(gam[0].sum())
 
+        if rotation_rate not in ("cayley", "mid-point"):
+            raise ValueError(f"rotation_rate must be 'cayley' or 'mid-point', got {rotation_rate!r}")
+        self.rotation_rate = rotation_rate
+        self.cayley_coordinates = tuple(int(i) for i in self.node_dofs[:, 2]) if rotation_rate == "cayley" else ()
         self.q0 = np.zeros(n) if q0 is None else check_finite_vector("q0", q0, n)
         self.v0 = np.zeros(n) if v0 is None else check_finite_vector("v0", v0, n)
         kin = self._kinematics(self.q0, check=False)
@@ -463,47 +468,95 @@ class ExactBeam(Body):
                      -wn * kin["stretch"] - wq * kin["gam"])
         return self._scatter_matrix(k_el.reshape(ne, 3 * k, 3 * k))
 
-    def potential_discrete_gradient(self, q0, q1):
-        """Stress at the mean strain times the exact strain increment (see the module docstring).
+    def _discrete_gradient_elements(self, ql0, ql1):
+        """Element vectors of the discrete gradient, (n_el, batch, 3k), in Δq-space.
 
-        Returns (g, ∂g/∂q1) with g · (q1 − q0) = V(q1) − V(q0) to round-off.
+        ``ql0`` (n_el, 3k) and ``ql1`` (n_el, batch, 3k) are element coordinates
+        (node-major x, y, ψ); ``ql1`` may be complex (complex-step tangent).
+        See the module docstring for the equations.
         """
-        k0 = self._kin_cached(q0)
-        k1 = self._kinematics(q1)
-        W = self._W
-        h = 0.5 * (k1["psi"] - k0["psi"])
-        phim = self.angle + k0["psi"] + h
-        cm, sm = np.cos(phim), np.sin(phim)
-        sc, dsc = _sinc(h), _dsinc(h)
-        rbx, rby = 0.5 * (k0["rx"] + k1["rx"]), 0.5 * (k0["ry"] + k1["ry"])     # r̄' = e_α + ū'
+        N, dN, W = self._N, self._dN, self._W                   # (e, p, k), (e, p, k), (e, p)
+        ql0 = ql0[:, None, :]
 
-        a = -sm * rbx + cm * rby            # n_m · r̄'
-        b = cm * rbx + sm * rby             # t_m · r̄'
-        tbx, tby = 0.5 * (k0["c"] + k1["c"]), 0.5 * (k0["s"] + k1["s"])
-        zero = np.zeros_like(h)
-        d_eps = self._vec(tbx, tby, sc * a, 0.0)
-        d_gam = self._vec(-tby, tbx, -sc * b, 0.0)
-        d_kap = self._vec(zero, zero, zero, 1.0)
-        n_bar = W * self.EA * 0.5 * (k0["eps"] + k1["eps"])
-        q_bar = W * self.kGA * 0.5 * (k0["gam"] + k1["gam"])
-        m_bar = W * self.EI * 0.5 * (k0["kap"] + k1["kap"])
-        g_el = (np.einsum("ep,epi->ei", n_bar, d_eps) + np.einsum("ep,epi->ei", q_bar, d_gam)
-                + np.einsum("ep,epi->ei", m_bar, d_kap))
-        # tangent with respect to q1
-        b1_eps, b1_gam, _ = self._grads(k1)
-        k_el = np.einsum("ep,epi,epj->eij", 0.5 * W * self.EA, d_eps, b1_eps)
-        k_el += np.einsum("ep,epi,epj->eij", 0.5 * W * self.kGA, d_gam, b1_gam)
-        k_el += np.einsum("ep,epi,epj->eij", 0.5 * W * self.EI, d_kap, d_kap)
-        ne, k = self.n_elements, self.k
-        k_el = k_el.reshape(ne, k, 3, k, 3)
-        c1, s1 = k1["c"], k1["s"]
-        # ∂t̄/∂φ1 = n1/2, ∂n̄/∂φ1 = −t1/2;
-        # ∂(sinc·a)/∂r1' = sinc n_m/2, ∂(−sinc·b)/∂r1' = −sinc t_m/2
-        self._second(k_el,
-                     0.5 * (n_bar * -s1 - q_bar * c1), 0.5 * (n_bar * c1 - q_bar * s1),
-                     0.5 * sc * (n_bar * -sm - q_bar * cm), 0.5 * sc * (n_bar * cm - q_bar * sm),
-                     n_bar * (0.5 * dsc * a - 0.5 * sc * b) + q_bar * (-0.5 * dsc * b - 0.5 * sc * a))
-        return self._scatter_vector(g_el), self._scatter_matrix(k_el.reshape(ne, 3 * k, 3 * k))
+        def ends(ql):
+            U, V, P = ql[..., 0::3], ql[..., 1::3], ql[..., 2::3]
+            ux = np.einsum("ebk,epk->ebp", U, dN)
+            uy = np.einsum("ebk,epk->ebp", V, dN)
+            psi = np.einsum("ebk,epk->ebp", P, N)
+            kap = np.einsum("ebk,epk->ebp", P, dN)
+            phi = self.angle + psi
+            c, s = np.cos(phi), np.sin(phi)
+            sh = np.sin(0.5 * psi)
+            eps = -2.0 * sh * sh + c * ux + s * uy
+            gam = -np.sin(psi) + (-s * ux + c * uy)
+            return ux, uy, c, s, eps, gam, kap, P
+
+        ux0, uy0, c0, s0, eps0, gam0, kap0, P0 = ends(ql0)
+        ux1, uy1, c1, s1, eps1, gam1, kap1, P1 = ends(ql1)
+        wb = W[:, None, :]
+        n_bar = wb * self.EA * 0.5 * (eps0 + eps1)
+        q_bar = wb * self.kGA * 0.5 * (gam0 + gam1)
+        m_bar = wb * self.EI * 0.5 * (kap0 + kap1)
+        rbx = self.direction[0] + 0.5 * (ux0 + ux1)              # r̄'
+        rby = self.direction[1] + 0.5 * (uy0 + uy1)
+        tbx, tby = 0.5 * (c0 + c1), 0.5 * (s0 + s1)              # t̄ = mean section tangent at the point
+        a = -tby * rbx + tbx * rby                               # r̄' · E t̄
+        b = tbx * rbx + tby * rby                                # r̄' · t̄
+
+        # nodal Cayley rates w_a = W(Δψ_a) → point rate w_p and curvature increment, exactly and linearly,
+        # through divided differences about the element's first node (coefficients sum to 1 and to 0)
+        X = P1 - P0                                              # (e, b, k)
+        Xp = np.einsum("ebk,epk->ebp", X, N)
+        dd_p = cayley_divided_difference(X[..., :1], Xp)         # (e, b, p)
+        dd_a = cayley_divided_difference(X[..., :1], X[..., 1:])  # (e, b, k−1)
+        beta = dd_p[..., None] * N[:, None, :, 1:] / dd_a[:, :, None, :]
+        c_w = np.concatenate([1.0 - beta.sum(axis=-1, keepdims=True), beta], axis=-1)      # (e, b, p, k)
+        k_w = dN[:, None, :, 1:] / dd_a[:, :, None, :]
+        k_w = np.concatenate([-k_w.sum(axis=-1, keepdims=True), k_w], axis=-1)
+
+        fx = np.einsum("ebp,epk->ebk", n_bar * tbx - q_bar * tby, dN)
+        fy = np.einsum("ebp,epk->ebk", n_bar * tby + q_bar * tbx, dN)
+        fw = (np.einsum("ebp,ebpk->ebk", n_bar * a - q_bar * b, c_w)
+              + np.einsum("ebp,ebpk->ebk", m_bar, k_w))
+        out = np.empty(ql1.shape, dtype=np.result_type(ql1, float))
+        out[..., 0::3] = fx
+        out[..., 1::3] = fy
+        out[..., 2::3] = fw / cayley_ratio(X)                   # conjugate to w → conjugate to Δψ
+        return out
+
+    def potential_discrete_gradient(self, q0, q1):
+        """Equivariant discrete gradient: stress at the mean strain, strain increments in Cayley rates.
+
+        Returns (g, ∂g/∂q1) with g · (q1 − q0) = V(q1) − V(q0) to round-off;
+        its ψ rows are those of the Cayley-rate gradient times w/Δψ (module
+        docstring), so that the integrator's scaling by Δψ/w recovers it.
+        The tangent is the complex-step derivative of the element vectors
+        (exact to round-off; the coefficients of the divided differences make
+        a closed form long and error-prone).
+
+        Raises
+        ------
+        ElementInversionError
+            If q1 folds an element.
+        ConvergenceError
+            If a nodal rotation increment |Δψ| reaches π (no Cayley parameter).
+        """
+        self._kin_cached(q0)
+        self._kinematics(q1)                                    # folded elements are reported here
+        q0, q1 = np.asarray(q0, dtype=float), np.asarray(q1, dtype=float)
+        dpsi = np.abs(q1[self.node_dofs[:, 2]] - q0[self.node_dofs[:, 2]])
+        if dpsi.size and dpsi.max() >= _MAX_INCREMENT:
+            i = int(np.argmax(dpsi))
+            raise ConvergenceError(f"{self.name}: the section at node {i} turns by {dpsi[i]:.3g} rad in one step; "
+                                   f"the Cayley parameter 2 tan(Δψ/2) needs |Δψ| < π (take a smaller step)")
+        ql0, ql1 = q0[self.ed], q1[self.ed]
+        nloc = ql1.shape[1]
+        h = _COMPLEX_STEP
+        probe = ql1[:, None, :] + (1j * h) * np.eye(nloc)[None]
+        g = self._discrete_gradient_elements(ql0, probe)        # (e, j, i): perturbation j, row i
+        g_el = g[:, 0, :].real
+        k_el = np.transpose(g.imag, (0, 2, 1)) / h
+        return self._scatter_vector(g_el), self._scatter_matrix(k_el)
 
     # --------------------------------------------------------------- kinetic
     def mass_matrix(self, q):
