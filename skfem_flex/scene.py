@@ -321,7 +321,7 @@ class Scene:
         (or with conservative force elements) the terms come from the separate contract methods.
         """
         if self._fused is None:
-            self._fused = (bool(self.variable_mass_bodies) and not self.conservative_forces and all(
+            self._fused = (bool(self.variable_mass_bodies) and all(
                 hasattr(b, "energy_momentum_terms") for b, _ in self.variable_mass_bodies + self.potential_bodies)
                 and {id(b) for b, _ in self.potential_bodies} <= {id(b) for b, _ in self.variable_mass_bodies})
         if not self._fused:
@@ -336,8 +336,7 @@ class Scene:
             jac = add_matrices(jac, dt * h)
             floor = dt * (abs(h) @ (np.abs(q0) + np.abs(q1)))
             return p1, g_kin, g_pot, jac, floor, self.kinetic_energy(q1, v1)
-        single = len(self.bodies) == 1
-        if single:
+        if len(self.bodies) == 1 and not self.conservative_forces:
             b = self.bodies[0]
             p1, g_kin, g_pot, jac, floor = b.energy_momentum_terms(q0, q1, v0, v1, dt)
             return p1, g_kin, g_pot, jac, floor, 0.5 * float(v1 @ p1)
@@ -351,6 +350,13 @@ class Scene:
             g_pot[i] += gpb
             floor[i] += fb
             self._add(acc, jb, i)
+        for f, i in self.conservative_forces:          # gravity, springs: their own discrete gradients
+            gf, hf = f.potential_discrete_gradient(q0[i], q1[i])
+            g_pot[i] += gf
+            if hf is not None:
+                hf = hf * dt
+                self._add(acc, hf, i)
+                floor[i] += abs(hf) @ (np.abs(q0[i]) + np.abs(q1[i]))
         jac = add_matrices(self._constant_mass * (2.0 / dt), acc.result())
         return p1, g_kin, g_pot, jac, floor, 0.5 * float(v1 @ p1)
 
