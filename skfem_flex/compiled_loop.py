@@ -1,0 +1,318 @@
+r"""Compiled (Numba) energy-momentum time loop for a single floating-frame beam.
+
+For the scenes the benchmark is about — one :class:`~skfem_flex.bodies.FloatingBeam` whose
+reference coordinates follow prescribed motion laws (the spin-up, the rotating beam) — the
+Python per-step overhead of :class:`~skfem_flex.integrators.EnergyMomentum` (Newton loop,
+scale computations, small dense solves) costs far more than the arithmetic. This module runs
+many steps of the *same* scheme inside one compiled function:
+
+* unknowns Δq of the free coordinates, q1 = q0 + Δq, v1 = 2Δq/Δt − v0, prescribed Δq from
+  the laws' positions at t1 (evaluated in Python for the chunk's step times);
+* residual r = p(q1, v1) − p(q0, v0) − Δt g_kin + Δt g_pot (the fused body kernel
+  :func:`skfem_flex.bodies.floating_kernel.energy_momentum_terms`);
+* convergence err = max(‖r_F‖∞ / (rtol · scale), |v̄_F · r_F| / (etol · E_scale)) ≤ 1, with the
+  round-off-floor acceptance, the update-below-round-off and stagnation exits and the line
+  search of :meth:`Integrator._newton`, initial guess Δq = Δt v0;
+* prescribed reaction r_P / Δt and its work Δq_P · r_P / Δt.
+
+Dense partial-pivoting LU solves the Newton systems (the eligible scenes are small, see
+:func:`eligible`). On any failure — non-finite residual, update or state, singular matrix,
+no convergence within ``max_iterations`` — the compiled loop stops *before* the failing step
+and reports its index; :func:`skfem_flex.simulate` then re-runs that step on the Python path,
+which halves it or raises :class:`~skfem_flex.errors.ConvergenceError` with its usual message,
+and continues compiled afterwards.
+
+The trajectory equals the Python path's to round-off (the two differ only in the order of
+floating-point sums), so the Newton iteration counts agree except where a scaled residual
+lands within round-off of a convergence threshold.
+"""
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from .bodies.floating import FloatingBeam
+from .bodies.floating_kernel import energy_momentum_terms, momentum
+from .integrators import EnergyMomentum
+from .scene import Scene
+
+__all__ = ["eligible", "run_chunk", "OK", "NONFINITE", "NOT_CONVERGED", "SINGULAR"]
+
+_EPS = np.finfo(float).eps
+_TINY = 1e-300
+_NEAR_FLOOR = 1e4
+#: status codes of :func:`run_chunk`
+OK, NONFINITE, NOT_CONVERGED, SINGULAR = 0, 1, 2, 3
+
+
+def eligible(scene, scheme):
+    """True if ``simulate`` may run ``scene`` with ``scheme`` through the compiled loop.
+
+    Eligible: the :class:`~skfem_flex.integrators.EnergyMomentum` class itself (not a
+    subclass, which may change the step) on a plain :class:`~skfem_flex.scene.Scene` of one
+    :class:`~skfem_flex.bodies.FloatingBeam` with dense matrices (``scene.dense``), no
+    constraints, no force elements (loads, gravity, springs) and no incremental-rotation
+    coordinates; any of its coordinates may be prescribed.
+    """
+    if type(scheme) is not EnergyMomentum or type(scene) is not Scene:
+        return False
+    if len(scene.bodies) != 1 or not isinstance(scene.bodies[0], FloatingBeam):
+        return False
+    if scene.n_constraints or scene.forces or len(getattr(scene, "cayley_index", ())):
+        return False
+    return bool(scene.dense) and hasattr(scene.bodies[0], "_kd")
+
+
+@numba.njit(cache=True)
+def _inf(x):
+    m = 0.0
+    for i in range(x.size):
+        a = abs(x[i])
+        if a > m:
+            m = a
+    return m
+
+
+@numba.njit(cache=True)
+def _all_finite(x):
+    for i in range(x.size):
+        if not np.isfinite(x[i]):
+            return False
+    return True
+
+
+@numba.njit(cache=True)
+def _lu_solve(a, b):
+    """x with a x = b by LU with partial pivoting (a is overwritten); (x, False) if a pivot is exactly 0."""
+    n = b.size
+    x = b.copy()
+    for k in range(n):
+        p, big = k, abs(a[k, k])
+        for i in range(k + 1, n):
+            if abs(a[i, k]) > big:
+                p, big = i, abs(a[i, k])
+        if big == 0.0:
+            return x, False
+        if p != k:
+            for j in range(n):
+                a[k, j], a[p, j] = a[p, j], a[k, j]
+            x[k], x[p] = x[p], x[k]
+        piv = a[k, k]
+        for i in range(k + 1, n):
+            f = a[i, k] / piv
+            if f != 0.0:
+                a[i, k] = f
+                for j in range(k + 1, n):
+                    a[i, j] -= f * a[k, j]
+                x[i] -= f * x[k]
+    for i in range(n - 1, -1, -1):
+        s = x[i]
+        for j in range(i + 1, n):
+            s -= a[i, j] * x[j]
+        x[i] = s / a[i, i]
+    return x, True
+
+
+@numba.njit(cache=True)
+def _evaluate(kd, x, q0, v0, dq_base, free, fpos, h, p0, p0_inf, e_scale0, rtol, etol):
+    """One Newton evaluation of the energy-momentum step (EnergyMomentum.step's ``fun``).
+
+    Returns (r_F, J_FF, err, dq, q1, v1, p1, r)."""
+    n = q0.size
+    dq = dq_base.copy()
+    for i in range(free.size):
+        dq[free[i]] = x[i]
+    q1 = q0 + dq
+    v1 = (2.0 / h) * dq - v0
+    p1, gk, gp, data, floor = energy_momentum_terms(kd, q0, q1, v0, v1, h)
+    kin1 = 0.5 * np.dot(v1, p1)
+    r = p1 - p0
+    scale = max(_inf(p1), p0_inf)
+    r -= h * gk
+    scale = max(scale, h * _inf(gk))
+    r += h * gp
+    scale = max(scale, h * _inf(gp))
+    e_scale = max(e_scale0, abs(kin1), abs(np.dot(dq, gp)), _TINY)
+    nfr = free.size
+    rf = np.empty(nfr)
+    vr, fl_inf, vfl = 0.0, 0.0, 0.0
+    for i in range(nfr):
+        j = free[i]
+        rf[i] = r[j]
+        vb = dq[j] / h
+        vr += vb * r[j]
+        fl_inf = max(fl_inf, abs(floor[j]))
+        vfl += abs(vb) * floor[j]
+    vr = abs(vr)
+    r_inf = _inf(rf)
+    err = max(r_inf / (rtol * max(scale, _TINY)), 0.0, vr / (etol * e_scale))
+    # round-off floor acceptance (see EnergyMomentum.step)
+    if err > 1.0 and r_inf <= 16 * _EPS * fl_inf and vr <= 2 * _EPS * vfl:
+        err = min(err, 1e3)
+    # the free-free block of the tangent, from the body's CSR pattern
+    jf = np.zeros((nfr, nfr))
+    ptr, idx = kd.pat_ptr, kd.pat_idx
+    for i in range(n):
+        fi = fpos[i]
+        if fi < 0:
+            continue
+        for k in range(ptr[i], ptr[i + 1]):
+            fj = fpos[idx[k]]
+            if fj >= 0:
+                jf[fi, fj] = data[k]
+    return rf, jf, err, dq, q1, v1, p1, r
+
+
+@numba.njit(cache=True)
+def _step(kd, q0, v0, p0, h, qp1, pres, free, fpos, rtol, etol, max_iterations, line_search):
+    """One energy-momentum step; (status, iterations, dq, q1, v1, p1, r) as EnergyMomentum.step and _newton."""
+    n = q0.size
+    dq_base = np.zeros(n)
+    for i in range(pres.size):
+        dq_base[pres[i]] = qp1[i] - q0[pres[i]]
+    p0_inf = _inf(p0)
+    e_scale0 = abs(0.5 * np.dot(v0, p0))
+    x = np.empty(free.size)
+    for i in range(free.size):
+        x[i] = h * v0[free[i]]
+    rf, jf, err, dq, q1, v1, p1, r = _evaluate(kd, x, q0, v0, dq_base, free, fpos, h, p0, p0_inf, e_scale0,
+                                               rtol, etol)
+    err_prev = np.inf
+    for it in range(max_iterations + 1):
+        if not (_all_finite(rf) and np.isfinite(err)):
+            return NONFINITE, it, dq, q1, v1, p1, r
+        if err <= 1.0:
+            return OK, it, dq, q1, v1, p1, r
+        if it == max_iterations:
+            break
+        sol, regular = _lu_solve(jf, rf)
+        if not regular:
+            return SINGULAR, it, dq, q1, v1, p1, r
+        dx = -sol
+        if not _all_finite(dx):
+            return NONFINITE, it, dq, q1, v1, p1, r
+        dx_inf, x_inf = _inf(dx), _inf(x)
+        if dx_inf <= 8 * _EPS * max(x_inf, _TINY) and err < 1e6:
+            return OK, it + 1, dq, q1, v1, p1, r          # update below round-off
+        if it >= 2 and err >= 0.25 * err_prev and dx_inf <= 1.5e-8 * x_inf and err < 1e4:
+            return OK, it + 1, dq, q1, v1, p1, r          # stagnated at the round-off floor
+        err_prev = err
+        step = 1.0
+        for _ in range(7 if line_search else 1):
+            x_try = x + step * dx
+            rf_t, jf_t, err_t, dq_t, q1_t, v1_t, p1_t, r_t = _evaluate(kd, x_try, q0, v0, dq_base, free, fpos, h,
+                                                                       p0, p0_inf, e_scale0, rtol, etol)
+            if not line_search or (np.isfinite(err_t) and (err_t < max(err, 1.0) or err_t <= _NEAR_FLOOR)):
+                break
+            step *= 0.5
+        x, rf, jf, err, dq, q1, v1, p1, r = x_try, rf_t, jf_t, err_t, dq_t, q1_t, v1_t, p1_t, r_t
+    return NOT_CONVERGED, max_iterations, dq, q1, v1, p1, r
+
+
+@numba.njit(cache=True)
+def _run(kd, q, v, t, hs, qp, pres, free, rtol, etol, max_iterations, line_search, work, first_step,
+         record_every, n_steps):
+    n, ns, npr = q.size, hs.size, pres.size
+    fpos = -np.ones(n, dtype=np.int64)
+    for i in range(free.size):
+        fpos[free[i]] = i
+    n_rec = 0
+    for k in range(ns):
+        s = first_step + k
+        if s % record_every == 0 or s == n_steps:
+            n_rec += 1
+    rec_t = np.empty(n_rec)
+    rec_q = np.empty((n_rec, n))
+    rec_v = np.empty((n_rec, n))
+    rec_work = np.empty(n_rec)
+    rec_its = np.empty(n_rec, dtype=np.int64)
+    rec_reac = np.empty((n_rec, npr))
+    reaction = np.zeros(npr)
+    its_total = 0
+    p = momentum(kd, q, v)
+    i_rec = 0
+    for k in range(ns):
+        h = hs[k]
+        status, its, dq, q1, v1, p1, r = _step(kd, q, v, p, h, qp[k], pres, free, fpos, rtol, etol, max_iterations,
+                                           line_search)
+        if status == OK and not (_all_finite(q1) and _all_finite(v1)):
+            status = NONFINITE
+        if status != OK:
+            return (status, k, t, q, v, p, reaction, work, its_total, i_rec,
+                    rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac)
+        w = 0.0
+        for i in range(npr):
+            j = pres[i]
+            reaction[i] = r[j] / h
+        for i in range(npr):
+            w += dq[pres[i]] * reaction[i]
+        work += w
+        t = t + h
+        q, v, p = q1, v1, p1
+        its_total += its
+        s = first_step + k
+        if s % record_every == 0 or s == n_steps:
+            rec_t[i_rec] = t
+            rec_q[i_rec] = q
+            rec_v[i_rec] = v
+            rec_work[i_rec] = work
+            rec_its[i_rec] = its
+            rec_reac[i_rec] = reaction
+            i_rec += 1
+    return (OK, ns, t, q, v, p, reaction, work, its_total, i_rec,
+            rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac)
+
+
+def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, record_every, work):
+    """Run steps ``first_step … first_step + n_chunk − 1`` of a run through the compiled loop.
+
+    Step sizes follow :func:`skfem_flex.simulate`: ``dt`` (s), the last step of the run
+    (number ``n_steps``) shortened to land on ``t_end`` (s); times are summed step by step
+    exactly as the Python loop does. The prescribed coordinates' laws are evaluated here, in
+    Python, at the chunk's step end times.
+
+    Parameters
+    ----------
+    scene, scheme
+        An eligible pair (:func:`eligible`).
+    state : State
+        Start state (t, q, v).
+    dt, t_end : float
+    first_step, n_chunk, n_steps : int
+        Number of the first step of the chunk (1-based), steps in the chunk, steps in the run.
+    record_every : int
+        Step s is recorded when ``s % record_every == 0 or s == n_steps``.
+    work : float
+        External work accumulated so far, J (the loop adds each step's work in order).
+
+    Returns
+    -------
+    dict
+        ``status`` (OK or the failure code of the step after the completed ones), ``done``
+        (steps completed), ``t, q, v, reaction`` (state after them; ``reaction`` is the mean
+        generalized force of the prescribed laws over the last step), ``work`` (accumulated),
+        ``iterations`` (Newton iterations summed over the completed steps) and ``records``, a
+        list of (t, q, v, work, iterations, reaction) of the recorded steps.
+    """
+    body = scene.bodies[0]
+    s = scheme.newton
+    hs, times = np.empty(n_chunk), np.empty(n_chunk)
+    t = state.t
+    for k in range(n_chunk):              # the same sequence of sums as the Python loop's state.t + h
+        h = min(dt, t_end - t) if first_step + k == n_steps else dt
+        t = t + h
+        hs[k], times[k] = h, t
+    laws = [p.law.position for p in scene.prescribed]
+    qp = np.array([[float(f(tk)) for f in laws] for tk in times], dtype=float).reshape(n_chunk, len(laws))
+    out = _run(body._kd, np.ascontiguousarray(state.q, dtype=float), np.ascontiguousarray(state.v, dtype=float),
+               float(state.t), hs, qp, scene.prescribed_index.astype(np.int64), scene.free_index.astype(np.int64),
+               float(s.rtol), float(s.etol), int(s.max_iterations), bool(s.line_search), float(work),
+               int(first_step), int(record_every), int(n_steps))
+    (status, done, t, q, v, _, reaction, work, its_total, n_rec, rec_t, rec_q, rec_v, rec_work, rec_its,
+     rec_reac) = out
+    records = [(float(rec_t[i]), rec_q[i], rec_v[i], float(rec_work[i]), int(rec_its[i]), rec_reac[i])
+               for i in range(n_rec)]
+    return dict(status=int(status), done=int(done), t=float(t), q=q, v=v, reaction=reaction, work=float(work),
+                iterations=int(its_total), records=records)
