@@ -15,8 +15,8 @@ many steps of the *same* scheme inside one compiled function:
   search of :meth:`Integrator._newton`, initial guess Δq = Δt v0;
 * prescribed reaction r_P / Δt and its work Δq_P · r_P / Δt.
 
-Dense partial-pivoting LU solves the Newton systems (the eligible scenes are small, see
-:func:`eligible`). On any failure — non-finite residual, update or state, singular matrix,
+Partial-pivoting LU solves the Newton systems: dense for small scenes, in LAPACK band storage
+for large ones whose free-free block is banded (see :func:`eligible`). On any failure — non-finite residual, update or state, singular matrix,
 no convergence within ``max_iterations`` — the compiled loop stops *before* the failing step
 and reports its index; :func:`skfem_flex.simulate` then re-runs that step on the Python path,
 which halves it or raises :class:`~skfem_flex.errors.ConvergenceError` with its usual message,
@@ -28,17 +28,17 @@ lands within round-off of a convergence threshold.
 """
 from __future__ import annotations
 
-import math
+import weakref
 
 import numba
 import numpy as np
 
 from .bodies.floating import FloatingBeam
 from .bodies.floating_kernel import energy_momentum_terms, momentum
-from .integrators import EnergyMomentum
+from .integrators import _MAX_BANDWIDTH, EnergyMomentum
 from .scene import Scene
 
-__all__ = ["eligible", "run_chunk", "OK", "NONFINITE", "NOT_CONVERGED", "SINGULAR"]
+__all__ = ["eligible", "run_chunk", "chunk_steps", "OK", "NONFINITE", "NOT_CONVERGED", "SINGULAR"]
 
 _EPS = np.finfo(float).eps
 _TINY = 1e-300
@@ -52,9 +52,11 @@ def eligible(scene, scheme):
 
     Eligible: the :class:`~skfem_flex.integrators.EnergyMomentum` class itself (not a
     subclass, which may change the step) on a plain :class:`~skfem_flex.scene.Scene` of one
-    :class:`~skfem_flex.bodies.FloatingBeam` with dense matrices (``scene.dense``), no
-    constraints, no force elements (loads, gravity, springs) and no incremental-rotation
-    coordinates; any of its coordinates may be prescribed.
+    :class:`~skfem_flex.bodies.FloatingBeam`, no constraints, no force elements (loads,
+    gravity, springs) and no incremental-rotation coordinates; any of its coordinates may be
+    prescribed. Small scenes (``scene.dense``) solve dense; larger ones only if their free-free
+    Newton block is banded (bandwidth l + u ≤ 64, as the Python path's banded LAPACK solve:
+    e.g. the spin-up, whose frame coordinates are prescribed), which is solved as a band.
     """
     if type(scheme) is not EnergyMomentum or type(scene) is not Scene:
         return False
@@ -62,7 +64,48 @@ def eligible(scene, scheme):
         return False
     if scene.n_constraints or scene.forces or len(getattr(scene, "cayley_index", ())):
         return False
-    return bool(scene.dense) and hasattr(scene.bodies[0], "_kd")
+    return hasattr(scene.bodies[0], "_kd") and _plan(scene) is not None
+
+
+_PLANS = weakref.WeakKeyDictionary()
+
+
+def _plan(scene):
+    """(target, size, kl, ku): where each entry of the body's CSR pattern goes in the storage of the
+    free-free Newton block — dense row-major (kl = ku = −1) or LAPACK band storage with kl
+    sub- and ku superdiagonals, column-major (:func:`_band_lu_solve`); −1 for entries outside the block.
+    None if the scene is too large for dense and its block is not banded. Built once per scene."""
+    body = scene.bodies[0]
+    hit = _PLANS.get(scene)
+    if hit is not None and hit[0] is body._kd:
+        return hit[1]
+    kd, n = body._kd, body.n_dofs
+    free = scene.free_index
+    nfr = free.size
+    fpos = -np.ones(n, dtype=np.int64)
+    fpos[free] = np.arange(nfr)
+    fr = fpos[np.repeat(np.arange(n), np.diff(kd.pat_ptr))]
+    fc = fpos[kd.pat_idx]
+    both = (fr >= 0) & (fc >= 0)
+    if scene.dense:
+        plan = (np.where(both, fr * nfr + fc, -1), nfr * nfr, -1, -1)
+    else:
+        off = fc[both] - fr[both]
+        kl, ku = (int(max(0, -off.min())), int(max(0, off.max()))) if off.size else (0, 0)
+        if kl + ku > _MAX_BANDWIDTH:
+            plan = None
+        else:
+            plan = (np.where(both, fc * (2 * kl + ku + 1) + kl + ku + fr - fc, -1), (2 * kl + ku + 1) * nfr, kl, ku)
+    if plan is not None:
+        plan = (np.ascontiguousarray(plan[0], dtype=np.int64),) + plan[1:]
+    _PLANS[scene] = (kd, plan)
+    return plan
+
+
+def chunk_steps(scene):
+    """Steps per compiled call: up to 1000, fewer for large bodies (about 0.1–0.2 s of work per call),
+    so that recorded steps, output files and the progress bar follow the run closely."""
+    return int(min(1000, max(10, 200_000 // max(scene.n, 1))))
 
 
 @numba.njit(cache=True)
@@ -116,10 +159,66 @@ def _lu_solve(a, b):
 
 
 @numba.njit(cache=True)
-def _evaluate(kd, x, q0, v0, dq_base, free, fpos, h, p0, p0_inf, e_scale0, rtol, etol):
+def _band_lu_solve(ab, kl, ku, b):
+    """x with a x = b for a band matrix with kl sub- and ku superdiagonals; LU with partial pivoting.
+
+    Storage: a[i, j] at ab[j, kl + ku + i − j], i.e. LAPACK's gbsv band layout transposed so that
+    each column is contiguous; ab[j, :kl] is room for the fill-in of row interchanges. ``ab``
+    (n, 2 kl + ku + 1) is overwritten. Returns (x, False) if a pivot is exactly 0."""
+    n = b.size
+    kv = kl + ku
+    x = b.copy()
+    piv = np.empty(n, dtype=np.int64)
+    ju = 0
+    for j in range(n):
+        km = min(kl, n - 1 - j)
+        p, big = j, abs(ab[j, kv])
+        for i in range(j + 1, j + km + 1):
+            if abs(ab[j, kv + i - j]) > big:
+                p, big = i, abs(ab[j, kv + i - j])
+        piv[j] = p
+        if big == 0.0:
+            return x, False
+        ju = max(ju, min(p + ku, n - 1))          # last column row p reaches
+        if p != j:
+            for c in range(j, ju + 1):
+                ab[c, kv + j - c], ab[c, kv + p - c] = ab[c, kv + p - c], ab[c, kv + j - c]
+        d = ab[j, kv]
+        for i in range(j + 1, j + km + 1):
+            ab[j, kv + i - j] /= d
+        for c in range(j + 1, ju + 1):
+            u = ab[c, kv + j - c]
+            if u != 0.0:
+                for i in range(j + 1, j + km + 1):
+                    ab[c, kv + i - c] -= ab[j, kv + i - j] * u
+    for j in range(n):                            # L y = P b
+        p = piv[j]
+        if p != j:
+            x[j], x[p] = x[p], x[j]
+        for i in range(j + 1, min(n, j + kl + 1)):
+            x[i] -= ab[j, kv + i - j] * x[j]
+    for j in range(n - 1, -1, -1):                # U x = y (U has kl + ku superdiagonals)
+        x[j] /= ab[j, kv]
+        for i in range(max(0, j - kv), j):
+            x[i] -= ab[j, kv + i - j] * x[j]
+    return x, True
+
+
+@numba.njit(cache=True)
+def _solve(mat, kl, ku, b):
+    """Solve the free-free Newton system stored by :func:`_evaluate` (dense when kl < 0, else banded)."""
+    n = b.size
+    if kl < 0:
+        return _lu_solve(mat.reshape(n, n), b)
+    return _band_lu_solve(mat.reshape(n, 2 * kl + ku + 1), kl, ku, b)
+
+
+@numba.njit(cache=True)
+def _evaluate(kd, x, q0, v0, dq_base, free, target, mat_size, h, p0, p0_inf, e_scale0, rtol, etol):
     """One Newton evaluation of the energy-momentum step (EnergyMomentum.step's ``fun``).
 
-    Returns (r_F, J_FF, err, dq, q1, v1, p1, r)."""
+    Returns (r_F, J_FF, err, dq, q1, v1, p1, r); J_FF is the flat storage of the free-free block
+    (dense or banded) that ``target`` maps the body's CSR pattern entries to."""
     n = q0.size
     dq = dq_base.copy()
     for i in range(free.size):
@@ -151,22 +250,16 @@ def _evaluate(kd, x, q0, v0, dq_base, free, fpos, h, p0, p0_inf, e_scale0, rtol,
     # round-off floor acceptance (see EnergyMomentum.step)
     if err > 1.0 and r_inf <= 16 * _EPS * fl_inf and vr <= 2 * _EPS * vfl:
         err = min(err, 1e3)
-    # the free-free block of the tangent, from the body's CSR pattern
-    jf = np.zeros((nfr, nfr))
-    ptr, idx = kd.pat_ptr, kd.pat_idx
-    for i in range(n):
-        fi = fpos[i]
-        if fi < 0:
-            continue
-        for k in range(ptr[i], ptr[i + 1]):
-            fj = fpos[idx[k]]
-            if fj >= 0:
-                jf[fi, fj] = data[k]
+    # the free-free block of the tangent, gathered from the body's CSR pattern
+    jf = np.zeros(mat_size)
+    for k in range(data.size):
+        if target[k] >= 0:
+            jf[target[k]] = data[k]
     return rf, jf, err, dq, q1, v1, p1, r
 
 
 @numba.njit(cache=True)
-def _step(kd, q0, v0, p0, h, qp1, pres, free, fpos, rtol, etol, max_iterations, line_search):
+def _step(kd, q0, v0, p0, h, qp1, pres, free, target, mat_size, kl, ku, rtol, etol, max_iterations, line_search):
     """One energy-momentum step; (status, iterations, dq, q1, v1, p1, r) as EnergyMomentum.step and _newton."""
     n = q0.size
     dq_base = np.zeros(n)
@@ -177,8 +270,8 @@ def _step(kd, q0, v0, p0, h, qp1, pres, free, fpos, rtol, etol, max_iterations, 
     x = np.empty(free.size)
     for i in range(free.size):
         x[i] = h * v0[free[i]]
-    rf, jf, err, dq, q1, v1, p1, r = _evaluate(kd, x, q0, v0, dq_base, free, fpos, h, p0, p0_inf, e_scale0,
-                                               rtol, etol)
+    rf, jf, err, dq, q1, v1, p1, r = _evaluate(kd, x, q0, v0, dq_base, free, target, mat_size, h, p0, p0_inf,
+                                               e_scale0, rtol, etol)
     err_prev = np.inf
     for it in range(max_iterations + 1):
         if not (_all_finite(rf) and np.isfinite(err)):
@@ -187,7 +280,7 @@ def _step(kd, q0, v0, p0, h, qp1, pres, free, fpos, rtol, etol, max_iterations, 
             return OK, it, dq, q1, v1, p1, r
         if it == max_iterations:
             break
-        sol, regular = _lu_solve(jf, rf)
+        sol, regular = _solve(jf, kl, ku, rf)
         if not regular:
             return SINGULAR, it, dq, q1, v1, p1, r
         dx = -sol
@@ -202,8 +295,8 @@ def _step(kd, q0, v0, p0, h, qp1, pres, free, fpos, rtol, etol, max_iterations, 
         step = 1.0
         for _ in range(7 if line_search else 1):
             x_try = x + step * dx
-            rf_t, jf_t, err_t, dq_t, q1_t, v1_t, p1_t, r_t = _evaluate(kd, x_try, q0, v0, dq_base, free, fpos, h,
-                                                                       p0, p0_inf, e_scale0, rtol, etol)
+            rf_t, jf_t, err_t, dq_t, q1_t, v1_t, p1_t, r_t = _evaluate(kd, x_try, q0, v0, dq_base, free, target,
+                                                                       mat_size, h, p0, p0_inf, e_scale0, rtol, etol)
             if not line_search or (np.isfinite(err_t) and (err_t < max(err, 1.0) or err_t <= _NEAR_FLOOR)):
                 break
             step *= 0.5
@@ -212,12 +305,9 @@ def _step(kd, q0, v0, p0, h, qp1, pres, free, fpos, rtol, etol, max_iterations, 
 
 
 @numba.njit(cache=True)
-def _run(kd, q, v, t, hs, qp, pres, free, rtol, etol, max_iterations, line_search, work, first_step,
-         record_every, n_steps):
+def _run(kd, q, v, t, hs, qp, pres, free, target, mat_size, kl, ku, rtol, etol, max_iterations, line_search, work,
+         first_step, record_every, n_steps):
     n, ns, npr = q.size, hs.size, pres.size
-    fpos = -np.ones(n, dtype=np.int64)
-    for i in range(free.size):
-        fpos[free[i]] = i
     n_rec = 0
     for k in range(ns):
         s = first_step + k
@@ -235,8 +325,8 @@ def _run(kd, q, v, t, hs, qp, pres, free, rtol, etol, max_iterations, line_searc
     i_rec = 0
     for k in range(ns):
         h = hs[k]
-        status, its, dq, q1, v1, p1, r = _step(kd, q, v, p, h, qp[k], pres, free, fpos, rtol, etol, max_iterations,
-                                           line_search)
+        status, its, dq, q1, v1, p1, r = _step(kd, q, v, p, h, qp[k], pres, free, target, mat_size, kl, ku, rtol,
+                                               etol, max_iterations, line_search)
         if status == OK and not (_all_finite(q1) and _all_finite(v1)):
             status = NONFINITE
         if status != OK:
@@ -306,9 +396,10 @@ def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, rec
         hs[k], times[k] = h, t
     laws = [p.law.position for p in scene.prescribed]
     qp = np.array([[float(f(tk)) for f in laws] for tk in times], dtype=float).reshape(n_chunk, len(laws))
+    target, size, kl, ku = _plan(scene)
     out = _run(body._kd, np.ascontiguousarray(state.q, dtype=float), np.ascontiguousarray(state.v, dtype=float),
                float(state.t), hs, qp, scene.prescribed_index.astype(np.int64), scene.free_index.astype(np.int64),
-               float(s.rtol), float(s.etol), int(s.max_iterations), bool(s.line_search), float(work),
+               target, size, kl, ku, float(s.rtol), float(s.etol), int(s.max_iterations), bool(s.line_search), float(work),
                int(first_step), int(record_every), int(n_steps))
     (status, done, t, q, v, _, reaction, work, its_total, n_rec, rec_t, rec_q, rec_v, rec_work, rec_its,
      rec_reac) = out

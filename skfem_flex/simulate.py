@@ -15,8 +15,6 @@ from .result import Result
 
 __all__ = ["simulate"]
 
-#: steps per call of the compiled loop (recorded steps and output are handed back after each call)
-_CHUNK = 1000
 
 
 class _Recorder:
@@ -124,7 +122,8 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
     compiled : bool, optional
         Run eligible scenes through the compiled energy-momentum loop
         (:mod:`skfem_flex.compiled_loop`: one floating-frame beam, prescribed
-        coordinates, no constraints or force elements, dense size) — the same
+        coordinates, no constraints or force elements, a dense or banded Newton
+        block) — the same
         scheme and Newton rules, so the same trajectory to round-off, many times
         faster. Default: True, unless the environment variable
         ``SKFEM_FLEX_COMPILED`` is ``0``. False forces the Python path; other
@@ -193,8 +192,9 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
     try:
         while step < n_steps:
             if use_compiled:
-                out = compiled_loop.run_chunk(scene, scheme, state, dt, t_end, step + 1, min(_CHUNK, n_steps - step),
-                                              n_steps, record_every, work)
+                chunk = min(compiled_loop.chunk_steps(scene), n_steps - step)
+                out = compiled_loop.run_chunk(scene, scheme, state, dt, t_end, step + 1, chunk, n_steps, record_every,
+                                              work)
                 for t_r, q_r, v_r, w_r, its_r, reac_r in out["records"]:
                     recorded(State(t_r, q_r, v_r, lam=np.zeros(0), prescribed_force=reac_r), w_r, its_r, 0.0)
                 if out["done"]:

@@ -52,7 +52,8 @@ def test_eligibility():
     assert not compiled_loop.eligible(sf.scenes.spin_up_pinned(n_elements=4), em)   # constraints
     assert not compiled_loop.eligible(sf.scenes.free_beam(n_elements=4), em)        # a load
     assert not compiled_loop.eligible(sf.scenes.pendulum(), em)                      # not a floating beam
-    assert not compiled_loop.eligible(sf.scenes.spin_up_beam(n_elements=64), em)    # sparse size
+    assert compiled_loop.eligible(sf.scenes.spin_up_beam(n_elements=64), em)        # banded free block
+    assert not compiled_loop.eligible(free_flying_beam(n_elements=64), em)          # sparse, not banded
 
     class Custom(EnergyMomentum):
         pass
@@ -123,3 +124,11 @@ def test_newton_settings_reach_the_compiled_loop():
     assert_same_run(*runs, q_tol=1e-6, v_tol=1e-4)
     tight = sf.simulate(sf.scenes.spin_up_beam(n_elements=4), t_end=1.0, dt=1e-2)
     assert runs[0].newton_iterations.sum() < tight.newton_iterations.sum()
+
+
+def test_large_banded_spin_up_compiled_equals_python():
+    """Above the dense size the compiled loop solves the banded free-free block (kl = ku = 4 here)."""
+    scene = sf.scenes.spin_up_beam(n_elements=64)
+    assert not scene.dense and compiled_loop._plan(scene)[2:] == (4, 4)
+    runs = [sf.simulate(sf.scenes.spin_up_beam(n_elements=64), t_end=0.3, dt=2e-3, compiled=c) for c in (True, False)]
+    assert_same_run(*runs)
