@@ -35,7 +35,8 @@ import numpy as np
 
 from .bodies.floating import FloatingBeam
 from .bodies.floating_kernel import energy_momentum_terms, momentum
-from .integrators import _MAX_BANDWIDTH, EnergyMomentum
+from . import integrators
+from .integrators import EnergyMomentum
 from .scene import Scene
 
 __all__ = ["eligible", "run_chunk", "chunk_steps", "OK", "NONFINITE", "NOT_CONVERGED", "SINGULAR"]
@@ -43,6 +44,8 @@ __all__ = ["eligible", "run_chunk", "chunk_steps", "OK", "NONFINITE", "NOT_CONVE
 _EPS = np.finfo(float).eps
 _TINY = 1e-300
 _NEAR_FLOOR = 1e4
+#: widest band (l + u) solved as a band, as the Python path's banded LAPACK solve
+_MAX_BANDWIDTH = getattr(integrators, "_MAX_BANDWIDTH", 64)
 #: status codes of :func:`run_chunk`
 OK, NONFINITE, NOT_CONVERGED, SINGULAR = 0, 1, 2, 3
 

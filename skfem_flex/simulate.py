@@ -173,6 +173,8 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
                    file=sys.stderr, delay=1.0, mininterval=0.25, dynamic_ncols=True)
     if compiled is None:
         compiled = os.environ.get("SKFEM_FLEX_COMPILED", "1").strip() != "0"
+    elif not isinstance(compiled, (bool, np.bool_)):
+        raise ValueError(f"compiled must be True, False or None, got {compiled!r}")
     use_compiled = bool(compiled) and compiled_loop.eligible(scene, scheme)
     start = time.perf_counter()
     meta = dict(scheme=scheme.name, dt=dt)

@@ -132,3 +132,8 @@ def test_large_banded_spin_up_compiled_equals_python():
     assert not scene.dense and compiled_loop._plan(scene)[2:] == (4, 4)
     runs = [sf.simulate(sf.scenes.spin_up_beam(n_elements=64), t_end=0.3, dt=2e-3, compiled=c) for c in (True, False)]
     assert_same_run(*runs)
+
+
+def test_bad_compiled_switch_is_rejected():
+    with pytest.raises(ValueError, match="compiled must be"):
+        sf.simulate(sf.scenes.spin_up_beam(n_elements=4), t_end=0.01, dt=1e-3, compiled="yes")
