@@ -2,16 +2,19 @@
 from __future__ import annotations
 
 import math
+import os
 import sys
 import time
 
 import numpy as np
 
+from . import compiled_loop
 from .initial_conditions import consistent_initial_state
 from .integrators import ConvergenceError, SimulationError, State, make_integrator
 from .result import Result
 
 __all__ = ["simulate"]
+
 
 
 class _Recorder:
@@ -85,7 +88,7 @@ def _reaction_maps(scene):
 
 
 def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newton=None, record_every=1,
-             output=(), progress=False, max_halvings=8, project=True):
+             output=(), progress=False, max_halvings=8, project=True, compiled=None):
     """Integrate a scene in time.
 
     Parameters
@@ -116,6 +119,16 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
         prescribed coordinates kept; see
         :func:`skfem_flex.initial_conditions.consistent_initial_state`).
         False: only check it. Either way redundant constraints raise.
+    compiled : bool, optional
+        Run eligible scenes through the compiled energy-momentum loop
+        (:mod:`skfem_flex.compiled_loop`: one floating-frame beam, prescribed
+        coordinates, no constraints or force elements, a dense or banded Newton
+        block) — the same
+        scheme and Newton rules, so the same trajectory to round-off, many times
+        faster. Default: True, unless the environment variable
+        ``SKFEM_FLEX_COMPILED`` is ``0``. False forces the Python path; other
+        scenes and schemes always take it. A step the compiled loop cannot
+        finish is re-run on the Python path (halving, errors as there).
 
     Returns
     -------
@@ -152,31 +165,56 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
     for s in sinks:
         s.write(scene, state.t, state.q, state.v)
     work, halvings = 0.0, 0
-    bar = None
+    bar, bar_its = None, 0
     if progress:
         from tqdm import tqdm
         # shown only for runs longer than a second (delay); steps/s is tqdm's rate
         bar = tqdm(total=n_steps, unit="step", desc=f"{scene.name} [{scheme.name}]", leave=False,
                    file=sys.stderr, delay=1.0, mininterval=0.25, dynamic_ncols=True)
-        bar_its = 0
+    if compiled is None:
+        compiled = os.environ.get("SKFEM_FLEX_COMPILED", "1").strip() != "0"
+    elif not isinstance(compiled, (bool, np.bool_)):
+        raise ValueError(f"compiled must be True, False or None, got {compiled!r}")
+    use_compiled = bool(compiled) and compiled_loop.eligible(scene, scheme)
     start = time.perf_counter()
     meta = dict(scheme=scheme.name, dt=dt)
     step = 0
+
+    def recorded(state, work, its, vres):
+        rec.record(state, work, its, vres)
+        for s in sinks:
+            s.write(scene, state.t, state.q, state.v)
+
+    def advanced(n, its):
+        nonlocal bar_its
+        if bar is not None:
+            bar_its += its
+            bar.set_postfix_str(f"t={state.t:.4g}/{t_end:.4g} s, Newton {bar_its / step:.1f}/step", refresh=False)
+            bar.update(n)
     try:
-        for step in range(1, n_steps + 1):
+        while step < n_steps:
+            if use_compiled:
+                chunk = min(compiled_loop.chunk_steps(scene), n_steps - step)
+                out = compiled_loop.run_chunk(scene, scheme, state, dt, t_end, step + 1, chunk, n_steps, record_every,
+                                              work)
+                for t_r, q_r, v_r, w_r, its_r, reac_r in out["records"]:
+                    recorded(State(t_r, q_r, v_r, lam=np.zeros(0), prescribed_force=reac_r), w_r, its_r, 0.0)
+                if out["done"]:
+                    state = State(out["t"], out["q"], out["v"], lam=np.zeros(0), prescribed_force=out["reaction"])
+                    work = out["work"]
+                    step += out["done"]
+                    advanced(out["done"], out["iterations"])
+                if out["status"] == compiled_loop.OK:
+                    continue
+            # the Python path: every step of ineligible runs, and a step the compiled loop could not finish
+            step += 1
             h = min(dt, t_end - state.t) if step == n_steps else dt
             state, w, its, vres, nh = _advance(scheme, scene, state, h, max_halvings)
             work += w
             halvings += nh
             if step % record_every == 0 or step == n_steps:
-                rec.record(state, work, its, vres)
-                for s in sinks:
-                    s.write(scene, state.t, state.q, state.v)
-            if bar is not None:
-                bar_its += its
-                bar.set_postfix_str(f"t={state.t:.4g}/{t_end:.4g} s, Newton {bar_its / step:.1f}/step",
-                                    refresh=False)
-                bar.update(1)
+                recorded(state, work, its, vres)
+            advanced(1, its)
     except SimulationError as exc:
         exc.args = (f"{exc.args[0]} [step {step} of {n_steps}]",) + exc.args[1:]
         exc.info.update(step=step, time=state.t)

@@ -68,6 +68,7 @@ from skfem import BilinearForm, LinearForm, asm
 from ..beam import TimoshenkoBeam
 from ..forces import ForceElement
 from ..forms import bending, shear, translational_mass, rotary_mass
+from . import floating_kernel as _kernel
 from .base import Body, BodyGeometry, BodyPoint, check_finite_vector, to_dense
 from .rigid import E_MATRIX as E2, rotation as _rot
 
@@ -229,7 +230,7 @@ class FloatingBeam(Body):
         self._top_template = np.zeros((3, 3 + nf))
         self._top_template[:2, :2] = self.mass_total * np.eye(2)
         self._cache_key, self._cache_val = None, None
-        self._pcache = (None, None, None)
+        self._pcache = (None, None)                       # ((q, v) bytes, M(q) v) of the last momentum
         self._v0cache = (None, None)
 
         # ------------------------------------------------ stiffness
@@ -284,6 +285,7 @@ class FloatingBeam(Body):
             self._ff_stack = np.stack([self._Mff, self._H, self._MA]).reshape(3, nf * nf)
             self._K_half = 0.5 * self._K
             self._Wax = self._axial_map(self._loc_flat, nf * nf)
+        self._kd = self._kernel_data()
 
         # ------------------------------------------------ initial state
         qf0 = np.zeros(nf) if elastic is None else check_finite_vector("elastic", elastic, nf)
@@ -450,6 +452,42 @@ class FloatingBeam(Body):
         self._map_ff = {k: np.searchsorted(keys, v) for k, v in ff_keys.items()}
         self._map_loc = np.searchsorted(keys, loc_keys)
 
+    def _kernel_data(self):
+        """The plain arrays the compiled kernels (:mod:`.floating_kernel`) work on, built once.
+
+        The tangent is written into the data array of one CSR pattern: the body's fixed sparse
+        pattern, or for dense bodies the full n × n pattern (so that the data reshapes to the
+        dense matrix). Every term gets its positions in that pattern here."""
+        n, nf = self.n_dofs, self.n_elastic
+        if self.sparse:
+            ptr, idx = self._pat_indptr, self._pat_indices
+        else:
+            ptr, idx = np.arange(0, n * n + 1, n), np.tile(np.arange(n), n)
+        keys = np.repeat(np.arange(n), np.diff(ptr)) * n + idx       # row-major keys of the pattern
+
+        def at(flat):
+            pos = np.searchsorted(keys, flat)
+            if flat.size and not np.array_equal(keys[np.minimum(pos, keys.size - 1)], flat):
+                raise RuntimeError("FloatingBeam: a kernel term lies outside the matrix pattern")
+            return pos
+        blocks = dict(MA=self._MA, H=self._H, Mff=self._Mff, K=self._K)
+        maps = {"top": at(np.arange(3 * n))}
+        r, c = np.divmod(np.arange(nf * 3), 3)
+        maps["left"] = at((r + 3) * n + c)
+        for key, mat in blocks.items():
+            ptr_b, idx_b, _ = _kernel._csr_parts(mat)
+            rows_b = np.repeat(np.arange(nf), np.diff(ptr_b))
+            maps[key] = at((rows_b + 3) * n + idx_b + 3)
+        loc = self._loc
+        lr = np.broadcast_to(loc[:, :, None], (loc.shape[0],) + (loc.shape[1],) * 2)
+        lc = np.broadcast_to(loc[:, None, :], lr.shape)
+        keep = (lr >= 0) & (lc >= 0)
+        map_loc = -np.ones(lr.shape, dtype=np.int64)
+        map_loc[keep] = at((lr[keep] + 3) * n + lc[keep] + 3)
+        return _kernel.pack(n, nf, self.strain == "green-lagrange", self.mass_total, self._S0, self._I0,
+                            self._Sbar, self._c, self._k0n, blocks, (ptr, idx), maps, self._dNt, loc,
+                            self._wq, map_loc)
+
     # ================================================================ kinetic
     def _parts(self, q):
         """(A, q_f, s̄, c_m = c + M_A q_f, a = k0 + n_φ + H q_f, J) at q; one-entry cache (Newton
@@ -485,11 +523,16 @@ class FloatingBeam(Body):
         return self._compose(top, left, [(1.0, "Mff")])
 
     def momentum(self, q, v):
-        """p = M(q) v."""
-        key = v.tobytes()
+        """p = M(q) v (compiled kernel :func:`.floating_kernel.momentum`; cached for the last (q, v))."""
+        q, v = np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(v, dtype=float)
+        key = (q.tobytes(), v.tobytes())
+        if self._pcache[0] != key:
+            self._pcache = (key, _kernel.momentum(self._kd, q, v))
+        return self._pcache[1].copy()
+
+    def _momentum_numpy(self, q, v):
+        """Numpy implementation of :meth:`momentum` (the reference of the compiled kernel)."""
         A, qf, sbar, cm, a, J = self._parts(q)
-        if self._pcache[0] is self._cache_val and self._pcache[1] == key:
-            return self._pcache[2].copy()
         V, om, f = v[:2], float(v[2]), v[3:]
         AEs = A @ (E2 @ sbar)
         Sf = self._Sbar @ f
@@ -497,7 +540,6 @@ class FloatingBeam(Body):
         p[:2] = self.mass_total * V + om * AEs + A @ Sf
         p[2] = AEs @ V + J * om + a @ f
         p[3:] = self._SbarT @ (A.T @ V) + om * a + self._Mff @ f
-        self._pcache = (self._cache_val, key, p.copy())
         return p
 
     def kinetic_energy(self, q, v):
@@ -678,7 +720,11 @@ class FloatingBeam(Body):
         return val
 
     def potential_energy(self, q):
-        """Strain energy V(q_f), J."""
+        """Strain energy V(q_f) = ½ q_fᵀ K q_f + ½ Σ EA dx ε², J (compiled kernel)."""
+        return float(_kernel.potential_energy(self._kd, np.ascontiguousarray(q, dtype=float)))
+
+    def _potential_energy_numpy(self, q):
+        """Numpy implementation of :meth:`potential_energy` (the reference of the compiled kernel)."""
         qf = q[3:]
         e = 0.5 * float(qf @ (self._K @ qf))
         if self.strain == "green-lagrange":
@@ -730,6 +776,37 @@ class FloatingBeam(Body):
 
         Optional fused form of the body contract (the scene uses it when present): the same
         numbers as :meth:`momentum`, :meth:`mass_matrix`, :meth:`momentum_jacobian`,
+        :meth:`kinetic_discrete_gradient` and :meth:`potential_discrete_gradient` (to round-off).
+        Computed by the compiled kernel :func:`.floating_kernel.energy_momentum_terms`; the numpy
+        implementation of the same equations stays as :meth:`_energy_momentum_terms_numpy`.
+
+        Returns
+        -------
+        p1 : ndarray (n,)
+            M(q1) v1.
+        g_kin, g_pot : ndarray (n,)
+            Discrete gradients of G(q) = ½ v0ᵀ M(q) v1 and of the strain energy V.
+        jac : ndarray or csr_matrix (n, n)
+            (2/Δt) M(q1) + B(q1, v1) − Δt ∂g_kin/∂q1 − 2 ∂g_kin/∂v1 + Δt ∂g_pot/∂q1
+            (dense for dense bodies, CSR in the body's fixed pattern for sparse ones).
+        floor : ndarray (n,)
+            Δt |∂g_pot/∂q1| (|q0| + |q1|): round-off floor of the internal forces.
+        """
+        n = self.n_dofs
+        q0, q1, v0, v1 = (np.ascontiguousarray(x, dtype=float) for x in (q0, q1, v0, v1))
+        p, gk, gp, data, floor = _kernel.energy_momentum_terms(self._kd, q0, q1, v0, v1, float(dt))
+        self._pcache = ((q1.tobytes(), v1.tobytes()), p.copy())
+        if self.sparse:
+            jac = sps.csr_matrix((data, self._pat_indices, self._pat_indptr), shape=(n, n))
+        else:
+            jac = data.reshape(n, n)
+        return p, gk, gp, jac, floor
+
+    def _energy_momentum_terms_numpy(self, q0, q1, v0, v1, dt):
+        """Numpy implementation of :meth:`energy_momentum_terms` (the reference of the compiled kernel).
+
+        Optional fused form of the body contract (the scene uses it when present): the same
+        numbers as :meth:`momentum`, :meth:`mass_matrix`, :meth:`momentum_jacobian`,
         :meth:`kinetic_discrete_gradient` and :meth:`potential_discrete_gradient` (to round-off),
         sharing A(θ), s̄ and the strains and filling one matrix.
 
@@ -770,7 +847,6 @@ class FloatingBeam(Body):
         p[:2] = self.mass_total * V + w1 * AEs + A @ Sf
         p[2] = AEs @ V + J * w1 + a @ f
         p[3:] = self._SbarT @ b + w1 * a + self._Mff @ f
-        self._pcache = (self._cache_val, v1.tobytes(), p.copy())
         # ---- reference rows / columns of the tangent: c2 M + B − dt g_q − 2 g_v
         top = self._top_template * c2
         top[:2, 2] = c2 * AEs - w1 * (A @ sbar) + AE @ Sf

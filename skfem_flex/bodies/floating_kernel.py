@@ -1,0 +1,366 @@
+r"""Compiled (Numba) arithmetic of :class:`~skfem_flex.bodies.floating.FloatingBeam`.
+
+The energy-momentum scheme asks a floating-frame beam, at every Newton evaluation, for
+
+.. math::
+
+    p_1 = M(q_1) v_1,\quad g_{kin},\quad g_{pot},\quad
+    J = \tfrac{2}{\Delta t} M(q_1) + B(q_1, v_1) - \Delta t\,\partial_{q_1} g_{kin}
+        - 2\,\partial_{v_1} g_{kin} + \Delta t\,\partial_{q_1} g_{pot},\quad
+    \text{floor} = \Delta t\,|\partial_{q_1} g_{pot}|\,(|q_0| + |q_1|)
+
+(formulas in :meth:`FloatingBeam.kinetic_discrete_gradient`,
+:meth:`FloatingBeam.potential_discrete_gradient` and the module docstring of
+``floating.py``). The numpy implementation spends most of its time in the Python overhead
+of many small array operations; the kernels here do the same arithmetic in loops over
+plain arrays that :class:`FloatingBeam` precomputes once (:func:`pack`):
+
+* the constant elastic blocks M_A, H, M_ff = M_A + M_I and K as CSR arrays,
+* the inertia shape integrals m, S_0, I_00 + J_r, S̄, c, k_0 + n_φ,
+* the quadrature arrays of the axial (Green–Lagrange) kernel: dN/dx per element and point,
+  EA dx per point, the local-to-elastic DOF map (−1 = eliminated by the reference condition),
+* the CSR pattern of the body matrix (the full n × n pattern for dense bodies, the fixed
+  sparse pattern for large ones) and the positions in it of every term.
+
+The tangent is written as the data array of that pattern, so one kernel serves both the
+dense (reshaped to n × n) and the sparse (``csr_matrix``) return types.
+
+Kernels are compiled with ``cache=True``: the first call on a machine compiles them (a few
+seconds), later processes load them from numba's cache.
+"""
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+
+import numpy as np
+import numba
+
+__all__ = ["FloatingKernelData", "pack", "energy_momentum_terms", "momentum", "potential_energy"]
+
+#: the arrays a FloatingBeam hands its kernels (built once by :func:`pack`)
+FloatingKernelData = namedtuple("FloatingKernelData", [
+    "n", "nf", "green", "mass", "s0x", "s0y", "i0",
+    "sbar", "c", "k0n",
+    "ma_ptr", "ma_idx", "ma_dat", "h_ptr", "h_idx", "h_dat",
+    "mff_ptr", "mff_idx", "mff_dat", "k_ptr", "k_idx", "k_dat",
+    "pat_ptr", "pat_idx", "map_top", "map_left", "map_ma", "map_h", "map_mff", "map_k",
+    "dn", "loc", "wq", "map_loc"])
+
+
+def _csr_parts(mat):
+    """(indptr, indices, data) of a canonical CSR copy of ``mat`` (int64 indices)."""
+    import scipy.sparse as sps
+    x = sps.csr_matrix(mat, copy=True)
+    x.sum_duplicates()
+    x.sort_indices()
+    return x.indptr.astype(np.int64), x.indices.astype(np.int64), x.data.astype(float)
+
+
+def pack(n, nf, green, mass, s0, i0, sbar, c, k0n, blocks, pattern, maps, dn, loc, wq, map_loc):
+    """Build :class:`FloatingKernelData` from a FloatingBeam's precomputed operators.
+
+    Parameters
+    ----------
+    n, nf : int
+        Body coordinates (3 + nf) and elastic coordinates.
+    green : bool
+        Green–Lagrange axial strain (False: linear strain, the axial part is in K).
+    mass, s0, i0 : float, (2,), float
+        m = ∫ρA (kg), S_0 = ∫ρA x_0 (kg m), I_00 + J_r (kg m²).
+    sbar, c, k0n : (2, nf), (nf,), (nf,)
+        S̄ = ∫ρA S, c = ∫ρA Sᵀx_0, k_0 + n_φ.
+    blocks : dict
+        ``"MA", "H", "Mff", "K"``: the constant elastic blocks (dense or sparse, nf × nf).
+    pattern : (indptr, indices)
+        CSR pattern of the n × n body matrix.
+    maps : dict
+        Positions in the pattern data: ``"top"`` (3 n, rows 0–2 row-major), ``"left"``
+        (nf × 3 row-major, rows 3…, columns 0–2), and for each block key the positions of
+        the entries of its canonical CSR form (:func:`_csr_parts`).
+    dn : (n_el, n_qp, n_l)
+        dN/dx of the local shape functions at the axial quadrature points, 1/m.
+    loc : (n_el, 2 n_l) int
+        Elastic index of the local (u, w) DOFs, −1 where the reference condition eliminates it.
+    wq : (n_el n_qp,)
+        EA dx per quadrature point, N m.
+    map_loc : (n_el, 2 n_l, 2 n_l) int
+        Position in the pattern data of each entry of the element axial tangent (−1: dropped).
+    """
+    parts = {k: _csr_parts(blocks[k]) for k in ("MA", "H", "Mff", "K")}
+    i64 = lambda a: np.ascontiguousarray(a, dtype=np.int64)      # noqa: E731
+    f64 = lambda a: np.ascontiguousarray(a, dtype=float)         # noqa: E731
+    return FloatingKernelData(
+        int(n), int(nf), bool(green), float(mass), float(s0[0]), float(s0[1]), float(i0),
+        f64(sbar), f64(c), f64(k0n),
+        *parts["MA"], *parts["H"], *parts["Mff"], *parts["K"],
+        i64(pattern[0]), i64(pattern[1]), i64(maps["top"]), i64(maps["left"]),
+        i64(maps["MA"]), i64(maps["H"]), i64(maps["Mff"]), i64(maps["K"]),
+        f64(dn), i64(loc), f64(wq), i64(map_loc))
+
+
+@numba.njit(cache=True)
+def _matvec(ptr, idx, dat, x, off):
+    """y = X x[off:] for the CSR matrix (ptr, idx, dat)."""
+    m = ptr.size - 1
+    y = np.empty(m)
+    for i in range(m):
+        s = 0.0
+        for k in range(ptr[i], ptr[i + 1]):
+            s += dat[k] * x[off + idx[k]]
+        y[i] = s
+    return y
+
+
+@numba.njit(cache=True)
+def _sinc_half(d):
+    """σ = sin(d/2)/(d/2) and dσ/dd (series near 0), as floating._sinc_half."""
+    h = 0.5 * d
+    if abs(h) < 1e-3:
+        h2 = h * h
+        return 1.0 - h2 / 6.0 + h2 * h2 / 120.0, 0.5 * (-h / 3.0 + h * h2 / 30.0)
+    s, c = math.sin(h), math.cos(h)
+    return s / h, 0.5 * (h * c - s) / (h * h)
+
+
+@numba.njit(cache=True)
+def momentum(kd, q, v):
+    """p = M(q) v (eq. 16 of the seed paper; see FloatingBeam.momentum), kg m/s and kg m²/s."""
+    nf = kd.nf
+    sbar = kd.sbar
+    C, S = math.cos(q[2]), math.sin(q[2])
+    sqx, sqy, sfx, sfy, qc = 0.0, 0.0, 0.0, 0.0, 0.0
+    for i in range(nf):
+        sqx += sbar[0, i] * q[3 + i]
+        sqy += sbar[1, i] * q[3 + i]
+        sfx += sbar[0, i] * v[3 + i]
+        sfy += sbar[1, i] * v[3 + i]
+    sx, sy = kd.s0x + sqx, kd.s0y + sqy
+    maq = _matvec(kd.ma_ptr, kd.ma_idx, kd.ma_dat, q, 3)
+    hq = _matvec(kd.h_ptr, kd.h_idx, kd.h_dat, q, 3)
+    mff = _matvec(kd.mff_ptr, kd.mff_idx, kd.mff_dat, v, 3)
+    J = kd.i0
+    af = 0.0
+    for i in range(nf):
+        J += q[3 + i] * (kd.c[i] + (kd.c[i] + maq[i]))
+        af += (kd.k0n[i] + hq[i]) * v[3 + i]
+    w = v[2]
+    aesx, aesy = C * (-sy) - S * sx, S * (-sy) + C * sx          # A E s̄
+    bx, by = C * v[0] + S * v[1], -S * v[0] + C * v[1]            # Aᵀ Ṙ
+    p = np.empty(kd.n)
+    p[0] = kd.mass * v[0] + w * aesx + (C * sfx - S * sfy)
+    p[1] = kd.mass * v[1] + w * aesy + (S * sfx + C * sfy)
+    p[2] = (aesx * v[0] + aesy * v[1]) + J * w + af
+    for i in range(nf):
+        p[3 + i] = (sbar[0, i] * bx + sbar[1, i] * by) + w * (kd.k0n[i] + hq[i]) + mff[i]
+    return p
+
+
+@numba.njit(cache=True)
+def _axial_strains(kd, q):
+    """(u', w', ε) at the axial quadrature points (flattened element-major) of the body state q."""
+    dn, loc = kd.dn, kd.loc
+    nel, nqp, nl = dn.shape
+    up = np.zeros(nel * nqp)
+    wp = np.zeros(nel * nqp)
+    for e in range(nel):
+        for k in range(nqp):
+            su, sw = 0.0, 0.0
+            for l in range(nl):
+                iu, iw = loc[e, l], loc[e, nl + l]
+                if iu >= 0:
+                    su += dn[e, k, l] * q[3 + iu]
+                if iw >= 0:
+                    sw += dn[e, k, l] * q[3 + iw]
+            up[e * nqp + k] = su
+            wp[e * nqp + k] = sw
+    eps = up + 0.5 * (up * up + wp * wp)
+    return up, wp, eps
+
+
+@numba.njit(cache=True)
+def potential_energy(kd, q):
+    """Strain energy V = ½ q_fᵀ K q_f + ½ Σ EA dx ε² (Green–Lagrange part only if ``kd.green``), J."""
+    kq = _matvec(kd.k_ptr, kd.k_idx, kd.k_dat, q, 3)
+    e = 0.0
+    for i in range(kd.nf):
+        e += q[3 + i] * kq[i]
+    e *= 0.5
+    if kd.green:
+        _, _, eps = _axial_strains(kd, q)
+        s = 0.0
+        for k in range(eps.size):
+            s += kd.wq[k] * eps[k] * eps[k]
+        e += 0.5 * s
+    return e
+
+
+@numba.njit(cache=True)
+def energy_momentum_terms(kd, q0, q1, v0, v1, dt):
+    """Compiled twin of :meth:`FloatingBeam.energy_momentum_terms` (same equations).
+
+    Returns
+    -------
+    p1, g_kin, g_pot : ndarray (n,)
+    data : ndarray (nnz,)
+        The tangent J as the data array of the body's CSR pattern (``kd.pat_ptr``, ``kd.pat_idx``).
+    floor : ndarray (n,)
+        Δt |∂g_pot/∂q1| (|q0| + |q1|).
+    """
+    n, nf = kd.n, kd.nf
+    sbar = kd.sbar
+    c2 = 2.0 / dt
+    # ---------------------------------------------------------------- products with the elastic state
+    qfm = np.empty(nf)
+    for i in range(nf):
+        qfm[i] = 0.5 * (q0[3 + i] + q1[3 + i])
+    sq1x, sq1y, sqmx, sqmy = 0.0, 0.0, 0.0, 0.0
+    sf0x, sf0y, sf1x, sf1y = 0.0, 0.0, 0.0, 0.0
+    for i in range(nf):
+        sq1x += sbar[0, i] * q1[3 + i]
+        sq1y += sbar[1, i] * q1[3 + i]
+        sqmx += sbar[0, i] * qfm[i]
+        sqmy += sbar[1, i] * qfm[i]
+        sf0x += sbar[0, i] * v0[3 + i]
+        sf0y += sbar[1, i] * v0[3 + i]
+        sf1x += sbar[0, i] * v1[3 + i]
+        sf1y += sbar[1, i] * v1[3 + i]
+    maq1 = _matvec(kd.ma_ptr, kd.ma_idx, kd.ma_dat, q1, 3)
+    maqm = _matvec(kd.ma_ptr, kd.ma_idx, kd.ma_dat, qfm, 0)
+    hq1 = _matvec(kd.h_ptr, kd.h_idx, kd.h_dat, q1, 3)
+    hf0 = _matvec(kd.h_ptr, kd.h_idx, kd.h_dat, v0, 3)
+    hf1 = _matvec(kd.h_ptr, kd.h_idx, kd.h_dat, v1, 3)
+    mff1 = _matvec(kd.mff_ptr, kd.mff_idx, kd.mff_dat, v1, 3)
+    kqm = _matvec(kd.k_ptr, kd.k_idx, kd.k_dat, qfm, 0)
+    # at q1: s̄ = S_0 + S̄ q_f, c_m = c + M_A q_f, a = k_0 + n_φ + H q_f, J = I_0 + q_f·(c + c_m)
+    sx, sy = kd.s0x + sq1x, kd.s0y + sq1y
+    J = kd.i0
+    for i in range(nf):
+        J += q1[3 + i] * (kd.c[i] + (kd.c[i] + maq1[i]))
+    # at the midpoint: s̄_m (its y part without S_0, as the numpy code), c + M_A q_f,m
+    smx, smy = kd.s0x + sqmx, sqmy
+    # ---------------------------------------------------------------- kinetic discrete gradient
+    d = q1[2] - q0[2]
+    tm = 0.5 * (q0[2] + q1[2])
+    ca, sa = math.cos(tm), math.sin(tm)
+    sig, dsig = _sinc_half(d)
+    kap, dkap = math.cos(0.5 * d), -0.5 * math.sin(0.5 * d)
+    w0, w1 = v0[2], v1[2]
+    b0x, b0y = ca * v0[0] + sa * v0[1], -sa * v0[0] + ca * v0[1]
+    b1x, b1y = ca * v1[0] + sa * v1[1], -sa * v1[0] + ca * v1[1]
+    c0x, c0y = -w0 * smy + sf0x, w0 * smx + sf0y          # c_i = ω_i E s̄_m + S̄ f_i
+    c1x, c1y = -w1 * smy + sf1x, w1 * smx + sf1y
+    X = (-b0x * c1y + b0y * c1x) + (-b1x * c0y + b1y * c0x)
+    wbx, wby = w1 * b0x + w0 * b1x, w1 * b0y + w0 * b1y
+    gk = np.zeros(n)
+    gk[2] = 0.5 * sig * X
+    for i in range(nf):
+        sbe_wb = -sbar[1, i] * wbx + sbar[0, i] * wby         # (S̄ᵀEᵀ w_b)_i
+        gk[3 + i] = (0.5 * kap * sbe_wb + (w0 * w1) * (kd.c[i] + maqm[i])
+                     - 0.5 * (w0 * hf1[i] + w1 * hf0[i]))
+    # ---------------------------------------------------------------- momentum at (q1, v1)
+    C, S = math.cos(q1[2]), math.sin(q1[2])
+    Vx, Vy = v1[0], v1[1]
+    aesx, aesy = C * (-sy) - S * sx, S * (-sy) + C * sx        # A E s̄
+    bx, by = C * Vx + S * Vy, -S * Vx + C * Vy                # Aᵀ Ṙ_1
+    af = 0.0
+    for i in range(nf):
+        af += (kd.k0n[i] + hq1[i]) * v1[3 + i]
+    p = np.empty(n)
+    p[0] = kd.mass * Vx + w1 * aesx + (C * sf1x - S * sf1y)
+    p[1] = kd.mass * Vy + w1 * aesy + (S * sf1x + C * sf1y)
+    p[2] = (aesx * Vx + aesy * Vy) + J * w1 + af
+    for i in range(nf):
+        p[3 + i] = (sbar[0, i] * bx + sbar[1, i] * by) + w1 * (kd.k0n[i] + hq1[i]) + mff1[i]
+    # ---------------------------------------------------------------- tangent: reference rows and columns
+    data = np.zeros(kd.pat_idx.size)
+    top = kd.map_top
+    data[top[0]] = c2 * kd.mass
+    data[top[n + 1]] = c2 * kd.mass
+    asx, asy = C * sx - S * sy, S * sx + C * sy                # A s̄
+    aesfx, aesfy = -S * sf1x - C * sf1y, C * sf1x - S * sf1y  # A E S̄ f_1
+    data[top[2]] = c2 * aesx - w1 * asx + aesfx
+    data[top[n + 2]] = c2 * aesy - w1 * asy + aesfy
+    data[top[2 * n]] = c2 * aesx - sig * (ca * (-c0y) - sa * c0x)
+    data[top[2 * n + 1]] = c2 * aesy - sig * (sa * (-c0y) + ca * c0x)
+    data[top[2 * n + 2]] = (c2 * J - (bx * sx + by * sy)
+                            - dt * (0.5 * dsig * X - 0.25 * sig * (b0x * c1x + b0y * c1y + b1x * c0x + b1y * c0y))
+                            + sig * (b0x * smx + b0y * smy))
+    left = kd.map_left
+    for i in range(nf):
+        s0i, s1i = sbar[0, i], sbar[1, i]
+        asb0, asb1 = C * s0i - S * s1i, S * s0i + C * s1i      # A S̄
+        aesb0, aesb1 = -S * s0i - C * s1i, C * s0i - S * s1i  # A E S̄
+        ai = kd.k0n[i] + hq1[i]
+        cmi = kd.c[i] + maq1[i]
+        cmmi = kd.c[i] + maqm[i]
+        sbeb = -s1i * bx + s0i * by                            # S̄ᵀEᵀ b
+        sbeb0 = -s1i * b0x + s0i * b0y
+        sbe_wb = -s1i * wbx + s0i * wby
+        sbt_wb = s0i * wbx + s1i * wby
+        data[top[3 + i]] = c2 * asb0 + w1 * aesb0
+        data[top[n + 3 + i]] = c2 * asb1 + w1 * aesb1
+        data[top[2 * n + 3 + i]] = (c2 * ai + sbeb + 2.0 * w1 * cmi - hf1[i] + (0.25 * dt * sig) * sbt_wb
+                                    - sig * sbeb0)
+        data[left[3 * i]] = c2 * asb0 - (kap * w0) * (-s1i * ca - s0i * sa)
+        data[left[3 * i + 1]] = c2 * asb1 - (kap * w0) * (-s1i * sa + s0i * ca)
+        data[left[3 * i + 2]] = (c2 * ai + sbeb - dt * (0.5 * dkap * sbe_wb - 0.25 * kap * sbt_wb)
+                                 - (kap * sbeb0 + 2.0 * w0 * cmmi - hf0[i]))
+    # ---------------------------------------------------------------- constant elastic blocks
+    cma = -0.5 * dt * w0 * w1
+    ch = w1 + w0
+    for k in range(kd.mff_dat.size):
+        data[kd.map_mff[k]] += c2 * kd.mff_dat[k]
+    for k in range(kd.h_dat.size):
+        data[kd.map_h[k]] += ch * kd.h_dat[k]
+    for k in range(kd.ma_dat.size):
+        data[kd.map_ma[k]] += cma * kd.ma_dat[k]
+    # ---------------------------------------------------------------- strain energy: stress at the mean strain
+    gp = np.zeros(n)
+    for i in range(nf):
+        gp[3 + i] = kqm[i]
+    hv = np.zeros(data.size)                                   # ∂g_pot/∂q1 in the pattern
+    for k in range(kd.k_dat.size):
+        hv[kd.map_k[k]] += 0.5 * kd.k_dat[k]
+    if kd.green:
+        dn, loc, wq, mloc = kd.dn, kd.loc, kd.wq, kd.map_loc
+        nel, nqp, nl = dn.shape
+        up0, wp0, e0 = _axial_strains(kd, q0)
+        up1, wp1, e1 = _axial_strains(kd, q1)
+        coef = np.empty((2, 2))
+        for e in range(nel):
+            for kq in range(nqp):
+                k = e * nqp + kq
+                upm, wpm = 0.5 * (up0[k] + up1[k]), 0.5 * (wp0[k] + wp1[k])
+                t = wq[k] * (0.5 * (e0[k] + e1[k]))
+                for l in range(nl):
+                    iu, iw = loc[e, l], loc[e, nl + l]
+                    if iu >= 0:
+                        gp[3 + iu] += dn[e, kq, l] * (t * (1.0 + upm))
+                    if iw >= 0:
+                        gp[3 + iw] += dn[e, kq, l] * (t * wpm)
+                # ½ Σ EA dx [dε(q_m)ᵀ dε(q1) + ½(ε0 + ε1) d²ε]: per-point coefficients of the (u, w) blocks
+                wh = 0.5 * wq[k]
+                weps = 0.5 * t
+                wa0, wa1 = wh * (1.0 + upm), wh * wpm
+                b0 = 1.0 + up1[k]
+                coef[0, 0] = wa0 * b0 + weps
+                coef[0, 1] = wa0 * wp1[k]
+                coef[1, 0] = wa1 * b0
+                coef[1, 1] = wa1 * wp1[k] + weps
+                for ia in range(2 * nl):
+                    for ib in range(2 * nl):
+                        pos = mloc[e, ia, ib]
+                        if pos >= 0:
+                            hv[pos] += coef[ia // nl, ib // nl] * (dn[e, kq, ia % nl] * dn[e, kq, ib % nl])
+    floor = np.zeros(n)
+    ptr, idx = kd.pat_ptr, kd.pat_idx
+    for i in range(n):
+        s = 0.0
+        for k in range(ptr[i], ptr[i + 1]):
+            h = hv[k]
+            if h != 0.0:
+                data[k] += dt * h
+                s += abs(h) * (abs(q0[idx[k]]) + abs(q1[idx[k]]))
+        floor[i] = dt * s
+    return p, gk, gp, data, floor

@@ -1,0 +1,139 @@
+"""The compiled energy-momentum loop (skfem_flex/compiled_loop.py) against the Python path.
+
+Both run the same scheme with the same Newton rules; the trajectories must agree to round-off
+amplified by the Newton tolerance. Per-step Newton counts may differ by one where a scaled
+residual lands within round-off of a convergence threshold (steps decided at the round-off
+floor, e.g. the start from rest), so the totals are compared.
+"""
+import numpy as np
+import pytest
+import skfem
+
+import skfem_flex as sf
+from skfem_flex import compiled_loop
+from skfem_flex.bodies.floating import FloatingBeam
+from skfem_flex.integrators import ConvergenceError, EnergyMomentum, NewtonSettings
+
+SEC = dict(EA=2.8e7, EI=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4)
+
+
+def free_flying_beam(reference="pinned", n_elements=6):
+    """A floating beam in free flight (no prescribed coordinate, no force): energy and momenta are constant."""
+    beam = sf.TimoshenkoBeam(skfem.MeshLine(np.linspace(0.0, 10.0, n_elements + 1)), sf.Section(**SEC))
+    body = FloatingBeam(beam, reference=reference, velocity=(1.0, -0.5), angular_velocity=0.8)
+    body.v0[3:] = body.elastic_vector(w=lambda x: 0.02 * np.sin(np.pi * x / 10.0))
+    return sf.Scene([body], name="free flight")
+
+
+def assert_same_run(a, b, q_tol=1e-9, v_tol=1e-7):
+    np.testing.assert_array_equal(a.t, b.t)
+    assert a.steps == b.steps and a.halvings == b.halvings
+    assert np.abs(a.q - b.q).max() <= q_tol * np.abs(b.q).max()
+    assert np.abs(a.v - b.v).max() <= v_tol * np.abs(b.v).max()
+    e_scale = np.abs(b.total_energy).max() + np.abs(b.external_work).max()
+    assert np.abs(a.total_energy - b.total_energy).max() <= v_tol * e_scale
+    assert np.abs(a.external_work - b.external_work).max() <= v_tol * e_scale
+    if b.prescribed_force.size:
+        assert np.abs(a.prescribed_force - b.prescribed_force).max() <= v_tol * np.abs(b.prescribed_force).max()
+    for k in b.probes:
+        np.testing.assert_allclose(a.probes[k], b.probes[k], rtol=0, atol=q_tol * np.abs(b.q).max())
+    total_a, total_b = a.newton_iterations.sum(), b.newton_iterations.sum()
+    assert abs(total_a - total_b) <= 0.05 * total_b
+    # the compiled run conserves energy as exactly as the Python one
+    bal = np.abs(a.total_energy - a.total_energy[0] - a.external_work).max()
+    assert bal <= 1e-12 * e_scale + 10 * np.abs(b.total_energy - b.total_energy[0] - b.external_work).max()
+
+
+def test_eligibility():
+    em = EnergyMomentum()
+    assert compiled_loop.eligible(sf.scenes.spin_up_beam(n_elements=4), em)
+    assert compiled_loop.eligible(free_flying_beam(), em)
+    assert not compiled_loop.eligible(sf.scenes.spin_up_beam(n_elements=4), sf.integrators.Trapezoidal())
+    assert not compiled_loop.eligible(sf.scenes.spin_up_pinned(n_elements=4), em)   # constraints
+    assert not compiled_loop.eligible(sf.scenes.free_beam(n_elements=4), em)        # a load
+    assert not compiled_loop.eligible(sf.scenes.pendulum(), em)                      # not a floating beam
+    assert compiled_loop.eligible(sf.scenes.spin_up_beam(n_elements=64), em)        # banded free block
+    assert not compiled_loop.eligible(free_flying_beam(n_elements=64), em)          # sparse, not banded
+
+    class Custom(EnergyMomentum):
+        pass
+    assert not compiled_loop.eligible(sf.scenes.spin_up_beam(n_elements=4), Custom())
+
+
+@pytest.mark.parametrize("dt", [1e-3, 2e-2])
+def test_spin_up_compiled_equals_python(dt):
+    runs = [sf.simulate(sf.scenes.spin_up_beam(n_elements=8), t_end=300 * dt, dt=dt, compiled=c)
+            for c in (True, False)]
+    assert_same_run(*runs)
+
+
+@pytest.mark.parametrize("kw", [dict(order=2, n_elements=3), dict(strain="linear", n_elements=4)])
+def test_spin_up_variants_compiled_equal_python(kw):
+    runs = [sf.simulate(sf.scenes.spin_up_beam(**kw), t_end=2.0, dt=1e-2, record_every=7, compiled=c)
+            for c in (True, False)]
+    assert_same_run(*runs)
+    assert runs[0].t[-1] == pytest.approx(2.0) and runs[0].t.size == 1 + 200 // 7 + 1
+
+
+@pytest.mark.parametrize("reference", ["pinned", "clamped"])
+def test_free_flight_compiled_equals_python(reference):
+    runs = [sf.simulate(free_flying_beam(reference), t_end=1.0, dt=5e-3, compiled=c) for c in (True, False)]
+    assert_same_run(*runs)
+    a = runs[0]
+    e = a.total_energy
+    assert np.abs(e - e[0]).max() <= 1e-10 * e[0]
+    assert np.abs(a.linear_momentum - a.linear_momentum[0]).max() <= 1e-10 * np.abs(a.linear_momentum[0]).max()
+
+
+def test_last_step_is_shortened_and_environment_switch(monkeypatch):
+    scene = sf.scenes.spin_up_beam(n_elements=4)
+    a = sf.simulate(scene, t_end=0.1049, dt=1e-2)
+    monkeypatch.setenv("SKFEM_FLEX_COMPILED", "0")
+    b = sf.simulate(sf.scenes.spin_up_beam(n_elements=4), t_end=0.1049, dt=1e-2)
+    assert a.t[-1] == pytest.approx(0.1049, abs=1e-15)
+    assert_same_run(a, b)
+
+
+def test_failing_steps_are_halved_as_on_the_python_path():
+    """Steps too large for Newton leave the compiled loop and are halved by the Python path."""
+    runs = [sf.simulate(sf.scenes.spin_up_beam(n_elements=4, omega=10.0), t_end=20.0, dt=1.0, max_halvings=3,
+                        compiled=c) for c in (True, False)]
+    assert runs[0].halvings == runs[1].halvings > 0
+    assert_same_run(*runs, q_tol=1e-7, v_tol=1e-6)
+
+
+def test_convergence_error_is_the_python_paths():
+    errors = []
+    for c in (True, False):
+        with pytest.raises(ConvergenceError) as info:
+            sf.simulate(sf.scenes.spin_up_beam(n_elements=4, omega=10.0), t_end=20.0, dt=1.0, max_halvings=0,
+                        compiled=c)
+        errors.append(info.value)
+    assert str(errors[0]) == str(errors[1])
+    assert "Newton did not converge" in str(errors[0]) and "[step 6 of 20]" in str(errors[0])
+    assert errors[0].result.steps == errors[1].result.steps == 5
+    np.testing.assert_allclose(errors[0].result.q, errors[1].result.q, rtol=0,
+                               atol=1e-9 * np.abs(errors[1].result.q).max())
+
+
+def test_newton_settings_reach_the_compiled_loop():
+    """A looser tolerance must change the compiled run exactly as it changes the Python one."""
+    loose = NewtonSettings(rtol=1e-6, etol=1e-8)
+    runs = [sf.simulate(sf.scenes.spin_up_beam(n_elements=4), t_end=1.0, dt=1e-2, newton=loose, compiled=c)
+            for c in (True, False)]
+    assert_same_run(*runs, q_tol=1e-6, v_tol=1e-4)
+    tight = sf.simulate(sf.scenes.spin_up_beam(n_elements=4), t_end=1.0, dt=1e-2)
+    assert runs[0].newton_iterations.sum() < tight.newton_iterations.sum()
+
+
+def test_large_banded_spin_up_compiled_equals_python():
+    """Above the dense size the compiled loop solves the banded free-free block (kl = ku = 4 here)."""
+    scene = sf.scenes.spin_up_beam(n_elements=64)
+    assert not scene.dense and compiled_loop._plan(scene)[2:] == (4, 4)
+    runs = [sf.simulate(sf.scenes.spin_up_beam(n_elements=64), t_end=0.3, dt=2e-3, compiled=c) for c in (True, False)]
+    assert_same_run(*runs)
+
+
+def test_bad_compiled_switch_is_rejected():
+    with pytest.raises(ValueError, match="compiled must be"):
+        sf.simulate(sf.scenes.spin_up_beam(n_elements=4), t_end=0.01, dt=1e-3, compiled="yes")
