@@ -15,8 +15,9 @@ many steps of the *same* scheme inside one compiled function:
   search of :meth:`Integrator._newton`, initial guess Δq = Δt v0;
 * prescribed reaction r_P / Δt and its work Δq_P · r_P / Δt.
 
-Partial-pivoting LU solves the Newton systems: dense for small scenes, in LAPACK band storage
-for large ones whose free-free block is banded (see :func:`eligible`). On any failure — non-finite residual, update or state, singular matrix,
+LAPACK solves the Newton systems (gesv through numba's ``np.linalg.solve``; gbsv from
+scipy's Cython LAPACK): dense for small scenes, in band storage for large ones whose free-free
+block is banded (see :func:`eligible`). On any failure — non-finite residual, update or state, singular matrix,
 no convergence within ``max_iterations`` — the compiled loop stops *before* the failing step
 and reports its index; :func:`skfem_flex.simulate` then re-runs that step on the Python path,
 which halves it or raises :class:`~skfem_flex.errors.ConvergenceError` with its usual message,
@@ -30,8 +31,10 @@ from __future__ import annotations
 
 import weakref
 
+import llvmlite.binding as _llvm
 import numba
 import numpy as np
+from numba.extending import get_cython_function_address
 
 from .bodies.floating import FloatingBeam
 from .bodies.floating_kernel import energy_momentum_terms, momentum
@@ -76,7 +79,7 @@ _PLANS = weakref.WeakKeyDictionary()
 def _plan(scene):
     """(target, size, kl, ku): where each entry of the body's CSR pattern goes in the storage of the
     free-free Newton block — dense row-major (kl = ku = −1) or LAPACK band storage with kl
-    sub- and ku superdiagonals, column-major (:func:`_band_lu_solve`); −1 for entries outside the block.
+    sub- and ku superdiagonals, column-major (LAPACK gbsv, :func:`_solve`); −1 for entries outside the block.
     None if the scene is too large for dense and its block is not banded. Built once per scene."""
     body = scene.bodies[0]
     hit = _PLANS.get(scene)
@@ -129,91 +132,33 @@ def _all_finite(x):
     return True
 
 
-@numba.njit(cache=True)
-def _lu_solve(a, b):
-    """x with a x = b by LU with partial pivoting (a is overwritten); (x, False) if a pivot is exactly 0."""
-    n = b.size
-    x = b.copy()
-    for k in range(n):
-        p, big = k, abs(a[k, k])
-        for i in range(k + 1, n):
-            if abs(a[i, k]) > big:
-                p, big = i, abs(a[i, k])
-        if big == 0.0:
-            return x, False
-        if p != k:
-            for j in range(n):
-                a[k, j], a[p, j] = a[p, j], a[k, j]
-            x[k], x[p] = x[p], x[k]
-        piv = a[k, k]
-        for i in range(k + 1, n):
-            f = a[i, k] / piv
-            if f != 0.0:
-                a[i, k] = f
-                for j in range(k + 1, n):
-                    a[i, j] -= f * a[k, j]
-                x[i] -= f * x[k]
-    for i in range(n - 1, -1, -1):
-        s = x[i]
-        for j in range(i + 1, n):
-            s -= a[i, j] * x[j]
-        x[i] = s / a[i, i]
-    return x, True
-
-
-@numba.njit(cache=True)
-def _band_lu_solve(ab, kl, ku, b):
-    """x with a x = b for a band matrix with kl sub- and ku superdiagonals; LU with partial pivoting.
-
-    Storage: a[i, j] at ab[j, kl + ku + i − j], i.e. LAPACK's gbsv band layout transposed so that
-    each column is contiguous; ab[j, :kl] is room for the fill-in of row interchanges. ``ab``
-    (n, 2 kl + ku + 1) is overwritten. Returns (x, False) if a pivot is exactly 0."""
-    n = b.size
-    kv = kl + ku
-    x = b.copy()
-    piv = np.empty(n, dtype=np.int64)
-    ju = 0
-    for j in range(n):
-        km = min(kl, n - 1 - j)
-        p, big = j, abs(ab[j, kv])
-        for i in range(j + 1, j + km + 1):
-            if abs(ab[j, kv + i - j]) > big:
-                p, big = i, abs(ab[j, kv + i - j])
-        piv[j] = p
-        if big == 0.0:
-            return x, False
-        ju = max(ju, min(p + ku, n - 1))          # last column row p reaches
-        if p != j:
-            for c in range(j, ju + 1):
-                ab[c, kv + j - c], ab[c, kv + p - c] = ab[c, kv + p - c], ab[c, kv + j - c]
-        d = ab[j, kv]
-        for i in range(j + 1, j + km + 1):
-            ab[j, kv + i - j] /= d
-        for c in range(j + 1, ju + 1):
-            u = ab[c, kv + j - c]
-            if u != 0.0:
-                for i in range(j + 1, j + km + 1):
-                    ab[c, kv + i - c] -= ab[j, kv + i - j] * u
-    for j in range(n):                            # L y = P b
-        p = piv[j]
-        if p != j:
-            x[j], x[p] = x[p], x[j]
-        for i in range(j + 1, min(n, j + kl + 1)):
-            x[i] -= ab[j, kv + i - j] * x[j]
-    for j in range(n - 1, -1, -1):                # U x = y (U has kl + ku superdiagonals)
-        x[j] /= ab[j, kv]
-        for i in range(max(0, j - kv), j):
-            x[i] -= ab[j, kv + i - j] * x[j]
-    return x, True
+# LAPACK's band solver dgbsv, from scipy's Cython LAPACK, callable from compiled code: its address
+# is registered under a fixed symbol name at import, so cached machine code links to it again
+_llvm.add_symbol("skfem_flex_dgbsv", get_cython_function_address("scipy.linalg.cython_lapack", "dgbsv"))
+_dgbsv = numba.types.ExternalFunction("skfem_flex_dgbsv", numba.types.void(*([numba.types.voidptr] * 10)))
 
 
 @numba.njit(cache=True)
 def _solve(mat, kl, ku, b):
-    """Solve the free-free Newton system stored by :func:`_evaluate` (dense when kl < 0, else banded)."""
+    """Solve the free-free Newton system stored by :func:`_evaluate`; (x, False) if it is singular.
+
+    Dense (kl < 0): LAPACK gesv through ``np.linalg.solve``. Banded: LAPACK gbsv on the band
+    storage (Fortran layout, leading dimension 2 kl + ku + 1; ``mat`` is overwritten).
+    """
     n = b.size
     if kl < 0:
-        return _lu_solve(mat.reshape(n, n), b)
-    return _band_lu_solve(mat.reshape(n, 2 * kl + ku + 1), kl, ku, b)
+        try:
+            return np.linalg.solve(mat.reshape(n, n), b), True
+        except Exception:                # singular: numba raises LinAlgError
+            return b.copy(), False
+    ints = np.empty(6, dtype=np.int32)
+    ints[0], ints[1], ints[2], ints[3], ints[4], ints[5] = n, kl, ku, 1, 2 * kl + ku + 1, n
+    ipiv = np.empty(n, dtype=np.int32)
+    info = np.zeros(1, dtype=np.int32)
+    x = b.copy()
+    _dgbsv(ints[0:1].ctypes, ints[1:2].ctypes, ints[2:3].ctypes, ints[3:4].ctypes, mat.ctypes, ints[4:5].ctypes,
+           ipiv.ctypes, x.ctypes, ints[5:6].ctypes, info.ctypes)
+    return x, info[0] == 0
 
 
 @numba.njit(cache=True)
@@ -222,7 +167,6 @@ def _evaluate(kd, x, q0, v0, dq_base, free, target, mat_size, h, p0, p0_inf, e_s
 
     Returns (r_F, J_FF, err, dq, q1, v1, p1, r); J_FF is the flat storage of the free-free block
     (dense or banded) that ``target`` maps the body's CSR pattern entries to."""
-    n = q0.size
     dq = dq_base.copy()
     for i in range(free.size):
         dq[free[i]] = x[i]

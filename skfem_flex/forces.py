@@ -10,6 +10,7 @@ external work.
 from __future__ import annotations
 
 import numpy as np
+import scipy.linalg as sla
 import scipy.sparse as sps
 
 from .bodies.base import BodyPoint, check_finite_vector
@@ -128,7 +129,16 @@ class Gravity(ForceElement):
         return g, self._block_diagonal(blocks)
 
     def _block_diagonal(self, blocks):
-        """Sparse block diagonal of the bodies' blocks (None: zero block of that body's size)."""
+        """Block diagonal of the bodies' blocks (None: zero block of that body's size).
+
+        One body: its own block as it comes (dense stays dense, so that small scenes do no sparse
+        work per Newton evaluation); several: dense if every block is and the total is small,
+        sparse otherwise."""
+        if len(blocks) == 1:
+            return blocks[0]
+        if self._n <= 150 and not any(sps.issparse(blk) for blk in blocks):     # a small (dense) scene
+            return sla.block_diag(*[np.zeros((b.n_dofs, b.n_dofs)) if blk is None else blk
+                                    for b, blk in zip(self.bodies, blocks)])
         return sps.block_diag([sps.csr_matrix((b.n_dofs, b.n_dofs)) if blk is None else sps.csr_matrix(blk)
                                for b, blk in zip(self.bodies, blocks)], format="csr")
 

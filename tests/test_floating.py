@@ -414,25 +414,3 @@ def test_bad_input_is_rejected():
         sf.Prescribed(body, "phi", sf.MotionLaw.constant_rate(1.0))
     with pytest.raises(NotImplementedError):
         body.mass_moment()
-
-
-@pytest.mark.parametrize("strain", ["green-lagrange", "linear"])
-def test_fused_energy_momentum_terms_equal_the_contract_methods(strain):
-    """The fused per-evaluation call the time loop uses must agree with the body's contract methods."""
-    body = FloatingBeam(make_beam(4), strain=strain)
-    rng = np.random.default_rng(3)
-    n, dt = body.n_dofs, 0.01
-    q0 = rng.normal(size=n) * 0.01
-    q0[:3] = [0.3, -0.2, 0.7]
-    q1 = q0 + rng.normal(size=n) * 1e-3
-    v0 = rng.normal(size=n) * 0.1
-    v1 = rng.normal(size=n) * 0.1
-    p1, g_kin, g_pot, jac, _ = body.energy_momentum_terms(q0, q1, v0, v1, dt)
-    gk, gk_q, gk_v = body.kinetic_discrete_gradient(q0, q1, v0, v1)
-    gp, gp_q = body.potential_discrete_gradient(q0, q1)
-    expected = ((2.0 / dt) * dense(body.mass_matrix(q1)) + dense(body.momentum_jacobian(q1, v1))
-                - dt * dense(gk_q) - 2.0 * dense(gk_v) + dt * dense(gp_q))
-    np.testing.assert_allclose(p1, dense(body.mass_matrix(q1)) @ v1, rtol=1e-12, atol=1e-14)
-    np.testing.assert_allclose(g_kin, gk, rtol=1e-12, atol=1e-14)
-    np.testing.assert_allclose(g_pot, gp, rtol=1e-12, atol=1e-10)
-    np.testing.assert_allclose(dense(jac), expected, rtol=1e-10, atol=1e-8 * np.max(np.abs(expected)))

@@ -530,18 +530,6 @@ class FloatingBeam(Body):
             self._pcache = (key, _kernel.momentum(self._kd, q, v))
         return self._pcache[1].copy()
 
-    def _momentum_numpy(self, q, v):
-        """Numpy implementation of :meth:`momentum` (the reference of the compiled kernel)."""
-        A, qf, sbar, cm, a, J = self._parts(q)
-        V, om, f = v[:2], float(v[2]), v[3:]
-        AEs = A @ (E2 @ sbar)
-        Sf = self._Sbar @ f
-        p = np.empty(self.n_dofs)
-        p[:2] = self.mass_total * V + om * AEs + A @ Sf
-        p[2] = AEs @ V + J * om + a @ f
-        p[3:] = self._SbarT @ (A.T @ V) + om * a + self._Mff @ f
-        return p
-
     def kinetic_energy(self, q, v):
         return 0.5 * float(v @ self.momentum(q, v))
 
@@ -723,15 +711,6 @@ class FloatingBeam(Body):
         """Strain energy V(q_f) = ½ q_fᵀ K q_f + ½ Σ EA dx ε², J (compiled kernel)."""
         return float(_kernel.potential_energy(self._kd, np.ascontiguousarray(q, dtype=float)))
 
-    def _potential_energy_numpy(self, q):
-        """Numpy implementation of :meth:`potential_energy` (the reference of the compiled kernel)."""
-        qf = q[3:]
-        e = 0.5 * float(qf @ (self._K @ qf))
-        if self.strain == "green-lagrange":
-            eps = self._gl(qf)[2]
-            e += 0.5 * float(self._wq @ (eps * eps))
-        return e
-
     def potential_gradient(self, q):
         qf = q[3:]
         g = np.zeros(self.n_dofs)
@@ -777,8 +756,8 @@ class FloatingBeam(Body):
         Optional fused form of the body contract (the scene uses it when present): the same
         numbers as :meth:`momentum`, :meth:`mass_matrix`, :meth:`momentum_jacobian`,
         :meth:`kinetic_discrete_gradient` and :meth:`potential_discrete_gradient` (to round-off).
-        Computed by the compiled kernel :func:`.floating_kernel.energy_momentum_terms`; the numpy
-        implementation of the same equations stays as :meth:`_energy_momentum_terms_numpy`.
+        Computed by the compiled kernel :func:`.floating_kernel.energy_momentum_terms`; the
+        contract methods, in numpy, are its reference (tests/test_floating_kernel.py).
 
         Returns
         -------
@@ -800,101 +779,6 @@ class FloatingBeam(Body):
             jac = sps.csr_matrix((data, self._pat_indices, self._pat_indptr), shape=(n, n))
         else:
             jac = data.reshape(n, n)
-        return p, gk, gp, jac, floor
-
-    def _energy_momentum_terms_numpy(self, q0, q1, v0, v1, dt):
-        """Numpy implementation of :meth:`energy_momentum_terms` (the reference of the compiled kernel).
-
-        Optional fused form of the body contract (the scene uses it when present): the same
-        numbers as :meth:`momentum`, :meth:`mass_matrix`, :meth:`momentum_jacobian`,
-        :meth:`kinetic_discrete_gradient` and :meth:`potential_discrete_gradient` (to round-off),
-        sharing A(θ), s̄ and the strains and filling one matrix.
-
-        Returns
-        -------
-        p1 : ndarray (n,)
-            M(q1) v1.
-        g_kin, g_pot : ndarray (n,)
-            Discrete gradients of G(q) = ½ v0ᵀ M(q) v1 and of the strain energy V.
-        jac : ndarray or csr_matrix (n, n)
-            (2/Δt) M(q1) + B(q1, v1) − Δt ∂g_kin/∂q1 − 2 ∂g_kin/∂v1 + Δt ∂g_pot/∂q1.
-        floor : ndarray (n,)
-            Δt |∂g_pot/∂q1| (|q0| + |q1|): round-off floor of the internal forces.
-        """
-        n, nf = self.n_dofs, self.n_elastic
-        c2 = 2.0 / dt
-        A, qf1, sbar, cm, a, J = self._parts(q1)
-        # ---- kinetic discrete gradient (shared with kinetic_discrete_gradient)
-        qfm = 0.5 * (q0[3:] + q1[3:])
-        f = v1[3:]
-        key0 = v0.tobytes()
-        if self._v0cache[0] != key0:                        # v0 is fixed through a step's Newton iteration
-            self._v0cache = (key0, self._Pf @ v0[3:])
-        yf0 = self._v0cache[1]
-        yf1 = self._Pf @ f                                  # (2 + nf,): S̄ f_i, H f_i
-        (gk, sig, dsig, kap, dkap, ca, sa, smx, smy, cmm, w0, w1, b0x, b0y, b1x, b1y,
-         c0x, c0y, c1x, c1y, Hf0, Hf1, X, SbEwb, SbTwb) = self._kinetic_terms(q0, q1, v0, v1, yf0, yf1)
-        SbEb0 = self._SbEt @ np.array([b0x, b0y])
-        # ---- momentum, mass matrix and momentum Jacobian at (q1, v1)
-        V = v1[:2]
-        AE = A @ E2
-        AEs = A @ (E2 @ sbar)
-        ASb = A @ self._Sbar
-        Sf = yf1[:2]
-        b = A.T @ V
-        SbEb = self._SbEt @ b
-        p = np.empty(n)
-        p[:2] = self.mass_total * V + w1 * AEs + A @ Sf
-        p[2] = AEs @ V + J * w1 + a @ f
-        p[3:] = self._SbarT @ b + w1 * a + self._Mff @ f
-        # ---- reference rows / columns of the tangent: c2 M + B − dt g_q − 2 g_v
-        top = self._top_template * c2
-        top[:2, 2] = c2 * AEs - w1 * (A @ sbar) + AE @ Sf
-        top[:2, 3:] = c2 * ASb + w1 * (AE @ self._Sbar)
-        top[2, 0] = c2 * AEs[0] - sig * (ca * (-c0y) - sa * c0x)
-        top[2, 1] = c2 * AEs[1] - sig * (sa * (-c0y) + ca * c0x)
-        top[2, 2] = (c2 * J - float(b @ sbar)
-                     - dt * (0.5 * dsig * X - 0.25 * sig * (b0x * c1x + b0y * c1y + b1x * c0x + b1y * c0y))
-                     + sig * (b0x * smx + b0y * smy))
-        top[2, 3:] = c2 * a + SbEb + 2.0 * w1 * cm - Hf1 + (0.25 * dt * sig) * SbTwb - sig * SbEb0
-        left = np.empty((nf, 3))
-        left[:, :2] = c2 * ASb.T - (kap * w0) * (self._SbEt @ np.array([[ca, sa], [-sa, ca]]))
-        left[:, 2] = (c2 * a + SbEb - dt * (0.5 * dkap * SbEwb - 0.25 * kap * SbTwb)
-                      - (kap * SbEb0 + 2.0 * w0 * cmm - Hf0))
-        terms = [(c2, "Mff"), (w1 + w0, "H"), (-0.5 * dt * w0 * w1, "MA")]
-        # ---- strain energy: stress at the mean strain (as potential_discrete_gradient)
-        gp = np.zeros(n)
-        gp[3:] = self._K @ qfm
-        qa = np.abs(q0[3:]) + np.abs(q1[3:])
-        floor = np.zeros(n)
-        if self.strain == "linear":
-            if self.sparse:
-                floor[3:] = dt * (abs(self._K) @ qa) * 0.5
-            else:
-                floor[3:] = dt * (np.abs(0.5 * self._K) @ qa)
-            jac = self._compose(top, left, terms + [(0.5 * dt, "K")])
-            return p, gk, gp, jac, floor
-        up0, wp0, e0 = self._gl(q0[3:])
-        up1, wp1, e1 = self._gl(q1[3:])
-        upm, wpm = 0.5 * (up0 + up1), 0.5 * (wp0 + wp1)
-        t = self._wq * (0.5 * (e0 + e1))
-        gp[3:] += self._DT @ np.concatenate([t * (1.0 + upm), t * wpm])
-        hv = self._Wax @ self._axial_coefficients(0.5 * self._wq, (upm, wpm), (up1, wp1), 0.5 * t)
-        if self.sparse:
-            hv += self._Kh_data
-            floor = dt * (sps.csr_matrix((np.abs(hv), self._pat_indices, self._pat_indptr), shape=(n, n))
-                          @ np.concatenate([np.zeros(3), qa]))
-            jac = self._compose(top, left, terms)
-            jac.data += dt * hv
-            return p, gk, gp, jac, floor
-        hv = hv.reshape(nf, nf)
-        hv += self._K_half
-        floor[3:] = dt * (np.abs(hv) @ qa)
-        jac = np.empty((n, n))
-        jac[:3] = top
-        jac[3:, :3] = left
-        # Σ coef · (M_ff, H, M_A) in one product with the stacked constant blocks
-        jac[3:, 3:] = (np.array([c for c, _ in terms]) @ self._ff_stack).reshape(nf, nf) + dt * hv
         return p, gk, gp, jac, floor
 
     def strains(self, q):
