@@ -69,6 +69,7 @@ from ..beam import TimoshenkoBeam
 from ..forces import ForceElement
 from ..forms import bending, shear, translational_mass, rotary_mass
 from . import floating_kernel as _kernel
+from .floating_kernel import _sinc_half
 from .base import Body, BodyGeometry, BodyPoint, check_finite_vector, to_dense
 from .rigid import E_MATRIX as E2, rotation as _rot
 
@@ -82,16 +83,6 @@ _KineticTerms = namedtuple("_KineticTerms", "g sig dsig kap dkap ca sa smx smy c
 SPARSE_LIMIT = 150
 _FIELDS = {"u": 0, "w": 1, "theta": 2, "th": 2, "phi": 2}
 _FIELD_NAMES = ("u", "w", "th")
-
-
-def _sinc_half(d):
-    """σ = sin(d/2)/(d/2) and dσ/dd (series near 0)."""
-    h = 0.5 * d
-    if abs(h) < 1e-3:
-        h2 = h * h
-        return 1.0 - h2 / 6.0 + h2 * h2 / 120.0, 0.5 * (-h / 3.0 + h * h2 / 30.0)
-    s, c = math.sin(h), math.cos(h)
-    return s / h, 0.5 * (h * c - s) / (h * h)
 
 
 def _cross(a, b):

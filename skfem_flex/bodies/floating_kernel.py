@@ -114,7 +114,7 @@ def _matvec(ptr, idx, dat, x, off):
 
 @numba.njit(cache=True)
 def _sinc_half(d):
-    """σ = sin(d/2)/(d/2) and dσ/dd (series near 0), as floating._sinc_half."""
+    """σ = sin(d/2)/(d/2) and dσ/dd (series near 0); also used by the numpy methods of FloatingBeam."""
     h = 0.5 * d
     if abs(h) < 1e-3:
         h2 = h * h
