@@ -129,7 +129,7 @@ def momentum(kd, q, v):
     nf = kd.nf
     sbar = kd.sbar
     C, S = math.cos(q[2]), math.sin(q[2])
-    sqx, sqy, sfx, sfy, qc = 0.0, 0.0, 0.0, 0.0, 0.0
+    sqx, sqy, sfx, sfy = 0.0, 0.0, 0.0, 0.0
     for i in range(nf):
         sqx += sbar[0, i] * q[3 + i]
         sqy += sbar[1, i] * q[3 + i]
