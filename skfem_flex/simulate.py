@@ -16,7 +16,6 @@ from .result import Result
 __all__ = ["simulate"]
 
 
-
 class _Recorder:
     """Collects histories step by step; builds a Result at any time."""
 
