@@ -37,7 +37,7 @@ import numpy as np
 from numba.extending import get_cython_function_address
 
 from .bodies.floating import FloatingBeam
-from .bodies.floating_kernel import energy_momentum_terms, momentum
+from .bodies.floating_kernel import energy_momentum_terms, momentum, potential_energy
 from . import integrators
 from .integrators import EnergyMomentum
 from .scene import Scene
@@ -266,6 +266,9 @@ def _run(kd, q, v, t, hs, qp, pres, free, target, mat_size, kl, ku, rtol, etol, 
     rec_work = np.empty(n_rec)
     rec_its = np.empty(n_rec, dtype=np.int64)
     rec_reac = np.empty((n_rec, npr))
+    # T, V, p_R (2) and L about the origin of the recorded states, as FloatingBeam's kinetic_energy,
+    # potential_energy, linear_momentum and angular_momentum (R × p_R + p_θ) give them
+    rec_derived = np.empty((n_rec, 5))
     reaction = np.zeros(npr)
     its_total = 0
     p = momentum(kd, q, v)
@@ -278,7 +281,7 @@ def _run(kd, q, v, t, hs, qp, pres, free, target, mat_size, kl, ku, rtol, etol, 
             status = NONFINITE
         if status != OK:
             return (status, k, t, q, v, p, reaction, work, its_total, i_rec,
-                    rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac)
+                    rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac, rec_derived)
         w = 0.0
         for i in range(npr):
             j = pres[i]
@@ -297,9 +300,14 @@ def _run(kd, q, v, t, hs, qp, pres, free, target, mat_size, kl, ku, rtol, etol, 
             rec_work[i_rec] = work
             rec_its[i_rec] = its
             rec_reac[i_rec] = reaction
+            rec_derived[i_rec, 0] = 0.5 * np.dot(v, p)
+            rec_derived[i_rec, 1] = potential_energy(kd, q)
+            rec_derived[i_rec, 2] = p[0]
+            rec_derived[i_rec, 3] = p[1]
+            rec_derived[i_rec, 4] = q[0] * p[1] - q[1] * p[0] + p[2]
             i_rec += 1
     return (OK, ns, t, q, v, p, reaction, work, its_total, i_rec,
-            rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac)
+            rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac, rec_derived)
 
 
 def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, record_every, work):
@@ -331,7 +339,9 @@ def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, rec
         (steps completed), ``t, q, v, reaction`` (state after them; ``reaction`` is the mean
         generalized force of the prescribed laws over the last step), ``work`` (accumulated),
         ``iterations`` (Newton iterations summed over the completed steps) and ``records``, a
-        list of (t, q, v, work, iterations, reaction) of the recorded steps.
+        list of (t, q, v, work, iterations, reaction, derived) of the recorded steps, ``derived`` =
+        (kinetic energy J, strain energy J, linear momentum (2) kg m/s, angular momentum about the
+        origin kg m²/s), computed in the loop.
     """
     body = scene.bodies[0]
     s = scheme.newton
@@ -349,8 +359,9 @@ def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, rec
                target, size, kl, ku, float(s.rtol), float(s.etol), int(s.max_iterations), bool(s.line_search), float(work),
                int(first_step), int(record_every), int(n_steps))
     (status, done, t, q, v, _, reaction, work, its_total, n_rec, rec_t, rec_q, rec_v, rec_work, rec_its,
-     rec_reac) = out
-    records = [(float(rec_t[i]), rec_q[i], rec_v[i], float(rec_work[i]), int(rec_its[i]), rec_reac[i])
+     rec_reac, rec_derived) = out
+    records = [(float(rec_t[i]), rec_q[i], rec_v[i], float(rec_work[i]), int(rec_its[i]), rec_reac[i],
+                rec_derived[i])
                for i in range(n_rec)]
     return dict(status=int(status), done=int(done), t=float(t), q=q, v=v, reaction=reaction, work=float(work),
                 iterations=int(its_total), records=records)

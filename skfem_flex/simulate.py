@@ -30,7 +30,9 @@ class _Recorder:
         self.reactions = _reaction_maps(scene)
         self.reaction_rows = {k: [] for k, _ in self.reactions}
 
-    def record(self, state, work, iterations, vres):
+    def record(self, state, work, iterations, vres, derived=None):
+        """Append one state. ``derived`` = (T, V, p_x, p_y, L), when the caller computed them already
+        (the compiled loop), replaces the scene's kinetic/potential energy and momenta calls."""
         s = self.scene
         q, v, t = state.q, state.v, state.t
         r = self.rows
@@ -38,8 +40,8 @@ class _Recorder:
         r["q"].append(q.copy())
         r["v"].append(v.copy())
         r["lam"].append(np.array(state.lam, dtype=float))
-        r["kinetic"].append(s.kinetic_energy(q, v))
-        r["potential"].append(s.potential_energy(q))
+        r["kinetic"].append(s.kinetic_energy(q, v) if derived is None else float(derived[0]))
+        r["potential"].append(s.potential_energy(q) if derived is None else float(derived[1]))
         r["external_work"].append(work)
         r["constraint_residual"].append(float(np.max(np.abs(s.constraint_value(q, t)))) if s.n_constraints else 0.0)
         r["velocity_constraint_residual"].append(vres)
@@ -48,8 +50,12 @@ class _Recorder:
         if self.with_momentum is None:
             self.with_momentum = s.linear_momentum(q, v) is not None
         if self.with_momentum:
-            r["linear_momentum"].append(s.linear_momentum(q, v))
-            r["angular_momentum"].append(s.angular_momentum(q, v))
+            if derived is None:
+                r["linear_momentum"].append(s.linear_momentum(q, v))
+                r["angular_momentum"].append(s.angular_momentum(q, v))
+            else:
+                r["linear_momentum"].append(np.array(derived[2:4], dtype=float))
+                r["angular_momentum"].append(float(derived[4]))
         for k, val in s.evaluate_probes(t, q, v).items():
             self.probes[k].append(val)
         if self.reactions:
@@ -179,8 +185,8 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
     meta = dict(scheme=scheme.name, dt=dt)
     step = 0
 
-    def recorded(state, work, its, vres):
-        rec.record(state, work, its, vres)
+    def recorded(state, work, its, vres, derived=None):
+        rec.record(state, work, its, vres, derived)
         for s in sinks:
             s.write(scene, state.t, state.q, state.v)
 
@@ -196,8 +202,9 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
                 chunk = min(compiled_loop.chunk_steps(scene), n_steps - step)
                 out = compiled_loop.run_chunk(scene, scheme, state, dt, t_end, step + 1, chunk, n_steps, record_every,
                                               work)
-                for t_r, q_r, v_r, w_r, its_r, reac_r in out["records"]:
-                    recorded(State(t_r, q_r, v_r, lam=np.zeros(0), prescribed_force=reac_r), w_r, its_r, 0.0)
+                for t_r, q_r, v_r, w_r, its_r, reac_r, derived in out["records"]:
+                    recorded(State(t_r, q_r, v_r, lam=np.zeros(0), prescribed_force=reac_r), w_r, its_r, 0.0,
+                             derived)
                 if out["done"]:
                     state = State(out["t"], out["q"], out["v"], lam=np.zeros(0), prescribed_force=out["reaction"])
                     work = out["work"]

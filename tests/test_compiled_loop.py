@@ -32,6 +32,11 @@ def assert_same_run(a, b, q_tol=1e-9, v_tol=1e-7):
     assert np.abs(a.v - b.v).max() <= v_tol * np.abs(b.v).max()
     e_scale = np.abs(b.total_energy).max() + np.abs(b.external_work).max()
     assert np.abs(a.total_energy - b.total_energy).max() <= v_tol * e_scale
+    assert np.abs(a.potential - b.potential).max() <= v_tol * e_scale
+    p_scale = np.abs(b.linear_momentum).max() + 1e-300
+    assert np.abs(a.linear_momentum - b.linear_momentum).max() <= v_tol * p_scale
+    assert np.abs(a.angular_momentum - b.angular_momentum).max() <= v_tol * (np.abs(b.angular_momentum).max()
+                                                                            + p_scale * np.abs(b.q[:, :2]).max())
     assert np.abs(a.external_work - b.external_work).max() <= v_tol * e_scale
     if b.prescribed_force.size:
         assert np.abs(a.prescribed_force - b.prescribed_force).max() <= v_tol * np.abs(b.prescribed_force).max()
@@ -139,3 +144,17 @@ def test_large_banded_spin_up_compiled_equals_python():
 def test_bad_compiled_switch_is_rejected():
     with pytest.raises(ValueError, match="compiled must be"):
         sf.simulate(sf.scenes.spin_up_beam(n_elements=4), t_end=0.01, dt=1e-3, compiled="yes")
+
+
+def test_energies_and_momenta_computed_in_the_loop_equal_the_scene_methods():
+    """The compiled loop evaluates T, V and the momenta of the recorded states itself; they must be the
+    scene's values at the recorded (q, v)."""
+    scene = free_flying_beam("clamped")
+    res = sf.simulate(scene, t_end=0.2, dt=1e-2, record_every=3)
+    assert compiled_loop.eligible(scene, EnergyMomentum())
+    for k in range(res.t.size):
+        q, v = res.q[k], res.v[k]
+        assert res.kinetic[k] == pytest.approx(scene.kinetic_energy(q, v), rel=1e-13)
+        assert res.potential[k] == pytest.approx(scene.potential_energy(q), rel=1e-12, abs=1e-15)
+        np.testing.assert_allclose(res.linear_momentum[k], scene.linear_momentum(q, v), rtol=1e-13, atol=1e-13)
+        assert res.angular_momentum[k] == pytest.approx(scene.angular_momentum(q, v), rel=1e-13)
