@@ -21,6 +21,7 @@ import numpy as np
 import skfem
 
 from skfem_flex.beam import TimoshenkoBeam
+from skfem_flex.plots import pyplot_for
 from skfem_flex.section import Section
 
 E, NU, WIDTH, HEIGHT, RHO = 210e9, 0.3, 0.1, 0.1, 7850.0
@@ -83,11 +84,6 @@ def convergence_table():
 
 
 if __name__ == "__main__":
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     print("Relative error of the tip deflection, P1 elements "
           "(exact: P L^3/(3EI) + P L/(kGA))")
     print(convergence_table())
@@ -96,8 +92,7 @@ if __name__ == "__main__":
         kind = "axial" if axial else "bending"
         print(f"  mode {k}: {w:10.2f} rad/s = {w / (2 * np.pi):9.2f} Hz  ({kind})")
 
-    output = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parent / "output"
-    output.mkdir(parents=True, exist_ok=True)
+    plt, output = pyplot_for(sys.argv[1] if len(sys.argv) > 1 else Path(__file__).parent / "output")
 
     x = modal_beam.x_nodes
     fig, ax = plt.subplots(figsize=(7, 4))

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 import skfem_flex as sf
+from skfem_flex.plots import pyplot_for
 
 T_END, DT = 2.0, 1e-3
 SCHEMES = ("energy-momentum", "trapezoidal", "generalized-alpha")
@@ -37,17 +38,11 @@ def summary():
 
 
 if __name__ == "__main__":
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from skfem_flex.plots import plot_snapshots
 
     print("Rigid–flexible double pendulum, Δt = 1e-3 s, 2 s")
     print(summary())
-    output = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parent / "output"
-    output.mkdir(parents=True, exist_ok=True)
+    plt, output = pyplot_for(sys.argv[1] if len(sys.argv) > 1 else Path(__file__).parent / "output")
 
     fig, ax = plt.subplots(2, 2, figsize=(11, 7))
     for s, r in runs.items():

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 import skfem_flex as sf
+from skfem_flex.plots import pyplot_for
 
 DT = 0.1            # s, the spring–mass step
 T_END = 40.0        # s
@@ -48,12 +49,7 @@ def summary():
 
 
 def plot(out_dir):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    plt, out_dir = pyplot_for(out_dir)
     fig, axes = plt.subplots(len(EXPONENTS), 3, figsize=(13, 9), constrained_layout=True)
     for row, n in enumerate(EXPONENTS):
         for s, style in zip(SCHEMES, ("--", "-")):

@@ -18,6 +18,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 import skfem_flex as sf
+from skfem_flex.plots import pyplot_for
 
 G, LENGTH, RHOA, RHOI = 9.81, 1.0, 1.0, 1e-4
 T_END, DT = 2.0, 1e-3
@@ -49,17 +50,11 @@ def summary():
 
 
 if __name__ == "__main__":
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from skfem_flex.plots import plot_snapshots
 
     print("Flexible pendulum, 8 elements, Δt = 1e-3 s, 2 s")
     print(summary())
-    output = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parent / "output"
-    output.mkdir(parents=True, exist_ok=True)
+    plt, output = pyplot_for(sys.argv[1] if len(sys.argv) > 1 else Path(__file__).parent / "output")
 
     fig, ax = plt.subplots(1, 2, figsize=(11, 4.5))
     ax[0].plot(rigid_tip[:, 0], rigid_tip[:, 1], "k:", label="rigid bar")

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 import skfem_flex as sf
+from skfem_flex.plots import pyplot_for
 
 N_ELEMENTS = 10
 T_END = 12.0
@@ -57,12 +58,7 @@ def summary():
 
 
 def plot(out_dir):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    plt, out_dir = pyplot_for(out_dir)
     res = energy_momentum
     fig, ax = plt.subplots(figsize=(11, 4.5), constrained_layout=True)
     times = np.arange(0.0, T_END + 1e-9, 1.0)

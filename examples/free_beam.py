@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 import skfem_flex as sf
+from skfem_flex.plots import pyplot_for
 
 FORCE, DURATION = 100.0, 0.05
 T_END, DT = 4.0, 5e-3
@@ -35,17 +36,11 @@ def summary():
 
 
 if __name__ == "__main__":
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from skfem_flex.plots import plot_snapshots
 
     print(f"Free beam after a {FORCE:g} N, {DURATION:g} s half-sine pulse at the tip, Δt = {DT:g} s, {T_END:g} s")
     print(summary())
-    output = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parent / "output"
-    output.mkdir(parents=True, exist_ok=True)
+    plt, output = pyplot_for(sys.argv[1] if len(sys.argv) > 1 else Path(__file__).parent / "output")
 
     fig, ax = plt.subplots(3, 1, figsize=(7, 8), sharex=True)
     for s, r in runs.items():

@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 import skfem_flex as sf
+from skfem_flex.plots import pyplot_for
 
 SECTION = dict(length=10.0, EA=2.8e7, EI=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4)
 MESH = dict(n_elements=8, order=2)
@@ -65,12 +66,7 @@ def table():
 
 
 def plot(out_dir):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    plt, out_dir = pyplot_for(out_dir)
     fig, ax = plt.subplots(figsize=(7, 4.5), constrained_layout=True)
     ax.plot(LAMBDAS, LITERATURE, "ko", label="literature, in-plane (√(flapwise² − λ²))")
     fine = np.linspace(0, 12, 100)

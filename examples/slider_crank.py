@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 import skfem_flex as sf
+from skfem_flex.plots import pyplot_for
 from skfem_flex.scenes.mechanisms import SIMEON_REFERENCE
 
 OMEGA = 150.0
@@ -100,11 +101,6 @@ adds a free bending vibration to the same swing, so it is not compared with the 
 
 
 if __name__ == "__main__":
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     print("One crank revolution from the rigid-mechanism start, Δt = T/400, 8 elements")
     print(revolution_table())
     print("\nStep refinement of the mid-point deflection (energy-momentum, 4 elements, one revolution)")
@@ -114,8 +110,7 @@ if __name__ == "__main__":
     print()
     print(EXPLANATION)
 
-    output = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).parent / "output"
-    output.mkdir(parents=True, exist_ok=True)
+    plt, output = pyplot_for(sys.argv[1] if len(sys.argv) > 1 else Path(__file__).parent / "output")
 
     fig, ax = plt.subplots(3, 1, figsize=(7, 8), sharex=True)
     for s, r in revolution.items():

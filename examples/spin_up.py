@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 
 import skfem_flex as sf
+from skfem_flex.plots import pyplot_for
 
 OMEGAS = (4.0, 10.0)                 # rad/s
 STRAINS = ("green-lagrange", "linear")
@@ -100,12 +101,7 @@ def summary():
 
 
 def plot(out_dir):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    plt, out_dir = pyplot_for(out_dir)
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.2), constrained_layout=True)
     for ax, om in zip(axes, OMEGAS):
         for st, style in zip(STRAINS, ("-", "--")):

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 import skfem_flex as sf
+from skfem_flex.plots import pyplot_for
 
 MESHES = (8, 16, 32)
 T_END = 1.0
@@ -43,12 +44,7 @@ def summary():
 
 
 def plot(out_dir):
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    plt, out_dir = pyplot_for(out_dir)
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.6), constrained_layout=True)
     res, body = runs[finest], scenes[finest].bodies[0]
     cmap = plt.get_cmap("viridis")

@@ -11,7 +11,21 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["plot_energy", "plot_probes", "plot_constraints", "plot_snapshots", "save_plots"]
+__all__ = ["plot_energy", "plot_probes", "plot_constraints", "plot_snapshots", "save_plots", "pyplot_for"]
+
+
+def pyplot_for(directory):
+    """(``matplotlib.pyplot`` on the display-free Agg backend, ``directory`` as a Path, created).
+
+    For scripts (the examples) that draw their own figures with pyplot and save them as PNG.
+    """
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    return plt, directory
 
 
 def _figure(rows=1, cols=1, size=(7.0, 4.0), **kw):
