@@ -22,6 +22,7 @@ from .integrators import (ConvergenceError, EnergyMomentum, GeneralizedAlpha, Ne
                           Trapezoidal)
 from .result import Result
 from .simulate import simulate
+from .sweep import open_sweep, sweep
 from .output import VTKSeries
 from . import scenes
 
