@@ -8,11 +8,20 @@
     skfem-flex list
     skfem-flex study work-precision [CASE] [--schemes ...] [--quick] [--out DIR]
     skfem-flex study stability [--cases ...] [--schemes ...] [--quick] [--out DIR]
+    skfem-flex sweep SCENE --vary key=v1,v2,... [--vary ...] [--set key=value ...]
+                     [--t-end T] [--dt DT] [--integrator NAME] [--workers N | --scheduler ADDRESS]
+                     [--resume | --no-resume] [--probe NAME] [--out DIR]
 
 ``run`` builds a catalogue scene (default :data:`DEFAULT_SCENE`), integrates
 it and writes into DIR (default ``results/SCENE``): the VTK time series
 (``SCENE.pvd``, ``SCENE.vtu.series``, ``SCENE_NNNNNN.vtu``), ``summary.json``,
 ``result.npz`` (:meth:`skfem_flex.Result.load`), ``probes.csv`` and PNG plots.
+
+``sweep`` runs a scene over a grid of parameters as Dask tasks
+(:func:`skfem_flex.sweep.sweep`) and writes into DIR (default
+``results/sweep-SCENE``) the Zarr store ``sweep.zarr``, ``summary.csv``,
+``sweep.json`` (counts of computed and skipped cases) and
+``extremes_PROBE.png``; exit status 1 when a case did not complete.
 
 Exit status: 0 on success, 2 on bad input (unknown scene or parameter, a
 value of the wrong type, dt ≤ 0, an unwritable output directory; one line on
@@ -409,8 +418,143 @@ def _add_study(sub):
     p.set_defaults(func=_cmd_study)
 
 
+# --------------------------------------------------------------------- sweep
+def _sweep_grid(name, items):
+    """{name: [values]} from ``--vary key=v1,v2,...``, each value converted like ``--set`` (run settings too)."""
+    from . import scenes
+    from .sweep import RUN_SETTINGS
+
+    params = {p: d for p, d, _ in scenes.parameters(name)}
+    run_defaults = {"t_end": 0.0, "dt": 0.0, "integrator": ""}     # only their types matter
+    grid = {}
+    for item in items or ():
+        key, sep, text = item.partition("=")
+        key = key.strip()
+        values = [v.strip() for v in text.split(",")]
+        if not sep or not key or not all(values):
+            raise UsageError(f"--vary expects key=value1,value2,..., got {item!r}")
+        if key in grid:
+            raise UsageError(f"--vary {key} is given twice")
+        default = params.get(key, run_defaults.get(key) if key in RUN_SETTINGS else None)
+        default = None if default is inspect.Parameter.empty else default
+        # unknown names are reported by the sweep's plan, in the same words as for the API
+        try:
+            grid[key] = [convert_setting(key, v, default) for v in values]
+        except UsageError as exc:
+            raise UsageError(str(exc).replace(f"--set {key}=", f"--vary {key}=", 1)) from None
+    return grid
+
+
+def _cmd_sweep(args):
+    from . import scenes
+    from .plots import plot_sweep_extremes
+    from .output import _atomic_write_text
+    from .sweep import plan, probe_extremes, run_cases
+
+    if args.scene not in scenes.CATALOGUE:
+        raise UsageError(f"unknown scene {args.scene!r}; known scenes: {', '.join(sorted(scenes.CATALOGUE))}")
+    if not args.vary:
+        raise UsageError("give at least one --vary key=value1,value2,...")
+    grid = _sweep_grid(args.scene, args.vary)
+    fixed = _scene_settings(args.scene, args.set) if args.set else {}
+    clash = sorted(set(fixed) & set(grid))
+    if clash:
+        raise UsageError(f"{clash[0]} is both fixed (--set) and varied (--vary)")
+    for k, v in (("--dt", args.dt), ("--t-end", args.t_end)):
+        if v is not None and (not math.isfinite(v) or v <= 0):
+            raise UsageError(f"{k} must be a positive number of seconds, got {v!r}")
+    options = {} if args.rho_inf is None else {"rho_inf": args.rho_inf}
+    try:
+        specs = plan(args.scene, vary=grid, fixed=fixed, t_end=args.t_end, dt=args.dt, integrator=args.integrator,
+                     record_every=args.record_every, **options)
+    except (ValueError, TypeError) as exc:
+        raise UsageError(_one_line(exc)) from None
+    out = Path(args.out) if args.out is not None else Path("results") / f"sweep-{args.scene}"
+    _prepare_out(out)
+    client = args.scheduler if args.scheduler else None
+    start = time.perf_counter()
+    ds = run_cases(specs, store=out / "sweep.zarr", client=client, resume=args.resume, n_workers=args.workers,
+                   progress=not args.quiet)
+    wall = time.perf_counter() - start
+
+    probes = [k[len("probe_"):] for k in ds.data_vars if k.startswith("probe_")]
+    probe = args.probe if args.probe is not None else (probes[0] if probes else None)
+    columns = list(grid) + ["status", "steps", "wall_time", "newton_per_step", "max_energy_balance_error"]
+    table = ds[columns].reset_coords().drop_vars([k for k in ds.coords if k not in columns], errors="ignore")
+    table = table.to_dataframe().reset_index(drop=True)
+    files = {"store": out / "sweep.zarr", "summary_csv": out / "summary.csv"}
+    if probe is not None:
+        try:
+            ext = probe_extremes(ds, probe)
+        except ValueError as exc:
+            raise UsageError(f"--probe: {_one_line(exc)}") from None
+        comps = ext.values.reshape(ds.sizes["case"], -1)
+        for c in range(comps.shape[1]):
+            table[f"{probe} extreme" + (f"[{c}]" if comps.shape[1] > 1 else "")] = comps[:, c]
+        files["plot"] = out / f"extremes_{probe}.png"
+        plot_sweep_extremes(comps, {k: ds[k].values for k in grid}, files["plot"],
+                            title=f"{args.scene}: extreme of probe {probe!r}")
+    table["message"] = ds["message"].values
+    table.to_csv(files["summary_csv"], index=False)
+    status = ds["status"].values
+    report = {"scene": args.scene, "cases": int(ds.sizes["case"]), "computed": int(ds.attrs["computed"]),
+              "skipped": int(ds.attrs["skipped"]), "wall_time_s": wall,
+              "status": {k: int((status == k).sum()) for k in dict.fromkeys(status.tolist())},
+              "outputs": {k: str(v) for k, v in files.items()}}
+    _atomic_write_text(out / "sweep.json", json.dumps(_jsonable(report), indent=2) + "\n")
+    if not args.quiet:
+        import pandas as pd
+        with pd.option_context("display.width", 200, "display.max_columns", 30, "display.max_colwidth", 60):
+            print(table.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
+        print(f"{report['cases']} cases: {report['computed']} computed, {report['skipped']} read from the store, "
+              f"in {wall:.1f} s; outputs in {out.resolve()}/ (sweep.zarr, summary.csv, sweep.json"
+              + (f", {files['plot'].name})" if "plot" in files else ")"))
+    bad = int((status != "completed").sum())
+    if bad:
+        print(f"skfem-flex: {bad} of {len(status)} cases did not complete (status and message in "
+              f"{files['summary_csv']})", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _add_sweep(sub):
+    from .integrators import INTEGRATORS
+
+    p = sub.add_parser("sweep", help="run a scene over a parameter grid on Dask; results as an xarray/Zarr store",
+                       description="Run a catalogue scene for every combination of the --vary values, one Dask "
+                                   "task per case (a local cluster of worker processes, or --scheduler). Writes "
+                                   "the Zarr store sweep.zarr (open with skfem_flex.open_sweep or xarray), "
+                                   "summary.csv, sweep.json and a PNG of a probe's extreme against the varied "
+                                   "parameters into --out. Cases already in the store are not run again "
+                                   "(--no-resume recomputes them).")
+    p.add_argument("scene", metavar="SCENE", help="scene name from 'skfem-flex list'")
+    p.add_argument("--vary", action="append", default=[], metavar="KEY=V1,V2,...",
+                   help="a scene parameter (or t_end, dt, integrator) and its values (repeatable: a grid)")
+    p.add_argument("--set", action="extend", nargs="+", metavar="KEY=VALUE", default=[],
+                   help="a scene parameter fixed for every case (repeatable)")
+    p.add_argument("--t-end", type=_number, default=None, metavar="T", help="end time, s (default: the scene's)")
+    p.add_argument("--dt", type=_number, default=None, metavar="DT", help="time step, s (default: the scene's)")
+    p.add_argument("--integrator", choices=sorted(INTEGRATORS), default="energy-momentum",
+                   help="time integrator (default: energy-momentum)")
+    p.add_argument("--rho-inf", type=_number, default=None, metavar="R",
+                   help="spectral radius of generalized-alpha (default 0.9)")
+    p.add_argument("--record-every", type=_positive_int, default=1, metavar="N",
+                   help="store every N-th step (default 1)")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=_positive_int, default=None, metavar="N",
+                       help="worker processes of the local Dask cluster (default: one per core)")
+    where.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                       help="address of a running Dask scheduler (e.g. tcp://host:8786) to run the cases on")
+    p.add_argument("--resume", action=argparse.BooleanOptionalAction, default=True,
+                   help="skip cases already in the store (default); --no-resume recomputes them")
+    p.add_argument("--probe", default=None, metavar="NAME", help="probe whose extreme is plotted (default: the first)")
+    p.add_argument("--out", default=None, metavar="DIR", help="output directory (default: results/sweep-SCENE)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar and no table")
+    p.set_defaults(func=_cmd_sweep)
+
+
 #: functions adding one subcommand each to the subparsers
-SUBCOMMANDS = [_add_run, _add_list, _add_study]
+SUBCOMMANDS = [_add_run, _add_list, _add_study, _add_sweep]
 
 
 def build_parser():

@@ -11,7 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["plot_energy", "plot_probes", "plot_constraints", "plot_snapshots", "save_plots", "pyplot_for"]
+__all__ = ["plot_energy", "plot_probes", "plot_constraints", "plot_snapshots", "save_plots", "pyplot_for",
+           "plot_sweep_extremes"]
 
 
 def pyplot_for(directory):
@@ -199,3 +200,39 @@ def save_plots(scene, result, directory, prefix=""):
         job(p)
         out[name] = p
     return out
+
+
+def plot_sweep_extremes(extremes, parameters, path=None, title=""):
+    """A probe's extreme against the varied parameters of a sweep: one panel per component.
+
+    Parameters
+    ----------
+    extremes : array (n_cases,) or (n_cases, n_components)
+        Signed extreme of the probe per case (see :func:`skfem_flex.sweep.probe_extremes`).
+    parameters : dict of str to array (n_cases,)
+        The varied parameters. The first one is the x axis; every
+        combination of the others is a line of its own. Cases whose extreme
+        is NaN (failed before recording) are left out.
+    """
+    ext = np.asarray(extremes, dtype=float).reshape(len(np.asarray(next(iter(parameters.values())))), -1)
+    names = list(parameters)
+    x = np.asarray(parameters[names[0]])
+    others = [np.asarray(parameters[k]) for k in names[1:]]
+    groups = list(dict.fromkeys(zip(*others))) if others else [()]
+    fig, ax = _figure(ext.shape[1], 1, size=(7.0, 1.4 + 2.6 * ext.shape[1]), sharex=True)
+    numeric = np.issubdtype(x.dtype, np.number)
+    for c, a in enumerate(ax[:, 0]):
+        for g, combo in enumerate(groups):
+            sel = np.array([tuple(o[i] for o in others) == combo for i in range(len(x))], dtype=bool)
+            sel &= np.isfinite(ext[:, c])
+            order = np.argsort(x[sel], kind="stable") if numeric else np.arange(sel.sum())
+            label = ", ".join(f"{k} = {v}" for k, v in zip(names[1:], combo)) or None
+            a.plot(x[sel][order], ext[sel, c][order], "o-", color=f"C{g % 10}", label=label)
+        a.set_ylabel(f"extreme [{c}]" if ext.shape[1] > 1 else "extreme")
+        a.grid(alpha=0.3)
+        if others:
+            a.legend(fontsize="small")
+    ax[-1, 0].set_xlabel(names[0])
+    if title:
+        fig.suptitle(title)
+    return _finish(fig, path)

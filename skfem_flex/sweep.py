@@ -33,7 +33,8 @@ Cases of different lengths (another ``dt`` or ``t_end``, or a run that stopped
 early) share the ``time`` dimension as the index of the recorded step: shorter
 cases are padded with NaN, ``n_times`` holds each case's own length and the
 variable ``t`` (case, time) its times. When every case has the same times they
-also become the ``time`` coordinate.
+also become the ``time`` coordinate. Other dimensions that differ between
+cases (``q_dof`` of meshes with more or fewer elements) are padded the same way.
 """
 from __future__ import annotations
 
@@ -56,12 +57,13 @@ import numpy as np
 
 from .errors import SimulationError
 
-__all__ = ["sweep", "plan", "run_cases", "open_sweep", "CaseSpec", "BudgetExceeded", "WallClockBudget",
+__all__ = ["sweep", "plan", "run_cases", "open_sweep", "probe_extremes", "CaseSpec", "BudgetExceeded", "WallClockBudget",
            "RUN_SETTINGS", "RECORD_GROUPS", "DEFAULT_RECORD", "STATUSES"]
 
 #: run settings a case may vary like a scene parameter (``vary={"dt": [...]}``)
 RUN_SETTINGS = ("t_end", "dt", "integrator")
-#: further keyword arguments of :func:`~skfem_flex.simulate.simulate` a sweep passes on (part of the key)
+#: further keyword arguments of :func:`~skfem_flex.simulate.simulate` a sweep passes on (part of the key;
+#: a case may vary them too)
 SIMULATE_OPTIONS = ("rho_inf", "newton", "max_halvings", "project", "compiled")
 #: time series a case can store: group -> Result attributes
 RECORD_GROUPS = {
@@ -263,7 +265,7 @@ def plan(scene, vary=None, cases=None, *, fixed=None, t_end=None, dt=None, integ
     specs = []
     for i, row in enumerate(rows):
         row = {k: _plain(v) for k, v in {**(fixed or {}), **row}.items()}
-        params = {k: v for k, v in row.items() if k not in RUN_SETTINGS}
+        params = {k: v for k, v in row.items() if k not in RUN_SETTINGS + SIMULATE_OPTIONS}
         run = {k: row.get(k, base[k]) for k in RUN_SETTINGS}
         for k in ("t_end", "dt"):
             if run[k] is None:
@@ -284,7 +286,7 @@ def plan(scene, vary=None, cases=None, *, fixed=None, t_end=None, dt=None, integ
             params = {k: float(v) if isinstance(defaults[k], float) and isinstance(v, int)
                       and not isinstance(v, bool) else v for k, v in params.items()}
         settings = {**run, "record_every": record_every, "budget": budget,
-                    **{k: options[k] for k in SIMULATE_OPTIONS if k in options}}
+                    **{k: row.get(k, options.get(k)) for k in SIMULATE_OPTIONS if k in row or k in options}}
         spec = CaseSpec(factory if not isinstance(scene, str) else scene_name, scene_name, params, settings,
                         record, measures, label, i)
         spec.key                # raises TypeError now for values that cannot be keyed
@@ -507,15 +509,21 @@ def _combine(cases, attrs=None):
 
     if not cases:
         return xr.Dataset(coords={"case": np.array([], dtype=str)}, attrs=dict(attrs or {}))
-    n = max(ds.sizes.get("time", 0) for ds in cases)
-    padded = [ds.pad(time=(0, n - ds.sizes.get("time", 0))) if ds.sizes.get("time", 0) < n else ds for ds in cases]
-    padded = [ds.drop_attrs() for ds in padded]
+    # time (and any other dimension: q of different meshes) padded with NaN to the longest case
+    size = {}
+    for ds in cases:
+        for d, n in ds.sizes.items():
+            size[d] = max(size.get(d, 0), n)
+    padded = []
+    for ds in cases:
+        short = {d: (0, size[d] - n) for d, n in ds.sizes.items() if n < size[d]}
+        padded.append((ds.pad(short) if short else ds).drop_attrs())
     out = xr.concat(padded, dim="case", join="outer", data_vars="all", coords="different", compat="equals")
     params = [json.loads(ds.attrs["parameters"]) for ds in cases]
     settings = [json.loads(ds.attrs["settings"]) for ds in cases]
     coords = {"case": [ds.attrs["key"] for ds in cases], "scene": _column([ds.attrs["scene"] for ds in cases]),
               "label": _column([ds.attrs.get("label", "") for ds in cases])}
-    for k in RUN_SETTINGS:
+    for k in RUN_SETTINGS + tuple(k for k in SIMULATE_OPTIONS if any(k in s for s in settings)):
         coords[k] = _column([s.get(k) for s in settings])
     for k in dict.fromkeys(k for p in params for k in p):
         coords[k] = _column([p.get(k) for p in params])
@@ -526,6 +534,36 @@ def _combine(cases, attrs=None):
     out.attrs.update(attrs or {})
     out.attrs["settings"] = json.dumps(settings[0]) if all(s == settings[0] for s in settings) else ""
     return out
+
+
+def probe_extremes(ds, probe):
+    """The signed extreme (the value of largest magnitude over time) of a probe, per case and component.
+
+    Parameters
+    ----------
+    ds : xarray.Dataset
+        A sweep's Dataset.
+    probe : str
+        Probe name (the variable ``probe_<name>``).
+
+    Returns
+    -------
+    xarray.DataArray
+        Dimensions ``case`` and the probe's component dimension (if any);
+        NaN for cases without a history.
+
+    Raises
+    ------
+    ValueError
+        When the Dataset has no such probe (the message lists the probes it has).
+    """
+    var = f"probe_{probe}".replace("/", "_")
+    if var not in ds:
+        have = [k[len("probe_"):] for k in ds.data_vars if k.startswith("probe_")]
+        raise ValueError(f"the sweep recorded no probe {probe!r}; it has: {', '.join(have) or 'none'}")
+    x = ds[var]
+    where = abs(x).fillna(-1.0).argmax("time")
+    return x.isel(time=where).where(ds["n_times"] > 0).drop_vars("time", errors="ignore")
 
 
 # ------------------------------------------------------------------- run
@@ -633,8 +671,8 @@ def sweep(scene, vary=None, cases=None, *, t_end=None, dt=None, integrator="ener
         (it must pickle; a lambda needs ``name``).
     vary : dict of str to list, optional
         Grid: every combination of the values (``itertools.product``, last
-        name fastest). Names are factory parameters or the run settings
-        ``t_end``, ``dt``, ``integrator``.
+        name fastest). Names are factory parameters, the run settings
+        ``t_end``, ``dt``, ``integrator`` or the simulate options (below).
     cases : list of dict, optional
         Explicit cases instead of a grid (same names as ``vary``).
     t_end, dt : float, optional

@@ -1,0 +1,220 @@
+"""Parameter sweeps on a local Dask cluster: bit-for-bit equality with serial runs, faults, resume."""
+import json
+import logging
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import xarray as xr
+from distributed import Client, LocalCluster
+
+import skfem_flex as sf
+from skfem_flex.integrators import NewtonSettings
+from skfem_flex.sweep import open_sweep, plan, probe_extremes
+
+ROOT = Path(__file__).resolve().parents[1]
+GRID = {"omega": [4.0, 6.0, 8.0, 10.0], "n_elements": [2, 3, 4, 6]}
+
+
+@pytest.fixture(scope="module")
+def client():
+    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None,
+                           silence_logs=logging.ERROR)
+    c = Client(cluster)
+    yield c
+    c.close()
+    cluster.close()
+
+
+def _same(case, res):
+    """Every stored history of a case equals the serial Result exactly."""
+    n = int(case.n_times)
+    pairs = [(case.t, res.t), (case.probe_tip, res.probes["tip"]), (case.q, res.q), (case.v, res.v),
+             (case.kinetic, res.kinetic), (case.potential, res.potential), (case.external_work, res.external_work),
+             (case.energy_balance_error, res.energy_balance_error), (case.newton_iterations, res.newton_iterations),
+             (case.constraint_residual, res.constraint_residual)]
+    for a, b in pairs:
+        a = a.values
+        own = a[tuple(slice(0, m) for m in b.shape)]     # the rest is NaN padding (other meshes are larger)
+        if not (np.array_equal(own, b) and np.isnan(a).sum() == a.size - b.size):
+            return False
+    return n == len(res.t) and int(case.steps) == res.steps
+
+
+def test_sixteen_cases_on_two_workers_equal_serial_runs_bit_for_bit(client, tmp_path):
+    record = ("probes", "energy", "residuals", "newton", "state")
+    ds = sf.sweep("spin_up_beam", vary=GRID, t_end=1.0, dt=0.01, record=record, store=tmp_path / "s.zarr",
+                  client=client)
+    assert ds.sizes["case"] == 16 and ds.attrs["computed"] == 16 and ds.attrs["skipped"] == 0
+    assert set(ds.status.values) == {"completed"}
+    assert len(set(ds.worker.values)) == 2          # the cases really were spread over both workers
+    # grid order: itertools.product, last name fastest
+    assert list(ds.omega.values) == [w for w in GRID["omega"] for _ in GRID["n_elements"]]
+    assert list(ds.n_elements.values) == GRID["n_elements"] * 4
+    for i in range(16):
+        case = ds.isel(case=i)
+        res = sf.simulate(sf.scenes.spin_up_beam(omega=float(case.omega), n_elements=int(case.n_elements)), 1.0, 0.01)
+        assert _same(case, res), f"case {i} differs from the serial run"
+    # the store holds the same numbers and opens with plain xarray as one group per case
+    stored = open_sweep(tmp_path / "s.zarr")
+    assert stored.sizes["case"] == 16
+    xr.testing.assert_identical(stored.drop_attrs(), ds.drop_attrs())
+    tree = xr.open_datatree(tmp_path / "s.zarr", engine="zarr", consolidated=False)
+    assert len(tree.children) == 16
+    # same plan again: nothing is computed
+    again = sf.sweep("spin_up_beam", vary=GRID, t_end=1.0, dt=0.01, record=record, store=tmp_path / "s.zarr",
+                     client=client)
+    assert (again.attrs["computed"], again.attrs["skipped"]) == (0, 16)
+    # another setting is another case: dt enters the key
+    other = sf.sweep("spin_up_beam", vary={"omega": [4.0]}, t_end=1.0, dt=0.02, record=record,
+                     store=tmp_path / "s.zarr", client="serial")
+    assert other.attrs["computed"] == 1 and len(open_sweep(tmp_path / "s.zarr").case) == 17
+
+
+def test_a_failing_case_is_recorded_and_the_others_are_unaffected(client, tmp_path):
+    no_newton = NewtonSettings(max_iterations=1)
+    cases = [{"omega": 4.0}, {"n_elements": 0}, {"omega": 6.0, "newton": no_newton, "max_halvings": 0},
+             {"omega": 6.0}, {"omega": 4.0, "dt": 0.05}]
+    ds = sf.sweep("spin_up_beam", cases=cases, t_end=0.5, dt=0.01, store=tmp_path / "f.zarr", client=client)
+    assert list(ds.status.values) == ["completed", "error", "failed", "completed", "completed"]
+    assert "n_elements must be a positive integer, got 0" in str(ds.message.values[1])
+    assert "ValueError" in str(ds.message.values[1]) and int(ds.n_times[1]) == 0
+    assert "Newton" in str(ds.message.values[2]) or "converge" in str(ds.message.values[2]).lower()
+    assert int(ds.n_times[2]) >= 1              # the history up to the failure is kept (here: the initial state)
+    # cases with another step have fewer times: padded with NaN, their own length recorded
+    assert int(ds.n_times[4]) == 11 and np.isnan(ds.t.values[4, 11:]).all() and "time" not in ds.coords
+    for i, kw in ((0, {}), (3, {"omega": 6.0})):
+        res = sf.simulate(sf.scenes.spin_up_beam(**kw), 0.5, 0.01)
+        assert _same_without_state(ds.isel(case=i), res)
+    short = sf.simulate(sf.scenes.spin_up_beam(), 0.5, 0.05)
+    assert _same_without_state(ds.isel(case=4), short)
+    # failures are stored like any case, with their status
+    stored = open_sweep(tmp_path / "f.zarr")
+    assert list(stored.status.values) == list(ds.status.values)
+    ext = probe_extremes(ds, "tip")
+    assert np.isnan(ext.values[1]).all() and np.all(np.abs(ext.values[0]) > 0)
+    assert float(ext.values[0, 1]) == pytest.approx(ds.probe_tip.values[0, :, 1][
+        np.nanargmax(np.abs(ds.probe_tip.values[0, :, 1]))])
+
+
+def _same_without_state(case, res):
+    n = int(case.n_times)
+    return n == len(res.t) and np.array_equal(case.probe_tip.values[:n], res.probes["tip"]) \
+        and np.array_equal(case.total_energy.values[:n], res.total_energy)
+
+
+def test_bad_plans_are_rejected_before_anything_runs(tmp_path):
+    with pytest.raises(ValueError, match="no parameter 'omegax'"):
+        plan("spin_up_beam", vary={"omegax": [1.0]}, t_end=1.0, dt=0.1)
+    with pytest.raises(ValueError, match="unknown scene 'nope'"):
+        plan("nope", vary={"omega": [1.0]}, t_end=1.0, dt=0.1)
+    with pytest.raises(ValueError, match="not both"):
+        plan("spin_up_beam", vary={"omega": [1.0]}, cases=[{}], t_end=1.0, dt=0.1)
+    with pytest.raises(ValueError, match="give name="):
+        plan(lambda: sf.scenes.pendulum(), t_end=1.0, dt=0.1)
+    with pytest.raises(TypeError, match="unexpected option"):
+        plan("pendulum", t_end=1.0, dt=0.1, progress=True)
+    with pytest.raises(ValueError, match="integrator"):
+        plan("pendulum", t_end=1.0, dt=0.1, integrator="euler")
+    # an int for a float parameter is the same case as the float
+    assert plan("spin_up_beam", vary={"omega": [4]}, t_end=1, dt=0.1)[0].key == \
+        plan("spin_up_beam", vary={"omega": [4.0]}, t_end=1, dt=0.1)[0].key
+    (tmp_path / "not_a_store").mkdir()
+    with pytest.raises(ValueError, match="not a sweep store"):
+        open_sweep(tmp_path / "not_a_store")
+
+
+def test_worker_killed_mid_case_the_sweep_still_completes_every_case(client, tmp_path):
+    # case 0 is slow (about 2 s), so the kill lands while it runs; the others are short
+    cases = [{"n_elements": 16, "t_end": 20.0}] + [{"omega": w} for w in (4.0, 5.0, 6.0, 7.0)]
+    slow = plan("spin_up_beam", cases=cases, t_end=1.0, dt=1e-3)[0].task_name
+    pids = client.run(os.getpid)
+    out = {}
+    runner = threading.Thread(target=lambda: out.update(ds=sf.sweep(
+        "spin_up_beam", cases=cases, t_end=1.0, dt=1e-3, store=tmp_path / "k.zarr", client=client)))
+    runner.start()
+    victim, deadline = None, time.monotonic() + 30
+    while victim is None and time.monotonic() < deadline:
+        for addr, keys in client.processing().items():
+            if slow in keys:
+                victim = addr
+        time.sleep(0.05)
+    assert victim is not None, "the slow case never started"
+    time.sleep(0.5)                               # well inside the ~2 s case
+    assert slow in client.processing()[victim], "the slow case finished before the kill"
+    os.kill(pids[victim], signal.SIGKILL)
+    runner.join(timeout=120)
+    ds = out["ds"]
+    assert list(ds.status.values) == ["completed"] * 5
+    assert float(ds.t_reached[0]) == pytest.approx(20.0)
+    # the slow case was finished by a worker process other than the one killed
+    assert not str(ds.worker.values[0]).endswith(f":{pids[victim]}")
+    assert len(open_sweep(tmp_path / "k.zarr").case) == 5
+
+
+def _cli(*args):
+    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    return subprocess.Popen([sys.executable, "-m", "skfem_flex", "sweep", *args], env=env, cwd=ROOT,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+
+
+def _finished(store):
+    return sorted(d.name for d in store.iterdir() if d.is_dir() and not d.name.startswith(".")) \
+        if store.exists() else []
+
+
+def test_driver_killed_then_resume_computes_only_the_missing_cases(tmp_path):
+    out = tmp_path / "run"
+    store = out / "sweep.zarr"
+    args = ["spin_up_beam", "--vary", "omega=4,5,6,7,8,9,10,11", "--t-end", "3", "--dt", "1e-3",
+            "--workers", "1", "--out", str(out), "--quiet"]
+    proc = _cli(*args)
+    opened = 0
+    try:
+        deadline = time.monotonic() + 90
+        while len(_finished(store)) < 2 and time.monotonic() < deadline and proc.poll() is None:
+            if store.exists():
+                # the store opens with xarray at any moment while the sweep writes
+                tree = xr.open_datatree(store, engine="zarr", consolidated=False)
+                assert len(tree.children) <= len(open_sweep(store).case)
+                opened += 1
+            time.sleep(0.05)
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL)      # the driver and the cluster it started
+        proc.communicate()
+    done = _finished(store)
+    assert 2 <= len(done) < 8, f"{len(done)} cases were finished when the driver was killed"
+    assert opened > 0
+    # after the kill: opens with xarray, every case in it complete
+    killed = open_sweep(store)
+    assert set(killed.status.values) == {"completed"} and len(killed.case) == len(done)
+    assert np.all(killed.n_times.values == 3001)
+    before = {k: (store / k).stat().st_ino for k in done}
+    proc = _cli(*args[:-1], "--resume")
+    stdout, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 0, stderr
+    report = json.loads((out / "sweep.json").read_text())
+    assert (report["computed"], report["skipped"], report["cases"]) == (8 - len(done), len(done), 8)
+    assert "read from the store" in stdout
+    assert {k: (store / k).stat().st_ino for k in done} == before    # the finished cases were not rewritten
+    final = open_sweep(store)
+    assert len(final.case) == 8 and set(final.status.values) == {"completed"}
+    assert sorted(final.omega.values) == [4.0, 5.0, 6.0, 7.0, 8.0, 9.0, 10.0, 11.0]
+    assert not any(p.name.startswith(".") for p in store.iterdir() if p.is_dir())
+    assert (out / "extremes_tip.png").stat().st_size > 0 and (out / "summary.csv").exists()
+
+
+def test_cli_sweep_rejects_bad_input_with_one_line_and_status_2(tmp_path):
+    for args, text in ((["nope", "--vary", "omega=1"], "unknown scene 'nope'"),
+                       (["spin_up_beam", "--vary", "omegax=1"], "no parameter 'omegax'"),
+                       (["spin_up_beam", "--vary", "n_elements=4.5"], "--vary n_elements=4.5"),
+                       (["spin_up_beam"], "--vary")):
+        proc = _cli(*args, "--out", str(tmp_path / "x"))
+        stdout, stderr = proc.communicate(timeout=60)
+        assert proc.returncode == 2 and text in stderr and len(stderr.strip().splitlines()) == 1, stderr
