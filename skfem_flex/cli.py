@@ -10,7 +10,7 @@
     skfem-flex study stability [--cases ...] [--schemes ...] [--quick] [--out DIR]
     skfem-flex sweep SCENE --vary key=v1,v2,... [--vary ...] [--set key=value ...]
                      [--t-end T] [--dt DT] [--integrator NAME] [--workers N | --scheduler ADDRESS]
-                     [--resume | --no-resume] [--probe NAME] [--out DIR]
+                     [--resume | --no-resume] [--format netcdf|zarr] [--probe NAME] [--out DIR]
 
 ``run`` builds a catalogue scene (default :data:`DEFAULT_SCENE`), integrates
 it and writes into DIR (default ``results/SCENE``): the VTK time series
@@ -19,7 +19,8 @@ it and writes into DIR (default ``results/SCENE``): the VTK time series
 
 ``sweep`` runs a scene over a grid of parameters as Dask tasks
 (:func:`skfem_flex.sweep.sweep`) and writes into DIR (default
-``results/sweep-SCENE``) the Zarr store ``sweep.zarr``, ``summary.csv``,
+``results/sweep-SCENE``) the store ``sweep/`` (netCDF per case; ``sweep.zarr``
+with ``--format zarr``), ``summary.csv``,
 ``sweep.json`` (counts of computed and skipped cases) and
 ``extremes_PROBE.png``; exit status 1 when a case did not complete.
 
@@ -473,7 +474,8 @@ def _cmd_sweep(args):
     _prepare_out(out)
     client = args.scheduler if args.scheduler else None
     start = time.perf_counter()
-    ds = run_cases(specs, store=out / "sweep.zarr", client=client, resume=args.resume, n_workers=args.workers,
+    store = out / ("sweep.zarr" if args.format == "zarr" else "sweep")
+    ds = run_cases(specs, store=store, client=client, resume=args.resume, n_workers=args.workers,
                    progress=not args.quiet)
     wall = time.perf_counter() - start
 
@@ -482,7 +484,7 @@ def _cmd_sweep(args):
     columns = list(grid) + ["status", "steps", "wall_time", "newton_per_step", "max_energy_balance_error"]
     table = ds[columns].reset_coords().drop_vars([k for k in ds.coords if k not in columns], errors="ignore")
     table = table.to_dataframe().reset_index(drop=True)
-    files = {"store": out / "sweep.zarr", "summary_csv": out / "summary.csv"}
+    files = {"store": store, "summary_csv": out / "summary.csv"}
     if probe is not None:
         try:
             ext = probe_extremes(ds, probe)
@@ -507,7 +509,7 @@ def _cmd_sweep(args):
         with pd.option_context("display.width", 200, "display.max_columns", 30, "display.max_colwidth", 60):
             print(table.to_string(index=False, float_format=lambda x: f"{x:.4g}"))
         print(f"{report['cases']} cases: {report['computed']} computed, {report['skipped']} read from the store, "
-              f"in {wall:.1f} s; outputs in {out.resolve()}/ (sweep.zarr, summary.csv, sweep.json"
+              f"in {wall:.1f} s; outputs in {out.resolve()}/ ({store.name}, summary.csv, sweep.json"
               + (f", {files['plot'].name})" if "plot" in files else ")"))
     bad = int((status != "completed").sum())
     if bad:
@@ -523,7 +525,7 @@ def _add_sweep(sub):
     p = sub.add_parser("sweep", help="run a scene over a parameter grid on Dask; results as an xarray/Zarr store",
                        description="Run a catalogue scene for every combination of the --vary values, one Dask "
                                    "task per case (a local cluster of worker processes, or --scheduler). Writes "
-                                   "the Zarr store sweep.zarr (open with skfem_flex.open_sweep or xarray), "
+                                   "the store (DIR/sweep or DIR/sweep.zarr; open with skfem_flex.open_sweep or xarray), "
                                    "summary.csv, sweep.json and a PNG of a probe's extreme against the varied "
                                    "parameters into --out. Cases already in the store are not run again "
                                    "(--no-resume recomputes them).")
@@ -547,6 +549,9 @@ def _add_sweep(sub):
                        help="address of a running Dask scheduler (e.g. tcp://host:8786) to run the cases on")
     p.add_argument("--resume", action=argparse.BooleanOptionalAction, default=True,
                    help="skip cases already in the store (default); --no-resume recomputes them")
+    p.add_argument("--format", choices=["netcdf", "zarr"], default="netcdf",
+                   help="store layout: one netCDF file per case in DIR/sweep (default) or a Zarr hierarchy "
+                        "DIR/sweep.zarr")
     p.add_argument("--probe", default=None, metavar="NAME", help="probe whose extreme is plotted (default: the first)")
     p.add_argument("--out", default=None, metavar="DIR", help="output directory (default: results/sweep-SCENE)")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no table")
