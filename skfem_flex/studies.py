@@ -1,15 +1,16 @@
 """Studies: error against run time (work–precision) and stability on stiff and extreme cases.
 
-Both studies run catalogue scenes through :func:`~skfem_flex.simulate.simulate`,
-catch every failure (a failed run is a row with its message and the time it
-happened, never a crash) and return plain tables that the command line
-writes as Markdown, CSV and PNG.
+Both studies run catalogue scenes through :func:`~skfem_flex.simulate.simulate`
+as the cases of a sweep (:mod:`skfem_flex.sweep`: in this process by default,
+on a Dask cluster with ``client=``, resumable with ``store=``), catch every
+failure (a failed run is a row with its message and the time it happened,
+never a crash) and return plain tables that the command line writes as
+Markdown, CSV and PNG.
 """
 from __future__ import annotations
 
 import csv
 import math
-import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Callable
@@ -18,7 +19,6 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.special import ellipk, gamma
 
-from .integrators import SimulationError
 from .simulate import simulate
 
 __all__ = ["WorkPrecisionRow", "StabilityRow", "work_precision", "stability", "write_table",
@@ -168,7 +168,8 @@ WORK_PRECISION_CASES = {"spring_mass": _quartic_case, "pendulum": _pendulum_case
                         "rotating_beam": _rotating_beam_case}
 
 
-def work_precision(case, schemes=SCHEMES, dts=None, out_dir=None, name="case", progress=None):
+def work_precision(case, schemes=SCHEMES, dts=None, out_dir=None, name="case", progress=None, store=None,
+                   client="serial", resume=True):
     """Error against run time for every scheme and step.
 
     Parameters
@@ -182,12 +183,20 @@ def work_precision(case, schemes=SCHEMES, dts=None, out_dir=None, name="case", p
         Where a reference run is saved (``reference_<name>.npz``) and reused.
     progress : callable(str), optional
         Called with a line per run.
+    store, client, resume
+        As in :func:`skfem_flex.sweep.sweep`: the runs are the cases of a
+        sweep (scheme × dt) keyed ``work-precision:<name>``. The default
+        client ``"serial"`` runs them one after another in this process, so
+        that their wall times are not disturbed by each other; with a
+        ``store`` a rerun reuses the runs already there (timings included).
 
     Returns
     -------
     list of WorkPrecisionRow
         Failed runs have ``error = nan`` and their message.
     """
+    from .sweep import plan, run_cases
+
     if isinstance(case, str):
         if case not in WORK_PRECISION_CASES:
             raise ValueError(f"no work-precision case {case!r}; known: {sorted(WORK_PRECISION_CASES)}")
@@ -199,23 +208,24 @@ def work_precision(case, schemes=SCHEMES, dts=None, out_dir=None, name="case", p
     if error_fn is None:
         ref = _reference(case, out_dir, name)
         error_fn = history_error(ref, case.probe)
-    rows = []
-    for scheme in schemes:
-        for dt in dts:
-            scene = case.scene()
-            try:
-                res = simulate(scene, case.t_end, dt, integrator=scheme)
-                err, msg = float(error_fn(res)), ""
-                if not np.isfinite(err):
-                    msg = "error not measurable (no full period)"
-            except SimulationError as exc:
-                res, err, msg = exc.result, float("nan"), str(exc)
-            steps = max(int(res.steps), 1)
-            rows.append(WorkPrecisionRow(name, scheme, float(dt), int(res.steps), float(res.wall_time), err,
-                                         float(np.sum(res.newton_iterations)) / steps, msg))
-            if progress:
-                progress(f"{name} {scheme} dt={dt:.3g}: error {err:.3g}, {res.wall_time:.3g} s")
-    return rows
+    specs = plan(case.scene, vary={"integrator": list(schemes), "dt": [float(d) for d in dts]}, t_end=case.t_end,
+                 record=(), measures={"error": error_fn}, name=f"work-precision:{name}", label=name)
+
+    def row(spec, c):
+        err, msg = float(c["error"]) if "error" in c else float("nan"), str(c["message"].item())
+        if c["status"].item() != "completed":
+            err = float("nan")
+        elif not np.isfinite(err) and not msg:
+            msg = "error not measurable (no full period)"
+        steps = int(c["steps"])
+        r = WorkPrecisionRow(name, spec.settings["integrator"], float(spec.settings["dt"]), steps,
+                             float(c["wall_time"]), err, float(c["newton_total"]) / max(steps, 1), msg)
+        if progress:
+            progress(f"{name} {r.scheme} dt={r.dt:.3g}: error {r.error:.3g}, {r.wall_time:.3g} s")
+        return r
+    rows = {}
+    run_cases(specs, store=store, client=client, resume=resume, on_case=lambda s, c: rows.update({s.index: row(s, c)}))
+    return [rows[s.index] for s in specs]
 
 
 def _reference(case, out_dir, name):
@@ -350,21 +360,20 @@ STABILITY_CASES = {
 }
 
 
-class _WallClockBudget:
-    """Output sink that stops a run once it has used ``seconds`` of wall time (the result is kept)."""
-
-    def __init__(self, seconds):
-        self.seconds, self.start = float(seconds), time.perf_counter()
-
-    def write(self, scene, t, q, v):
-        if time.perf_counter() - self.start > self.seconds:
-            raise SimulationError(f"stopped: wall-clock budget of {self.seconds:g} s used up at t = {t:.6g} s")
-
-    def close(self):
-        pass
+def _energy_error(scale_fn):
+    """A measure: max |energy balance error| / scale (scale_fn(result), default max(|T| + |V|))."""
+    def measure(res):
+        scale = scale_fn(res) if scale_fn else float(np.max(np.abs(res.kinetic) + np.abs(res.potential)))
+        return float(np.max(np.abs(res.energy_balance_error))) / max(scale, 1e-300)
+    return measure
 
 
-def stability(cases=None, schemes=SCHEMES, progress=None, quick=False, budget=300.0):
+def _finite_state(res):
+    return float(np.all(np.isfinite(res.q)))
+
+
+def stability(cases=None, schemes=SCHEMES, progress=None, quick=False, budget=300.0, store=None, client="serial",
+              resume=True):
     """The stability matrix: every case under every scheme.
 
     Parameters
@@ -378,6 +387,9 @@ def stability(cases=None, schemes=SCHEMES, progress=None, quick=False, budget=30
     budget : float
         Wall-clock seconds a single run may use; a slower run is stopped and
         reported as not completed, with the time it reached.
+    store, client, resume
+        As in :func:`skfem_flex.sweep.sweep`: every case × scheme is a case
+        of one sweep (keyed ``stability:<case>``), in this process by default.
 
     Returns
     -------
@@ -386,34 +398,39 @@ def stability(cases=None, schemes=SCHEMES, progress=None, quick=False, budget=30
         energy error stayed below ``bound`` times the energy scale. A failure
         is a row with ``completed = False``, the time reached and the message.
     """
+    from .sweep import plan, run_cases
+
     names = list(STABILITY_CASES) if cases is None else list(cases)
     for n in names:
         if n not in STABILITY_CASES:
             raise ValueError(f"no stability case {n!r}; known: {sorted(STABILITY_CASES)}")
-    rows = []
+    specs, bounds = [], {}
     for n in names:
         case = STABILITY_CASES[n]()
         t_end = case.t_end / 20.0 if quick else case.t_end
-        for scheme in schemes:
-            start = time.perf_counter()
-            try:
-                res, msg = simulate(case.scene(), t_end, case.dt, integrator=scheme,
-                                    output=[_WallClockBudget(budget)]), ""
-            except SimulationError as exc:
-                res, msg = exc.result, str(exc)
-            wall = time.perf_counter() - start
-            scale = case.energy_scale(res) if case.energy_scale else float(
-                np.max(np.abs(res.kinetic) + np.abs(res.potential)))
-            e_err = float(np.max(np.abs(res.energy_balance_error))) / max(scale, 1e-300)
-            finite = bool(np.all(np.isfinite(res.q)))
-            bounded = bool(res.completed and finite and e_err < case.bound)
-            steps = max(int(res.steps), 1)
-            rows.append(StabilityRow(n, scheme, bounded, bool(res.completed), float(res.t[-1]), e_err,
-                                     float(np.max(res.constraint_residual)),
-                                     float(np.sum(res.newton_iterations)) / steps, wall, msg))
-            if progress:
-                progress(f"{n} / {scheme}: {'bounded' if bounded else 'NOT bounded'}, energy error {e_err:.2g}")
-    return rows
+        bounds[n] = case.bound
+        specs += plan(case.scene, vary={"integrator": list(schemes)}, t_end=t_end, dt=case.dt, budget=budget,
+                      record=(), measures={"energy_error": _energy_error(case.energy_scale),
+                                           "finite": _finite_state},
+                      name=f"stability:{n}", label=n)
+    for i, spec in enumerate(specs):
+        spec.index = i
+
+    def row(spec, c):
+        n, scheme = spec.label, spec.settings["integrator"]
+        e_err = float(c["energy_error"]) if "energy_error" in c else float("nan")
+        completed = c["status"].item() == "completed"
+        bounded = bool(completed and "finite" in c and float(c["finite"]) == 1.0 and e_err < bounds[n])
+        steps = int(c["steps"])
+        r = StabilityRow(n, scheme, bounded, completed, float(c["t_reached"]), e_err,
+                         float(c["max_constraint_residual"]), float(c["newton_total"]) / max(steps, 1),
+                         float(c["run_time"]), str(c["message"].item()))
+        if progress:
+            progress(f"{n} / {scheme}: {'bounded' if bounded else 'NOT bounded'}, energy error {e_err:.2g}")
+        return r
+    rows = {}
+    run_cases(specs, store=store, client=client, resume=resume, on_case=lambda s, c: rows.update({s.index: row(s, c)}))
+    return [rows[s.index] for s in specs]
 
 
 def plot_stability(rows, path):

@@ -606,8 +606,12 @@ def _default_workers():
         return os.cpu_count() or 1
 
 
-def run_cases(specs, store=None, client=None, resume=True, n_workers=None, progress=False):
-    """Run cases (from :func:`plan`) on Dask and return their Dataset; see :func:`sweep`."""
+def run_cases(specs, store=None, client=None, resume=True, n_workers=None, progress=False, on_case=None):
+    """Run cases (from :func:`plan`) on Dask and return their Dataset; see :func:`sweep`.
+
+    ``on_case(spec, ds)``, if given, is called in the driver with each case's
+    Dataset as it finishes (cases read from the store first).
+    """
     import xarray as xr  # noqa: F401  (fail here, not on a worker, when xarray is missing)
 
     specs = list(specs)
@@ -623,11 +627,14 @@ def run_cases(specs, store=None, client=None, resume=True, n_workers=None, progr
         _clean_partial(root)
         if resume:
             stored = set(layout.keys(root))
-            for k in keys:
+            for s, k in zip(specs, keys):
                 if k in stored:
                     results[k] = layout.read(layout.path(root, k))
+                    if on_case is not None:
+                        on_case(s, results[k])
     skipped = len(results)
     todo = [s for s, k in zip(specs, keys) if k not in results]
+    by_key = {k: s for s, k in zip(specs, keys)}
     bar = None
     if progress:
         from tqdm import tqdm
@@ -637,6 +644,8 @@ def run_cases(specs, store=None, client=None, resume=True, n_workers=None, progr
         if root is not None and ds["status"].item() != "lost":
             _write_case(root, layout, ds)
         results[ds.attrs["key"]] = ds
+        if on_case is not None:
+            on_case(by_key[ds.attrs["key"]], ds)
         if bar is not None:
             bar.set_postfix_str(f"last: {ds['status'].item()}", refresh=False)
             bar.update(1)

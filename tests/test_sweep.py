@@ -222,3 +222,18 @@ def test_cli_sweep_rejects_bad_input_with_one_line_and_status_2(tmp_path, capsys
         assert main(["sweep", *args, "--out", str(tmp_path / "x")]) == 2
         err = capsys.readouterr().err
         assert text in err and len(err.strip().splitlines()) == 1, err
+
+
+def test_studies_run_their_cases_through_the_sweep_on_a_cluster_and_resume(client, tmp_path):
+    from skfem_flex import studies
+
+    period = studies.oscillator_period(2.0)
+    dts = [period / 20, period / 40]
+    serial = studies.work_precision("spring_mass", schemes=["energy-momentum", "trapezoidal"], dts=dts)
+    spread = studies.work_precision("spring_mass", schemes=["energy-momentum", "trapezoidal"], dts=dts,
+                                    store=tmp_path / "wp", client=client)
+    assert [(r.scheme, r.dt, r.steps, r.error) for r in spread] == [(r.scheme, r.dt, r.steps, r.error) for r in serial]
+    again = studies.work_precision("spring_mass", schemes=["energy-momentum", "trapezoidal"], dts=dts,
+                                   store=tmp_path / "wp", client=client)
+    assert again == spread          # read back from the store: the same wall times, so nothing ran again
+    assert len(open_sweep(tmp_path / "wp").case) == 4
