@@ -1,0 +1,111 @@
+"""Benchmark: a 16-case spin-up sweep on a local Dask cluster against 16 serial ``simulate`` calls.
+
+Cases: ω ∈ {4, 6, 8, 10} rad/s × {16, 12, 8, 4} P1 elements, Δt = 1e-3 s, t_end
+= 30 s (``--t-end``), energy-conserving scheme, every ``--record-every``-th
+step recorded (default 10, as in ``benchmark.py``). The grid lists the large
+meshes first so that the longest cases start first (the scheduler runs
+tasks in submission order; this keeps the two workers evenly loaded at the end).
+
+* serial: the 16 ``simulate`` calls one after another in this process, after
+  a warm-up that loads the Numba kernels;
+* sweep: ``skfem_flex.sweep(..., n_workers=N, store=...)`` from start to
+  return, *including* starting and closing the local cluster of N worker
+  processes (each imports skfem_flex and loads the kernels from numba's
+  cache once) and writing every case to the store;
+* sweep on a running cluster: the same with a ``Client`` started before the
+  clock starts (the cost a sweep pays on a cluster that is already up).
+
+Per-case overhead = (sweep wall time × N − Σ time the cases spent in
+``simulate``) / 16: the worker time per case not spent integrating (task
+transfer, scene building, the Dataset, cluster start-up shared out). The
+load average of the machine is printed with the table: on a shared machine
+other processes compete for the cores and slow the parallel run most.
+
+Run ``python examples/sweep_benchmark.py [--workers 2] [--t-end 30] [--out DIR]``;
+writes ``OUT/sweep_benchmark.md`` (default ``examples/output``).
+"""
+import argparse
+import logging
+import os
+import platform
+import shutil
+import tempfile
+import time
+from pathlib import Path
+
+import skfem_flex as sf
+
+GRID = {"n_elements": [16, 12, 8, 4], "omega": [4.0, 6.0, 8.0, 10.0]}
+
+
+def serial(t_end, dt, record_every):
+    """Wall time (s) of the 16 serial simulate calls and the sum of the times spent in them."""
+    sf.simulate(sf.scenes.spin_up_beam(), 0.01, dt)          # load the kernels (not timed)
+    start, loop = time.perf_counter(), 0.0
+    for n in GRID["n_elements"]:
+        for w in GRID["omega"]:
+            scene = sf.scenes.spin_up_beam(omega=w, n_elements=n)
+            t0 = time.perf_counter()
+            sf.simulate(scene, t_end, dt, record_every=record_every)
+            loop += time.perf_counter() - t0
+    return time.perf_counter() - start, loop
+
+
+def sweep(t_end, dt, record_every, workers, client=None):
+    """(wall time, Σ simulate time over cases, the Dataset) of the sweep into a fresh store."""
+    store = Path(tempfile.mkdtemp(prefix="sweep-benchmark-")) / "cases"
+    try:
+        start = time.perf_counter()
+        ds = sf.sweep("spin_up_beam", vary=GRID, t_end=t_end, dt=dt, record_every=record_every, store=store,
+                      client=client, n_workers=workers if client is None else None)
+        wall = time.perf_counter() - start
+    finally:
+        shutil.rmtree(store.parent, ignore_errors=True)
+    assert set(ds.status.values) == {"completed"}, ds.message.values
+    return wall, float(ds.run_time.sum()), ds
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--t-end", type=float, default=30.0)
+    ap.add_argument("--dt", type=float, default=1e-3)
+    ap.add_argument("--record-every", type=int, default=10)
+    ap.add_argument("--out", default=str(Path(__file__).parent / "output"))
+    args = ap.parse_args()
+    load0 = os.getloadavg()
+    t_serial, loop_serial = serial(args.t_end, args.dt, args.record_every)
+    t_sweep, run_sweep, ds = sweep(args.t_end, args.dt, args.record_every, args.workers)
+    from distributed import Client, LocalCluster
+    with LocalCluster(n_workers=args.workers, threads_per_worker=1, dashboard_address=None,
+                      silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+        client.run(lambda: sf.simulate(sf.scenes.spin_up_beam(), 0.01, args.dt) and None)   # workers warm
+        t_warm, run_warm, _ = sweep(args.t_end, args.dt, args.record_every, args.workers, client)
+    load1 = os.getloadavg()
+    n = ds.sizes["case"]
+    w = args.workers
+    rows = [
+        ("16 serial simulate calls", t_serial, 1.0, loop_serial, float("nan")),
+        (f"sweep, {w} workers, cluster started and closed by it", t_sweep, t_sweep / t_serial, run_sweep,
+         (t_sweep * w - run_sweep) / n),
+        (f"sweep, {w} workers, cluster already running", t_warm, t_warm / t_serial, run_warm,
+         (t_warm * w - run_warm) / n),
+    ]
+    lines = [f"Spin-up sweep, {n} cases (ω × elements), Δt = {args.dt:g} s, t_end = {args.t_end:g} s, "
+             f"every {args.record_every}th step recorded; {platform.processor() or platform.machine()}, "
+             f"{os.cpu_count()} cores, load average {load0[0]:.1f} before / {load1[0]:.1f} after",
+             "",
+             "| run | wall time (s) | × serial | Σ time in simulate (s) | overhead per case (s) |",
+             "|---|---|---|---|---|"]
+    for name, wall, ratio, loop, over in rows:
+        lines.append(f"| {name} | {wall:.1f} | {ratio:.2f} | {loop:.1f} | "
+                     + ("–" if over != over else f"{over:.2f}") + " |")
+    text = "\n".join(lines) + "\n"
+    print(text)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "sweep_benchmark.md").write_text(text)
+
+
+if __name__ == "__main__":
+    main()
