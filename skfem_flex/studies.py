@@ -195,7 +195,7 @@ def work_precision(case, schemes=SCHEMES, dts=None, out_dir=None, name="case", p
     list of WorkPrecisionRow
         Failed runs have ``error = nan`` and their message.
     """
-    from .sweep import plan, run_cases
+    from .sweep import plan
 
     if isinstance(case, str):
         if case not in WORK_PRECISION_CASES:
@@ -223,6 +223,13 @@ def work_precision(case, schemes=SCHEMES, dts=None, out_dir=None, name="case", p
         if progress:
             progress(f"{name} {r.scheme} dt={r.dt:.3g}: error {r.error:.3g}, {r.wall_time:.3g} s")
         return r
+    return _study_rows(specs, row, store, client, resume)
+
+
+def _study_rows(specs, row, store, client, resume):
+    """Run a study's cases as a sweep; ``row(spec, case Dataset)`` makes each table row (in plan order)."""
+    from .sweep import run_cases
+
     rows = {}
     run_cases(specs, store=store, client=client, resume=resume, on_case=lambda s, c: rows.update({s.index: row(s, c)}))
     return [rows[s.index] for s in specs]
@@ -398,7 +405,7 @@ def stability(cases=None, schemes=SCHEMES, progress=None, quick=False, budget=30
         energy error stayed below ``bound`` times the energy scale. A failure
         is a row with ``completed = False``, the time reached and the message.
     """
-    from .sweep import plan, run_cases
+    from .sweep import plan
 
     names = list(STABILITY_CASES) if cases is None else list(cases)
     for n in names:
@@ -428,9 +435,7 @@ def stability(cases=None, schemes=SCHEMES, progress=None, quick=False, budget=30
         if progress:
             progress(f"{n} / {scheme}: {'bounded' if bounded else 'NOT bounded'}, energy error {e_err:.2g}")
         return r
-    rows = {}
-    run_cases(specs, store=store, client=client, resume=resume, on_case=lambda s, c: rows.update({s.index: row(s, c)}))
-    return [rows[s.index] for s in specs]
+    return _study_rows(specs, row, store, client, resume)
 
 
 def plot_stability(rows, path):
