@@ -664,6 +664,7 @@ def run_cases(specs, store=None, client=None, resume=True, n_workers=None, progr
 
 
 def _run_on_dask(specs, client, n_workers, finished):
+    import dask
     from distributed import Client, LocalCluster, as_completed
 
     own_cluster = own_client = None
@@ -672,8 +673,11 @@ def _run_on_dask(specs, client, n_workers, finished):
             n = _default_workers() if n_workers is None else int(n_workers)
             if n < 1:
                 raise ValueError(f"n_workers must be a positive integer, got {n_workers!r}")
-            own_cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None,
-                                       silence_logs=logging.ERROR)
+            # the workers' statistical profiler samples every thread's stack every 10 ms and costs the
+            # (GIL-bound) recording in the time loop several per cent: off for the clusters we start
+            with dask.config.set({"distributed.worker.profile.enabled": False}):
+                own_cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                           dashboard_address=None, silence_logs=logging.ERROR)
             client = own_client = Client(own_cluster)
         elif isinstance(client, str):
             client = own_client = Client(client)
