@@ -17,7 +17,9 @@ tasks in submission order; this keeps the two workers evenly loaded at the end).
 
 Per-case overhead = (sweep wall time × N − Σ time the cases spent in
 ``simulate``) / 16: the worker time per case not spent integrating (task
-transfer, scene building, the Dataset, cluster start-up shared out). The
+transfer, scene building, the Dataset, the store, cluster start-up shared
+out). A last sweep of the same 16 cases with a single step each measures that
+overhead alone. The
 load average of the machine is printed with the table: on a shared machine
 other processes compete for the cores and slow the parallel run most.
 
@@ -83,6 +85,7 @@ def main():
                          silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
         client.run(lambda: sf.simulate(sf.scenes.spin_up_beam(), 0.01, args.dt) and None)   # workers warm
         t_warm, run_warm, _ = sweep(args.t_end, args.dt, args.record_every, args.workers, client)
+        t_empty, run_empty, _ = sweep(args.dt, args.dt, args.record_every, args.workers, client)
     load1 = os.getloadavg()
     n = ds.sizes["case"]
     w = args.workers
@@ -92,6 +95,8 @@ def main():
          (t_sweep * w - run_sweep) / n),
         (f"sweep, {w} workers, cluster already running", t_warm, t_warm / t_serial, run_warm,
          (t_warm * w - run_warm) / n),
+        (f"the same 16 cases with one step each (pure overhead), cluster running", t_empty, float("nan"), run_empty,
+         (t_empty * w - run_empty) / n),
     ]
     lines = [f"Spin-up sweep, {n} cases (ω × elements), Δt = {args.dt:g} s, t_end = {args.t_end:g} s, "
              f"every {args.record_every}th step recorded; {platform.processor() or platform.machine()}, "
@@ -100,7 +105,7 @@ def main():
              "| run | wall time (s) | × serial | Σ time in simulate (s) | overhead per case (s) |",
              "|---|---|---|---|---|"]
     for name, wall, ratio, loop, over in rows:
-        lines.append(f"| {name} | {wall:.1f} | {ratio:.2f} | {loop:.1f} | "
+        lines.append(f"| {name} | {wall:.1f} | " + ("–" if ratio != ratio else f"{ratio:.2f}") + f" | {loop:.1f} | "
                      + ("–" if over != over else f"{over:.2f}") + " |")
     text = "\n".join(lines) + "\n"
     print(text)

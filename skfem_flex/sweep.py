@@ -178,7 +178,7 @@ def _canonical(value):
     if value is None or isinstance(value, (bool, int, str)):
         return value
     if isinstance(value, float):
-        return {"float": value.hex()}       # exact, and 4.0 (float) stays distinct from 4 (int) only by type
+        return {"float": value.hex()}       # exact; plan() turns ints given for float parameters into floats
     if isinstance(value, dict):
         return {str(k): _canonical(v) for k, v in sorted(value.items(), key=lambda kv: str(kv[0]))}
     if isinstance(value, (list, tuple)):
@@ -253,6 +253,10 @@ def plan(scene, vary=None, cases=None, *, fixed=None, t_end=None, dt=None, integ
             raise ValueError("cases is empty")
     else:
         rows = [{}]
+    if isinstance(record_every, bool) or not isinstance(record_every, int) or record_every < 1:
+        raise ValueError(f"record_every must be a positive integer, got {record_every!r}")
+    if budget is not None and not (isinstance(budget, (int, float)) and math.isfinite(budget) and budget > 0):
+        raise ValueError(f"budget must be a positive number of seconds or None, got {budget!r}")
     record = tuple(record)
     bad = [g for g in record if g not in RECORD_GROUPS]
     if bad:
