@@ -20,6 +20,9 @@ written as Markdown to ``OUT/benchmark.md`` (default ``examples/output``),
 which the README quotes.
 
 Run ``python examples/benchmark.py [--repeat 3] [--window 1.0] [--record-every 10] [--out DIR]``.
+
+Parameter sweeps on a local Dask cluster (16 spin-up cases on 2 workers against
+16 serial runs, per-case overhead) are timed by ``examples/sweep_benchmark.py``.
 """
 import argparse
 import platform

@@ -185,7 +185,7 @@ def test_driver_killed_then_resume_computes_only_the_missing_cases(client, tmp_p
                 tree = xr.open_datatree(store, engine="zarr", consolidated=False)
                 assert len(tree.children) <= len(open_sweep(store).case)
                 opened += 1
-            time.sleep(0.2)
+            time.sleep(0.05)
     finally:
         os.killpg(proc.pid, signal.SIGKILL)      # the driver and the cluster it started
         proc.communicate()
