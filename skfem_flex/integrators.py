@@ -22,7 +22,11 @@ itself, so that v_{n+1} keeps its digits as q grows; see
     the Newton residual: the energy balance holds to the Newton tolerance for
     nonlinear, constrained systems.
 ``trapezoidal``
-    Average-acceleration Newmark (β = ¼, γ = ½), equilibrium at t_{n+1}.
+    Average-acceleration Newmark (β = ¼, γ = ½), equilibrium at t_{n+1},
+    constraints at velocity level (index 2): Φ_q(q_{n+1}) v_{n+1} +
+    Φ_t = 0, as the established multibody codes run it. Positions then
+    drift off Φ = 0 by O(Δt²) (reported as the constraint residual) but the
+    weak instability of the index-3 form is gone.
 ``generalized-alpha``
     Chung–Hulbert with spectral radius ρ∞, constraints at position level in
     the form of Arnold & Brüls (2007); the velocity-level residual
@@ -512,14 +516,22 @@ class Newmark(Integrator):
     ----------
     alpha_m, alpha_f, beta, gamma : float
         Algorithmic parameters.
+    constraint_level : {"position", "velocity"}
+        Enforce Φ(q_{n+1}, t_{n+1}) = 0 (index 3) or Φ_q v_{n+1} + Φ_t = 0
+        (index 2). The velocity-level row is multiplied by βΔt/γ, so that
+        its Jacobian is Φ_q + (βΔt/γ) ∂(Φ_q v)/∂q, the same size as the
+        position-level one (∂Φ_t/∂q is left out: zero for drivers).
     newton : NewtonSettings, optional
     """
 
     name = "newmark"
 
-    def __init__(self, alpha_m=0.0, alpha_f=0.0, beta=0.25, gamma=0.5, newton=None):
+    def __init__(self, alpha_m=0.0, alpha_f=0.0, beta=0.25, gamma=0.5, newton=None, constraint_level="position"):
         super().__init__(newton)
         self.alpha_m, self.alpha_f, self.beta, self.gamma = map(float, (alpha_m, alpha_f, beta, gamma))
+        if constraint_level not in ("position", "velocity"):
+            raise ValueError(f"constraint_level must be 'position' or 'velocity', got {constraint_level!r}")
+        self.constraint_level = constraint_level
 
     def step(self, scene, state, dt):
         am, af, beta, gamma = self.alpha_m, self.alpha_f, self.beta, self.gamma
@@ -532,6 +544,7 @@ class Newmark(Integrator):
         c_a = (1.0 - am) / ((1.0 - af) * beta * dt * dt)
         c_v = gamma / (beta * dt)
         rows_c = np.arange(m)
+        by_velocity = self.constraint_level == "velocity"
         s = self.newton
         cache = {}
 
@@ -574,10 +587,17 @@ class Newmark(Integrator):
                 r += ctmu
                 scale = max(scale, _inf(ctmu))
                 jac = add_matrices(jac, scene.constraint_hessian_product(q1, mu, t1))
-                c = scene.constraint_value(q1, t1)
                 c_scale = max(_inf(abs(cq) @ np.abs(q1)), _inf(abs(cq)) * scene.length_scale, _TINY)
-                cq_f = _sub_block(cq, rows_c, free)
-                full = _bordered(_sub_block(jac, free, free), cq_f.T, cq_f, scene.dense)
+                if by_velocity:
+                    # (βΔt/γ)(Φ_q v1 + Φ_t): a length, like Φ, so the same scale and tolerance apply
+                    phit = scene.constraint_time_derivative(q1, t1)
+                    c = (cq @ v1 + phit) / c_v
+                    c_scale = max(c_scale, _inf(abs(cq) @ np.abs(v1)) / c_v, _inf(phit) / c_v)
+                    cq_c = add_matrices(cq, scene.constraint_velocity_jacobian(q1, v1, t1) / c_v)
+                else:
+                    c, cq_c = scene.constraint_value(q1, t1), cq
+                cq_f = _sub_block(cq_c, rows_c, free)
+                full = _bordered(_sub_block(jac, free, free), _sub_block(cq, rows_c, free).T, cq_f, scene.dense)
                 res = np.concatenate([r[free], c])
                 err_c = _inf(c) / (s.ctol * c_scale)
             else:
@@ -614,12 +634,18 @@ class Newmark(Integrator):
 
 
 class Trapezoidal(Newmark):
-    """Average-acceleration Newmark (β = ¼, γ = ½), ``"trapezoidal"``."""
+    """Average-acceleration Newmark (β = ¼, γ = ½) with velocity-level constraints, ``"trapezoidal"``.
+
+    Index 2, as the established multibody codes run the trapezoidal rule:
+    Φ_q(q_{n+1}) v_{n+1} + Φ_t(t_{n+1}) = 0. The position-level (index-3)
+    form is ``Newmark(constraint_level="position")``; it drives the
+    multipliers into a growing zigzag on a swinging pendulum.
+    """
 
     name = "trapezoidal"
 
     def __init__(self, newton=None):
-        super().__init__(0.0, 0.0, 0.25, 0.5, newton)
+        super().__init__(0.0, 0.0, 0.25, 0.5, newton, constraint_level="velocity")
 
 
 class GeneralizedAlpha(Newmark):

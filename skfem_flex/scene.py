@@ -460,6 +460,11 @@ class Scene:
             out[r] = c.acceleration_rhs(q[i], v[i], t)
         return out
 
+    def constraint_velocity_jacobian(self, q, v, t):
+        """∂(Φ_q v)/∂q at fixed v, shape (n_constraints, n)."""
+        return self._assemble_rows([(c.velocity_jacobian(q[i], v[i], t), i, r)
+                                    for c, i, r in zip(self.constraints, self._con_idx, self._con_rows)])
+
     def constraint_hessian_product(self, q, mu, t):
         """∂(Φ_qᵀ μ)/∂q, shape (n, n)."""
         acc = self._zeros()
