@@ -4,6 +4,7 @@ Timoshenko beams (linear, floating frame of reference, geometrically exact),
 rigid bodies and point masses, joined by constraints and integrated in time
 by an energy-conserving scheme, the trapezoidal rule or generalized-α.
 """
+from . import jit_cache  # noqa: F401  (first: compiled kernels must see the package's cache rule)
 from .section import Section
 from .beam import TimoshenkoBeam
 from .bodies import Body, BodyGeometry, BodyPoint, PointMass
