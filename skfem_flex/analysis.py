@@ -696,7 +696,7 @@ class Modes:
         """ζ = −Re s / |s| (0 for s = 0; −1 for a real growing mode)."""
         mag = np.abs(self.eigenvalues)
         with np.errstate(invalid="ignore", divide="ignore"):
-            return np.where(mag > 0, -self.eigenvalues.real / np.where(mag > 0, mag, 1.0), 0.0)
+            return np.where(mag > 0, -self.eigenvalues.real / np.where(mag > 0, mag, 1.0), 0.0) + 0.0
 
     @property
     def period(self):
