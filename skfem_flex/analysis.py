@@ -50,8 +50,10 @@ __all__ = ["EquilibriumState", "LinearSystem", "Modes", "CampbellDiagram", "stat
 
 _EPS = np.finfo(float).eps
 _TINY = 1e-300
-#: reduced systems with at most this many coordinates are solved by dense LAPACK eigensolvers
-DENSE_EIGEN_LIMIT = 400
+#: reduced systems with at most this many coordinates are solved by dense LAPACK eigensolvers, larger
+#: ones by ARPACK in shift-invert mode (which finds a few modes of a 200-coordinate beam several
+#: times faster than a dense solve finds all)
+DENSE_EIGEN_LIMIT = 120
 #: the states ``modes(about=...)`` accepts by name
 ABOUT = ("static", "steady", "initial")
 
@@ -426,7 +428,7 @@ def _continuation(scene, q0, v, a, t, settings, max_steps, min_step, steady):
         elif its >= 10:
             h *= 0.5
     s = float(y[-1])
-    exc = ConvergenceError(f"{name} of {scene.name!r} failed: reached load factor {s:.6g} of 1 after {steps} "
+    exc = ConvergenceError(f"{name} of {scene.name!r} failed: reached load factor {s:.9g} of 1 after {steps} "
                            f"steps (step size fell below {min_step:g}: the load path cannot be followed "
                            f"further, e.g. a limit load, an element folding or a mechanism that moves freely)",
                            load_factor=s, steps=steps)
@@ -435,9 +437,11 @@ def _continuation(scene, q0, v, a, t, settings, max_steps, min_step, steady):
 
 
 def _homotopy(sys_, x, s, r0):
-    res, jac, scales = sys_.evaluate(x)
+    res, jac, (scale, floor, c_scale) = sys_.evaluate(x)
     h = res - (1.0 - s) * r0
-    return h, jac, sys_.error(h, scales)
+    # the start's imbalance is a force scale of the path too: an equilibrium without loads
+    # (all forces → 0) is then found to rtol of the forces that were out of balance
+    return h, jac, sys_.error(h, (max(scale, _inf(r0[:sys_.nf])), floor, c_scale))
 
 
 def _corrector(sys_, y_pred, tau, weight, r0, settings, name):
@@ -740,7 +744,7 @@ def _solve_symmetric(sysm, n_modes, zero_tol):
         lam, vec = spla.eigsh(sps.csc_matrix(k), k=min(n_modes + 2, n - 1), M=sps.csc_matrix(m), sigma=shift,
                               which="LM")
     else:
-        lam, vec = sla.eigh(_dense(k), _dense(m))
+        lam, vec = sla.eigh(_dense(k), _dense(m), subset_by_index=[0, min(n_modes + 1, n - 1)])
     lam = np.where(np.abs(lam) <= zero_tol, 0.0, lam)
     s, shapes = [], []
     for li, phi in zip(lam, vec.T):
@@ -779,6 +783,10 @@ def _solve_first_order(sysm, n_modes, zero_tol):
     real = np.abs(lam.imag) <= 1e-9 * np.maximum(np.abs(lam), 1e-12 * scale)
     lam = np.where(real, lam.real + 0j, lam)
     keep = real | (lam.imag > 0)
+    zeros = np.flatnonzero(keep & (lam == 0))
+    # s = 0 of a motion without stiffness is a double root of det(s²M + sC + K) with one shape:
+    # the first-order form returns it twice, one mode is kept per pair
+    keep[zeros[(zeros.size + 1) // 2:]] = False
     return lam[keep], vec[:, keep]
 
 
