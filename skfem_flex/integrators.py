@@ -244,7 +244,7 @@ def _inf(x):
     return float(np.abs(x).max()) if np.size(x) else 0.0
 
 
-def newton_solve(fun, x0, settings, name, where):
+def newton_solve(fun, x0, settings, name, where, x_scale=0.0):
     """Solve fun(x) = 0 by Newton–Raphson under the rules every solver of the package shares.
 
     Parameters
@@ -260,6 +260,10 @@ def newton_solve(fun, x0, settings, name, where):
         Solver name for messages.
     where : str
         Where the solve happens (time and step, load factor) for messages.
+    x_scale : float
+        Size of the state x belongs to when x is an increment of it (the time steppers'
+        Δq); a step that starts at rest has x ≈ 0, and its updates are then judged
+        against this size for the stagnation exit.
 
     Returns
     -------
@@ -301,7 +305,7 @@ def newton_solve(fun, x0, settings, name, where):
                                    iterations=it, residual=err)
         if _inf(dx) <= 8 * _EPS * max(_inf(x), _TINY) and err < 1e6:
             return x, r, it + 1          # update below round-off: as converged as floating point allows
-        if it >= 2 and err >= 0.25 * err_prev and _inf(dx) <= 1.5e-8 * _inf(x) and err < 1e4:
+        if it >= 2 and err >= 0.25 * err_prev and _inf(dx) <= 1.5e-8 * max(_inf(x), x_scale) and err < 1e4:
             return x, r, it + 1          # stagnated at the round-off floor of the residual's own terms
         err_prev = err
         step = 1.0
@@ -377,9 +381,9 @@ class Integrator:
         return replace(state, acc=acc, pseudo=acc.copy(), lam=lam, prescribed_force=reaction)
 
     # ---------------------------------------------------------------- Newton
-    def _newton(self, fun, x0, where):
+    def _newton(self, fun, x0, where, x_scale=0.0):
         """Solve fun(x) = 0 by :func:`newton_solve` with this scheme's settings and name."""
-        return newton_solve(fun, x0, self.newton, self.name, where)
+        return newton_solve(fun, x0, self.newton, self.name, where, x_scale)
 
     def step(self, scene, state, dt):
         """Advance ``state`` by ``dt``; returns (new State, StepInfo)."""
@@ -495,7 +499,9 @@ class EnergyMomentum(Integrator):
             on = np.isin(free, cay)
             dq_guess[on] = 2.0 * np.arctan(0.5 * dq_guess[on])
         x0 = np.concatenate([dq_guess, state.lam * dt if state.lam.size == m else np.zeros(m)])
-        x, _, its = self._newton(fun, x0, f"t = {t1:.6g} s (dt = {dt:.3g} s)")
+        # a step from rest in a stressed equilibrium (a run started from statics) has Δq ≈ 0 and a
+        # residual at the round-off floor of the internal forces: updates are judged against q
+        x, _, its = self._newton(fun, x0, f"t = {t1:.6g} s (dt = {dt:.3g} s)", _inf(q0[free]))
         dq, z, mu, q1, v1, r, d, ext = (cache[k] for k in ("dq", "z", "mu", "q1", "v1", "r", "d", "ext"))
         work = 0.0
         if ext is not None:
@@ -632,7 +638,9 @@ class Newmark(Integrator):
 
         lam0 = state.lam if state.lam.size == m else np.zeros(m)
         x0 = np.concatenate([dt * v0[free] + 0.5 * dt * dt * x0acc[free], dt * lam0])
-        x, _, its = self._newton(fun, x0, f"t = {t1:.6g} s (dt = {dt:.3g} s)")
+        # a step from rest in a stressed equilibrium (a run started from statics) has Δq ≈ 0 and a
+        # residual at the round-off floor of the internal forces: updates are judged against q
+        x, _, its = self._newton(fun, x0, f"t = {t1:.6g} s (dt = {dt:.3g} s)", _inf(q0[free]))
         dq, mu, q1, v1, a1, acc1, r, ext, cq = (cache[k] for k in
                                                 ("dq", "mu", "q1", "v1", "a1", "acc1", "r", "ext", "cq"))
         lam1 = mu / dt

@@ -84,6 +84,25 @@ def test_static_start_from_a_hanging_guess_runs_at_rest():
         sf.simulate(scene, 0.01, 0.01, start="rest")
 
 
+@pytest.mark.parametrize("integrator", ["energy-momentum", "trapezoidal", "generalized-alpha"])
+def test_cantilever_sagging_under_gravity_and_a_run_started_there(integrator):
+    length, EI, kGA, rhoA = 1.0, 1e3, 1e7, 2.0
+    beam = scenes.hub_beam(length=length, EA=1e8, EI=EI, kGA=kGA, rhoA=rhoA, rhoI=1e-5, n_elements=8)
+    clamp = [sf.Prescribed(beam, c, _fixed()) for c in ("Rx", "Ry", "theta")]
+    scene = sf.Scene([beam], forces=[sf.Gravity((0.0, -G))], prescribed=clamp,
+                     probes={"tip": beam.displacement_probe()})
+    state = sf.static_equilibrium(scene)
+    # Timoshenko cantilever under its weight p = ρA g: w = p L⁴/(8 EI) + p L²/(2 kGA)
+    sag = rhoA * G * length ** 4 / (8 * EI) + rhoA * G * length ** 2 / (2 * kGA)
+    assert scene.probes["tip"](scene, 0.0, state.q, state.v)[1] == pytest.approx(-sag, rel=1e-9)
+    # the clamp carries the weight and its moment about the root
+    np.testing.assert_allclose(state.prescribed_force, [0.0, rhoA * G * length, rhoA * G * length ** 2 / 2],
+                               rtol=1e-4, atol=1e-9)
+    # started from statics, a run stays at rest (from the straight beam it would ring)
+    run = sf.simulate(scene, 0.02, 0.005, integrator=integrator, start="static")
+    assert np.max(np.abs(run.q - state.q)) < 1e-12
+
+
 # ------------------------------------------------------------------ roll-up
 @pytest.mark.parametrize("n_elements", [8, 16, 64])
 def test_exact_beam_rolls_up_into_a_circle(n_elements):
