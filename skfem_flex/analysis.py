@@ -655,7 +655,7 @@ class Modes:
     Attributes
     ----------
     eigenvalues : ndarray of complex
-        s, 1/s, ordered by |s| (ties: stable first).
+        s, 1/s, ordered by |s| (of a real pair ±σ the growing one first).
     shapes : ndarray (n, n_modes)
         Shapes on all coordinates (real for undamped conservative systems, complex
         otherwise), scaled to largest entry 1 (phase of that entry 0).
@@ -872,7 +872,9 @@ def modes(scene, about="static", n_modes=6, t=0.0, solver="auto", newton=None):
         s, z = _solve_symmetric(sysm, n_modes, zero_tol)
     else:
         s, z = _solve_first_order(sysm, n_modes, zero_tol)
-    order = np.lexsort((s.real, np.round(np.abs(s), 12)))[:n_modes]
+    mag = np.abs(s)
+    # by |s|; of a pair ±σ (equal |s| to round-off) the growing mode first
+    order = np.lexsort((-s.real, np.round(mag / max(float(mag.max(initial=0.0)), _TINY), 10)))[:n_modes]
     s, z = s[order], _normalize(z[:, order])
     shapes = sysm.basis @ z
     return Modes(s, _normalize(shapes), z, sysm, scene.name, label)
