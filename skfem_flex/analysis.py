@@ -375,6 +375,14 @@ def _continuation(scene, q0, v, a, t, settings, max_steps, min_step, steady):
                          f"start nearer the rest state (q=...)") from None
     if not np.all(np.isfinite(dxds)):
         raise ValueError(f"{name}: the tangent of the load path is not finite at the start of {scene.name!r}")
+    # the linear response to the full load: a coordinate moving by more than a hundred sizes of
+    # the scene (or turns) means no stiffness meets the load at the start
+    reach = 100.0 * max(scene.length_scale, 2.0 * np.pi)
+    if _inf(dxds[:nf]) > reach:
+        raise ValueError(f"{name}: the start state of {scene.name!r} is (nearly) a singular point of the load "
+                         f"path: the linear response to the loads moves a coordinate by {_inf(dxds[:nf]):.3g} "
+                         f"(no stiffness meets the load there, e.g. a pendulum held horizontal); start nearer "
+                         f"the rest state (q=...)")
     sigma = max(float(np.linalg.norm(dxds[:nf])), _TINY)
     weight = np.zeros(nf + m + 1)
     weight[:nf] = 1.0 / sigma ** 2
@@ -404,6 +412,15 @@ def _continuation(scene, q0, v, a, t, settings, max_steps, min_step, steady):
             else:
                 y_new, its = _corrector(sys_, y_pred, tau, weight, r0, settings, name)
         except (ConvergenceError, np.linalg.LinAlgError):     # includes an element folding inside out
+            y_new = None
+        if y_new is not None:
+            # accept a step only if Newton corrected the predictor by less than half the step:
+            # a larger correction means the path curves more than the step resolves (or Newton
+            # jumped to another branch)
+            dist = math.sqrt(float((y_new - y_pred) @ (weight * (y_new - y_pred))))
+            if dist > 0.5 * math.sqrt(float((y_pred - y) @ (weight * (y_pred - y)))):
+                y_new = None
+        if y_new is None:
             h *= 0.5
             if h < min_step:
                 break

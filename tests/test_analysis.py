@@ -103,6 +103,18 @@ def test_cantilever_sagging_under_gravity_and_a_run_started_there(integrator):
     assert np.max(np.abs(run.q - state.q)) < 1e-12
 
 
+def test_static_from_a_start_without_stiffness_is_refused():
+    scene = scenes.flexible_pendulum()                  # released horizontal: gravity meets no stiffness
+    with pytest.raises(ValueError, match="singular point of the load path"):
+        sf.static_equilibrium(scene)
+    with pytest.raises(ValueError, match="q must be a finite vector"):
+        sf.static_equilibrium(scene, q=np.zeros(3))
+    with pytest.raises(ValueError, match="about must be one of"):
+        sf.modes(scene, about="rest")
+    with pytest.raises(ValueError, match="n_modes"):
+        sf.modes(scene, n_modes=0)
+
+
 # ------------------------------------------------------------------ roll-up
 @pytest.mark.parametrize("n_elements", [8, 16, 64])
 def test_exact_beam_rolls_up_into_a_circle(n_elements):
