@@ -807,16 +807,17 @@ def _solve_first_order(sysm, n_modes, zero_tol):
     return lam[keep], vec[:, keep]
 
 
-def _normalize(shapes):
+def _normalize(shapes, reduced):
+    """Both scaled column by column so that the largest entry of ``shapes`` is 1 (real when they are)."""
     if shapes.size == 0:
-        return shapes
+        return shapes, reduced
     idx = np.argmax(np.abs(shapes), axis=0)
     piv = shapes[idx, np.arange(shapes.shape[1])]
     piv = np.where(np.abs(piv) > 0, piv, 1.0)
-    out = shapes / piv
+    out, red = shapes / piv, reduced / piv
     if np.iscomplexobj(out) and np.all(np.abs(out.imag) <= 1e-12 * np.maximum(np.abs(out).max(axis=0), _TINY)):
-        out = out.real
-    return out
+        out, red = out.real, red.real
+    return out, red
 
 
 def _reference(scene, about, t, newton):
@@ -892,9 +893,9 @@ def modes(scene, about="static", n_modes=6, t=0.0, solver="auto", newton=None):
     mag = np.abs(s)
     # by |s|; of a pair ±σ (equal |s| to round-off) the growing mode first
     order = np.lexsort((-s.real, np.round(mag / max(float(mag.max(initial=0.0)), _TINY), 10)))[:n_modes]
-    s, z = s[order], _normalize(z[:, order])
-    shapes = sysm.basis @ z
-    return Modes(s, _normalize(shapes), z, sysm, scene.name, label)
+    s, z = s[order], z[:, order]
+    shapes, z = _normalize(sysm.basis @ z, z)
+    return Modes(s, shapes, z, sysm, scene.name, label)
 
 
 # ======================================================================= output
@@ -1018,31 +1019,10 @@ class CampbellDiagram:
         return csv_path, md_path
 
     def plot(self, path=None, orders=None):
-        """Frequencies (Hz) against the parameter, one line per mode order; unstable points marked.
+        """Frequencies against the parameter (:func:`skfem_flex.plots.plot_campbell`)."""
+        from .plots import plot_campbell
 
-        ``orders``: excitation orders n to draw as lines f = n · value/2π (for a spin rate in
-        rad/s); default (1,) when the parameter's unit is rad/s, none otherwise.
-        """
-        from .plots import _figure, _finish
-
-        fig, ax = _figure(1, 1, size=(7.0, 4.5))
-        a = ax[0, 0]
-        f = self.frequency_hz
-        for k in range(f.shape[1]):
-            a.plot(self.values, f[:, k], ".-", label=f"mode {k + 1}")
-            bad = self.growth_rate[:, k] > 1e-9 * np.maximum(np.abs(self.omega[:, k]), 1.0)
-            if np.any(bad):
-                a.plot(self.values[bad], f[bad, k], "x", color="C3", ms=8)
-        if orders is None:
-            orders = (1,) if self.unit == "rad/s" else ()
-        for n in orders:
-            a.plot(self.values, n * np.asarray(self.values) / (2 * np.pi), "k--", lw=0.8, label=f"{n}× excitation")
-        a.set_xlabel(f"{self.parameter} ({self.unit})" if self.unit else self.parameter)
-        a.set_ylabel("frequency (Hz)")
-        a.set_title(f"Campbell diagram: {self.scene_name} (about the {self.about} state; × unstable)")
-        a.grid(alpha=0.3)
-        a.legend(fontsize="small", ncols=2)
-        return _finish(fig, path)
+        return plot_campbell(self, path, orders)
 
 
 def campbell(build, parameter, values, n_modes=6, about="steady", t=0.0, **fixed):

@@ -421,22 +421,32 @@ def _catalogue_scene(name):
     return scenes.get(name)
 
 
+def _analysis(name, compute):
+    """``compute()``; bad input becomes a UsageError (exit 2), an equilibrium that cannot be found
+    (a SimulationError) is reported in one line and gives None (exit 1)."""
+    from .errors import SimulationError
+
+    try:
+        return compute()
+    except SimulationError as exc:
+        print(f"skfem-flex: error: {_one_line(exc)}", file=sys.stderr)
+        return None
+    except (ValueError, TypeError) as exc:
+        raise UsageError(f"scene {name!r}: {_one_line(exc)}") from None
+
+
 def _cmd_modes(args):
     from .analysis import modes, write_mode_series
-    from .errors import SimulationError
     from .output import _atomic_write_text
 
     factory = _catalogue_scene(args.scene)
     params = _scene_settings(args.scene, args.set)
     out = Path(args.out) if args.out is not None else Path("results") / f"{args.scene}-modes"
-    try:
-        scene = factory(**params)
-        result = modes(scene, about=args.about, n_modes=args.n)
-    except SimulationError as exc:
-        print(f"skfem-flex: error: {_one_line(exc)}", file=sys.stderr)
+    scene = _analysis(args.scene, lambda: factory(**params))
+    result = None if scene is None else _analysis(args.scene, lambda: modes(scene, about=args.about,
+                                                                          n_modes=args.n))
+    if result is None:
         return 1
-    except (ValueError, TypeError) as exc:
-        raise UsageError(f"scene {args.scene!r}: {_one_line(exc)}") from None
     _prepare_out(out)
     rows = result.table()
     lines = ["mode,omega_rad_s,frequency_hz,damping_ratio,growth_rate_1_s"]
@@ -480,7 +490,6 @@ def _cmd_campbell(args):
     import inspect as _inspect
 
     from .analysis import campbell
-    from .errors import SimulationError
     from . import scenes
 
     _catalogue_scene(args.scene)
@@ -498,13 +507,10 @@ def _cmd_campbell(args):
     values = _vary_values(key, text.strip(), default)
     params.pop(key, None)
     out = Path(args.out) if args.out is not None else Path("results") / f"{args.scene}-campbell"
-    try:
-        diagram = campbell(args.scene, key, values, n_modes=args.n, about=args.about, **params)
-    except SimulationError as exc:
-        print(f"skfem-flex: error: {_one_line(exc)}", file=sys.stderr)
+    diagram = _analysis(args.scene, lambda: campbell(args.scene, key, values, n_modes=args.n, about=args.about,
+                                                     **params))
+    if diagram is None:
         return 1
-    except (ValueError, TypeError) as exc:
-        raise UsageError(f"scene {args.scene!r}: {_one_line(exc)}") from None
     _prepare_out(out)
     csv_path, md_path = diagram.write_table(out / "campbell")
     png = out / "campbell.png"
