@@ -180,6 +180,7 @@ def test_slider_crank_modes_are_real_and_the_first_is_reproduced_by_a_run():
     state = sf.static_equilibrium(scene)
     res = sf.modes(scene, about=state, n_modes=4)
     assert np.all(np.isfinite(res.eigenvalues)) and np.isrealobj(res.shapes)
+    np.testing.assert_allclose(res.system.basis @ res.reduced_shapes, res.shapes, atol=1e-14)
     assert np.all(res.eigenvalues.real == 0.0) and np.all(res.omega > 0)
     quad = sf.modes(scene, about=state, n_modes=4, solver="first-order")
     np.testing.assert_allclose(quad.omega, res.omega, rtol=1e-9)
@@ -194,6 +195,20 @@ def test_slider_crank_modes_are_real_and_the_first_is_reproduced_by_a_run():
     assert crossings.size >= 3
     measured = 2.0 * (crossings[-1] - crossings[0]) / (crossings.size - 1)
     assert measured == pytest.approx(period, rel=1e-3)
+
+
+def test_damped_oscillator_damping_ratio():
+    m, k, c = 2.0, 50.0, 3.0
+    mass = sf.PointMass(m, [1.0, 0.0], name="mass")
+    scene = sf.Scene([mass], constraints=[sf.Slider(mass.point(), (1.0, 0.0), (0.0, 0.0))],
+                     forces=[sf.LinearSpring(mass.point(), (0.0, 0.0), k), sf.LinearDamper(mass.point(), (0.0, 0.0), c)])
+    res = sf.modes(scene, about="static", n_modes=2)
+    assert res.eigenvalues.size == 1                    # one dof: one complex pair
+    zeta, wn = c / (2 * np.sqrt(k * m)), np.sqrt(k / m)
+    assert res.damping_ratio[0] == pytest.approx(zeta, rel=1e-12)
+    assert res.natural_omega[0] == pytest.approx(wn, rel=1e-12)
+    assert res.omega[0] == pytest.approx(wn * np.sqrt(1 - zeta ** 2), rel=1e-12)
+    assert res.stable and np.iscomplexobj(res.shapes) is False
 
 
 # ------------------------------------------------------------------ zero modes, sparse path
