@@ -176,7 +176,9 @@ def test_rotating_beam_with_linear_strain_does_not_stiffen():
 
 # ------------------------------------------------------------------ mechanism
 def test_slider_crank_modes_are_real_and_the_first_is_reproduced_by_a_run():
-    scene = scenes.slider_crank(omega=0.0)             # the driver holds the crank at angle 0
+    scene = scenes.slider_crank(omega=0.0, crank_angle=0.7)   # the driver holds the crank at 0.7 rad
+    q0, v0 = scene.initial_state()
+    assert np.max(np.abs(scene.constraint_value(q0, 0.0))) < 1e-15     # the mechanism assembles there
     state = sf.static_equilibrium(scene)
     res = sf.modes(scene, about=state, n_modes=4)
     assert np.all(np.isfinite(res.eigenvalues)) and np.isrealobj(res.shapes)
@@ -254,6 +256,14 @@ def test_null_space_basis_is_sparse_and_spans_the_tangent_space():
 
 
 # ------------------------------------------------------------------ Campbell and output
+def test_campbell_over_the_crank_angle():
+    angles = [0.0, 1.0, 2.0, np.pi]
+    diagram = sf.campbell("slider_crank", "crank_angle", angles, n_modes=2, about="static", omega=0.0)
+    assert diagram.unit == "rad" and np.all(np.isfinite(diagram.omega)) and np.all(diagram.growth_rate == 0)
+    # at rest the rod carries no axial force: its bending frequency hardly depends on the crank angle
+    assert np.ptp(diagram.omega[:, 0]) < 1e-3 * diagram.omega[0, 0]
+
+
 def test_campbell_of_the_rotating_beam(tmp_path):
     diagram = sf.campbell("rotating_beam", "omega", [0.0, 4.0, 8.0], n_modes=2)
     for i, om in enumerate(diagram.values):
