@@ -344,12 +344,32 @@ def static_equilibrium(scene, t=0.0, q=None, steady=False, newton=None, max_step
     for _ in range(4):                     # steady: the constraint velocities follow the solution
         state = _continuation(scene, q0, v, a, t, settings, int(max_steps), float(min_step), steady)
         if not steady or not scene.n_constraints:
-            return state
+            break
         v_new = _steady_velocity(scene, state.q, t)
         if _inf(v_new - v) <= 1e-12 * max(_inf(v), _TINY):
-            return state
+            break
         v, q0 = v_new, state.q
+    if steady:
+        _check_steady(scene, state)
     return state
+
+
+def _check_steady(scene, state):
+    """ValueError unless the unknown coordinates stay at rest in the steady state (a relative equilibrium)."""
+    if not np.any(state.v):
+        return
+    try:
+        acc = EnergyMomentum().start(scene, State(state.t, state.q, state.v)).acc
+    except ValueError:                      # no inertia in some direction: nothing to check against
+        return
+    free = scene.free_index
+    inertia = _sub(scene.mass_matrix(state.q), free, free) @ acc[free]
+    scale = force_balance(scene, state.q, state.v, state.acc, state.t)[3]
+    if _inf(inertia) > 1e-6 * max(scale, _TINY):
+        raise ValueError(f"scene {scene.name!r} has no steady state: with the velocities of its steady motion "
+                         f"the unknown coordinates must accelerate (inertia force {_inf(inertia):.3g} against "
+                         f"forces of {scale:.3g}); a relative equilibrium needs a steady motion along "
+                         f"coordinates the equations do not depend on (a prescribed spin)")
 
 
 def _continuation(scene, q0, v, a, t, settings, max_steps, min_step, steady):

@@ -164,6 +164,17 @@ def test_rotating_beam_frequencies_about_the_steady_spin(lam):
     assert np.all(res.growth_rate <= 1e-9 * res.omega)
 
 
+def test_steady_spin_held_by_joints_gives_the_same_frequencies():
+    # spin_up_pinned: a Pin and a Driver instead of prescribed coordinates; at t = 1 s the hub
+    # turns steadily at ω (spin-up time 1 ms): the null-space reduction removes R and θ
+    omega = 4.0
+    res = sf.modes(scenes.spin_up_pinned(omega=omega, T=1e-3), about="steady", t=1.0, n_modes=3)
+    np.testing.assert_allclose(res.omega, scenes.rotating_beam_frequencies(omega, n_modes=3), rtol=1e-9)
+    # a driven mechanism is not a relative equilibrium: refused, not linearized about nonsense
+    with pytest.raises(ValueError, match="no steady state"):
+        sf.modes(scenes.slider_crank(), about="steady")
+
+
 def test_rotating_beam_with_linear_strain_does_not_stiffen():
     still = sf.modes(scenes.rotating_beam(omega=0.0, strain="linear"), about="steady", n_modes=1).omega[0]
     for lam in (4, 8, 12):
