@@ -190,7 +190,7 @@ class _Statics:
         return q
 
     def evaluate(self, x):
-        """(R, ∂R/∂x, scaled error) at x."""
+        """(R, ∂R/∂x, scales) at x; scales = (force scale, round-off floor, constraint scale) for :meth:`error`."""
         s, free, nf, m = self.scene, self.free, self.nf, self.m
         q = self.full_q(x)
         lam = x[nf:]
@@ -212,12 +212,12 @@ class _Statics:
                 jac = np.block([[kff, cqf.T], [cqf, np.zeros((m, m))]])
             res = np.concatenate([force[free], phi])
         else:
-            phi, c_scale = np.zeros(0), 1.0
+            c_scale = 1.0
             jac = _sub(stiff, free, free)
             if sps.issparse(jac):
                 jac = jac.tocsr()
             res = force[free]
-        self.last = dict(q=q, force=force, scale=scale, floor=floor, c_scale=c_scale)
+        self.last_force = force
         return res, jac, (scale, _inf(floor[free]) if nf else 0.0, c_scale)
 
     def error(self, res, scales):
@@ -257,7 +257,7 @@ def _steady_velocity(scene, q, t):
     return v
 
 
-def _solve_aug(jac, col, row, corner):
+def _bordered_matrix(jac, col, row, corner):
     """The bordered matrix [[J, col], [rowᵀ, corner]] (dense or sparse)."""
     if sps.issparse(jac):
         return sps.bmat([[jac, sps.csr_matrix(col[:, None])], [sps.csr_matrix(row[None, :]),
@@ -380,10 +380,10 @@ def _continuation(scene, q0, v, a, t, settings, max_steps, min_step, steady):
     name = "static equilibrium"
 
     def done(x, s, steps, its):
-        res, _, _ = sys_.evaluate(x)
+        sys_.evaluate(x)                     # the force balance at x, for the prescribed coordinates' forces
         q = sys_.full_q(x)
         lam = x[nf:]
-        return _equilibrium_state(scene, t, q, v, a, lam, s, steps, its, steady, sys_.last["force"])
+        return _equilibrium_state(scene, t, q, v, a, lam, s, steps, its, steady, sys_.last_force)
 
     if sys_.error(r0, sc0) <= 1.0:
         return done(x0, 1.0, 0, 0)
@@ -451,7 +451,7 @@ def _continuation(scene, q0, v, a, t, settings, max_steps, min_step, steady):
             return done(y_new[:-1], 1.0, steps, its_total)
         res, jac, _ = _homotopy(sys_, y_new[:-1], float(y_new[-1]), r0)
         try:
-            aug = _solve_aug(jac, r0, weight[:-1] * tau[:-1], weight[-1] * tau[-1])
+            aug = _bordered_matrix(jac, r0, weight[:-1] * tau[:-1], weight[-1] * tau[-1])
             rhs = np.zeros(nf + m + 1)
             rhs[-1] = 1.0
             tau_new = linear_solve(aug, rhs)
@@ -465,9 +465,11 @@ def _continuation(scene, q0, v, a, t, settings, max_steps, min_step, steady):
         elif its >= 10:
             h *= 0.5
     s = float(y[-1])
+    why = (f"{max_steps} steps taken (max_steps)" if steps >= max_steps else
+           f"the step size fell below {min_step:g}: the load path cannot be followed further, e.g. a limit "
+           f"load, an element folding or a mechanism that moves freely")
     exc = ConvergenceError(f"{name} of {scene.name!r} failed: reached load factor {s:.9g} of 1 after {steps} "
-                           f"steps (step size fell below {min_step:g}: the load path cannot be followed "
-                           f"further, e.g. a limit load, an element folding or a mechanism that moves freely)",
+                           f"steps ({why})",
                            load_factor=s, steps=steps)
     exc.state = done(y[:-1], s, steps, its_total)
     raise exc
@@ -488,7 +490,7 @@ def _corrector(sys_, y_pred, tau, weight, r0, settings, name):
     def fun(y):
         h, jac, err = _homotopy(sys_, y[:-1], float(y[-1]), r0)
         row = float(wt @ (y - y_pred))
-        return np.concatenate([h, [row]]), _solve_aug(jac, r0, wt[:-1], wt[-1]), err
+        return np.concatenate([h, [row]]), _bordered_matrix(jac, r0, wt[:-1], wt[-1]), err
 
     y, _, its = newton_solve(fun, y_pred, settings, name, f"load factor {y_pred[-1]:.4g}")
     return y, its

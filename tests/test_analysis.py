@@ -132,6 +132,27 @@ def test_exact_beam_rolls_up_into_a_circle(n_elements):
     assert state.steps > 1 and state.load_factor == 1.0   # reached by automatic stepping
 
 
+def test_snap_through_past_the_limit_load():
+    # von Mises truss: a mass on two springs from (±b, 0), guided vertically, pushed down by F
+    # beyond the limit load (43 N here): the load path turns at the limit point and the
+    # equilibrium lies on the inverted branch, reached by the arc-length steps
+    from scipy.optimize import brentq
+
+    b, h, k, force = 1.0, 0.5, 1000.0, 60.0
+    apex = sf.PointMass(1.0, [0.0, h], name="apex")
+    springs = [sf.LinearSpring(apex.point(), (-b, 0.0), k), sf.LinearSpring(apex.point(), (b, 0.0), k)]
+    scene = sf.Scene([apex], constraints=[sf.Slider(apex.point(), (0.0, 1.0), (0.0, 0.0))],
+                     forces=springs + [sf.PointForce(apex.point(), (0.0, -force))], name="von_mises_truss")
+    rest = np.hypot(b, h)
+
+    def lift(y):                                        # vertical pull of both springs on the apex, N
+        return 2 * k * (np.hypot(b, y) - rest) * (-y) / np.hypot(b, y)
+    assert lift(np.linspace(0.0, h, 1001)).max() < force
+    state = sf.static_equilibrium(scene)
+    assert state.q[1] == pytest.approx(brentq(lambda y: lift(y) - force, -5 * h, -h), rel=1e-10)
+    assert state.steps > 2
+
+
 def test_static_failure_names_the_load_factor():
     # a clamped beam crushed along its axis by twice its axial stiffness EA: at half the load
     # the elements' stretch 1 + ε reaches zero and the path cannot go on
