@@ -272,6 +272,17 @@ def sps_like(a):
     return hasattr(a, "tocsr")
 
 
+def test_large_hanging_pendulum_reduces_sparsely():
+    scene = scenes.flexible_pendulum(EI=1e6, n_elements=200)          # 603 coordinates
+    state = sf.static_equilibrium(scene, q=_hanging(scene))
+    res = sf.modes(scene, about=state, n_modes=2)
+    basis = res.system.basis
+    assert basis.shape == (scene.n, scene.n - 2) and basis.nnz == scene.n - 2   # the pin touches R only
+    assert sps_like(res.system.stiffness)
+    rigid = np.sqrt(G / 2 / (1 / 3 + 1e-4))
+    assert res.omega[0] == pytest.approx(rigid, rel=1e-4)
+
+
 def test_null_space_basis_is_sparse_and_spans_the_tangent_space():
     rng = np.random.default_rng(3)
     n, m = 400, 6
