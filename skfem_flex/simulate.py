@@ -77,13 +77,8 @@ class _Recorder:
 
 def _reaction_maps(scene):
     """[(unique name, fn(q, lam) -> reaction)] for the scene's constraints (names made unique with #2, #3...)."""
-    out, seen = [], {}
-    for c, idx, rows in zip(scene.constraints, scene._con_idx, scene._con_rows):
-        name = c.name
-        seen[name] = seen.get(name, 0) + 1
-        if seen[name] > 1:
-            name = f"{name}#{seen[name]}"
-
+    out = []
+    for name, c, idx, rows in zip(scene.reaction_names, scene.constraints, scene._con_idx, scene._con_rows):
         def fn(q, lam, c=c, idx=idx, rows=rows):
             if lam.size != scene.n_constraints:
                 return np.full(len(c.reaction_labels) or c.n_equations, np.nan)
