@@ -235,7 +235,8 @@ def test_damped_oscillator_damping_ratio():
     m, k, c = 2.0, 50.0, 3.0
     mass = sf.PointMass(m, [1.0, 0.0], name="mass")
     scene = sf.Scene([mass], constraints=[sf.Slider(mass.point(), (1.0, 0.0), (0.0, 0.0))],
-                     forces=[sf.LinearSpring(mass.point(), (0.0, 0.0), k), sf.LinearDamper(mass.point(), (0.0, 0.0), c)])
+                     forces=[sf.LinearSpring(mass.point(), (0.0, 0.0), k),
+                             sf.LinearDamper(mass.point(), (0.0, 0.0), c)])
     res = sf.modes(scene, about="static", n_modes=2)
     assert res.eigenvalues.size == 1                    # one dof: one complex pair
     zeta, wn = c / (2 * np.sqrt(k * m)), np.sqrt(k / m)
