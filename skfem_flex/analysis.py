@@ -46,7 +46,7 @@ from .integrators import EnergyMomentum, NewtonSettings, State, linear_solve, ne
 from .scene import add_matrices
 
 __all__ = ["EquilibriumState", "LinearSystem", "Modes", "CampbellDiagram", "static_equilibrium", "linearize",
-           "modes", "campbell", "null_space_basis", "write_mode_series", "ABOUT"]
+           "modes", "campbell", "null_space_basis", "write_mode_series", "force_balance", "ABOUT", "DENSE_EIGEN_LIMIT"]
 
 _EPS = np.finfo(float).eps
 _TINY = 1e-300
