@@ -24,6 +24,8 @@ from .integrators import (ConvergenceError, EnergyMomentum, GeneralizedAlpha, Ne
 from .result import Result
 from .simulate import simulate
 from .output import VTKSeries
+from .analysis import (CampbellDiagram, EquilibriumState, LinearSystem, Modes, campbell, linearize, modes,
+                       static_equilibrium)
 from . import scenes
 
 __version__ = "0.1.0"
