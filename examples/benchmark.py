@@ -19,7 +19,24 @@ the median wall time, µs per step and Newton iterations per step, and is
 written as Markdown to ``OUT/benchmark.md`` (default ``examples/output``),
 which the README quotes.
 
-Run ``python examples/benchmark.py [--repeat 3] [--window 1.0] [--record-every 10] [--out DIR]``.
+Two more tables:
+
+* every catalogue scene with its default settings under each scheme: µs per
+  step over the first ``--catalogue-steps`` steps (after a two-step warm-up),
+  with the number of coordinates;
+* with exudyn installed (``pip install ".[bench]"``), the same problems in
+  both codes side by side in this process (:mod:`peer_exudyn`), alternating,
+  median of ``--repeat``, every step recorded on both sides: spin-up (8
+  elements, Δt = 1e-3, 30 s), flexible pendulum (16 elements, Δt = 1e-4 and
+  1e-3, 2 s), rigid pendulum (Δt = 1e-2, 10 s). Each code's error is the
+  largest distance over the run between its probe and a converged
+  reference: the exact elliptic motion for the pendulum; for the beams a
+  run refined 4× in space and time (ours for the spin-up, exudyn's for the
+  flexible pendulum, where ours is slower; the two codes' beams agree to
+  5e-7 m at equal mesh). Without exudyn our side still runs.
+
+Run ``python examples/benchmark.py [--repeat 3] [--window 1.0] [--record-every 10] [--catalogue-steps 200]
+[--no-loop] [--no-catalogue] [--no-peer] [--out DIR]``.
 
 Parameter sweeps on a local Dask cluster (16 spin-up cases on 2 workers against
 16 serial runs, per-case overhead) are timed by ``examples/sweep_benchmark.py``.
@@ -113,6 +130,140 @@ def table(rows, record_every, warm, cold=None):
     return "\n".join(lines) + "\n"
 
 
+# ------------------------------------------------------------------ every catalogue scene
+SCHEMES = ("energy-momentum", "trapezoidal", "generalized-alpha")
+
+
+def catalogue_rows(steps=200):
+    """Rows (scene, coordinates, scheme, dt, µs per step) for every catalogue scene, default settings."""
+    rows = []
+    for name in sorted(sf.scenes.CATALOGUE):
+        factory = sf.scenes.CATALOGUE[name]
+        dt = factory.defaults.get("dt", 1e-3)
+        t_end = min(factory.defaults.get("t_end", steps * dt), steps * dt)
+        n = factory().n
+        for scheme in SCHEMES:
+            try:
+                sf.simulate(factory(), t_end=2 * dt, dt=dt, integrator=scheme)         # compile / load
+                res = sf.simulate(factory(), t_end=t_end, dt=dt, integrator=scheme)
+                rows.append((name, n, scheme, dt, 1e6 * res.wall_time / res.steps, ""))
+            except sf.SimulationError as exc:
+                rows.append((name, n, scheme, dt, float("nan"), str(exc).splitlines()[0][:80]))
+    return rows
+
+
+def catalogue_table(rows, steps):
+    lines = [f"Every catalogue scene with its default parameters and step, the first {steps} steps "
+             f"(or its default run if shorter), every step recorded, no files; after a two-step warm-up.", "",
+             "| scene | coordinates | Δt (s) | " + " | ".join(f"{s} µs/step" for s in SCHEMES) + " |",
+             "|---|---|---|" + "---|" * len(SCHEMES)]
+    by = {}
+    for name, n, scheme, dt, us, msg in rows:
+        by.setdefault((name, n, dt), {})[scheme] = f"{us:.0f}" if np.isfinite(us) else f"failed: {msg}"
+    for (name, n, dt), cells in by.items():
+        lines.append(f"| {name} | {n} | {dt:g} | " + " | ".join(cells.get(s, "") for s in SCHEMES) + " |")
+    return "\n".join(lines) + "\n"
+
+
+# ------------------------------------------------------------------ side by side with exudyn
+def _max_distance(t, probe, reference):
+    """Largest |probe(t) − reference(t)| over the run, m; ``reference`` is callable t -> (n, 2)."""
+    return float(np.max(np.linalg.norm(np.asarray(probe) - reference(np.asarray(t)), axis=1)))
+
+
+def _spline(t, values):
+    from scipy.interpolate import CubicSpline
+    return CubicSpline(np.asarray(t), np.asarray(values), axis=0)
+
+
+def _reference(out, key, compute):
+    """A converged reference (t, probe) computed once and kept in OUT/peer_references.npz."""
+    path = Path(out) / "peer_references.npz"
+    data = dict(np.load(path)) if path.exists() else {}
+    if key + "_t" not in data:
+        t, probe = compute()
+        data[key + "_t"], data[key + "_p"] = np.asarray(t), np.asarray(probe)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        np.savez(path, **data)
+    return _spline(data[key + "_t"], data[key + "_p"])
+
+
+def _pendulum_exact(length=0.5, v0=1.695, g=9.81):
+    from scipy.special import ellipj
+
+    def position(t):
+        k = v0 / (2.0 * np.sqrt(g * length))
+        theta = 2.0 * np.arcsin(k * ellipj(np.sqrt(g / length) * t, k * k)[0])
+        return length * np.stack([np.sin(theta), -np.cos(theta)], axis=-1)
+    return position
+
+
+def peer_problems(out):
+    """[(label, our scene factory, our scheme, dt, t_end, probe, peer run, peer scheme, reference factory)]."""
+    import peer_exudyn as peer
+
+    def spin_ref():
+        r = sf.simulate(sf.scenes.spin_up_beam(omega=4.0, n_elements=32), t_end=30.0, dt=2.5e-4)
+        return r.t, r.probes["tip"]
+
+    def flex_ref():
+        t, p, _ = peer.flexible_pendulum(n_elements=64, dt=2.5e-5)()
+        return t, p
+    def spin():
+        return _reference(out, "spin_up", spin_ref)
+
+    def flex():
+        return _reference(out, "flexible_pendulum", flex_ref)
+
+    def exact():
+        return _pendulum_exact()
+    rows = [("spin-up ω = 4, 8 elements", lambda: sf.scenes.spin_up_beam(omega=4.0, n_elements=8),
+             "energy-momentum", 1e-3, 30.0, "tip", peer.spin_up(8, 1e-3, 30.0), "generalized-alpha 0.9", spin)]
+    for dt in (1e-4, 1e-3):
+        rows.append((f"flexible pendulum, 16 elements", lambda: sf.scenes.flexible_pendulum(n_elements=16),
+                     "energy-momentum", dt, 2.0, "tip", peer.flexible_pendulum(16, dt, 2.0),
+                     "generalized-alpha 0.9", flex))
+    for scheme in ("trapezoidal", "energy-momentum"):
+        rows.append(("rigid pendulum", sf.scenes.pendulum, scheme, 1e-2, 10.0, "position",
+                     peer.pendulum(1e-2, 10.0), "trapezoidal, index 2", exact))
+    return rows
+
+
+def peer_rows(out, repeat=3, only=None):
+    """Rows (problem, dt, our scheme, ours s, peer scheme, peer s, ratio, our error, peer error).
+
+    ``only``: a substring of the problem labels to run (all by default).
+    """
+    rows = []
+    for label, scene, scheme, dt, t_end, probe, peer_run, peer_scheme, ref in peer_problems(out):
+        if only is not None and only not in label:
+            continue
+        ref = ref()
+        ours, theirs = [], []
+        for _ in range(repeat):             # alternate, so that both see the same machine load
+            res = sf.simulate(scene(), t_end=t_end, dt=dt, integrator=scheme, record_every=1)
+            ours.append(res.wall_time)
+            t, p, seconds = peer_run()
+            theirs.append(seconds)
+        mine, peer_s = statistics.median(ours), statistics.median(theirs)
+        rows.append((label, dt, scheme, mine, peer_scheme, peer_s, mine / peer_s,
+                     _max_distance(res.t, res.probes[probe], ref), _max_distance(t, p, ref)))
+    return rows
+
+
+def peer_table(rows, repeat):
+    import peer_exudyn as peer
+    lines = [f"Side by side with exudyn {peer.version()} in this process, alternating, median of {repeat}, "
+             f"every step recorded on both sides; error = largest distance (m) over the run from the converged "
+             f"reference.", "",
+             "| problem | Δt (s) | our scheme | ours (s) | exudyn scheme | exudyn (s) | ratio ours/exudyn "
+             "| our error (m) | exudyn error (m) |",
+             "|---|---|---|---|---|---|---|---|---|"]
+    lines += [f"| {a} | {dt:g} | {s} | {w:.3g} | {ps} | {pw:.3g} | {r:.2f} | {e:.2e} | {pe:.2e} |"
+              for a, dt, s, w, ps, pw, r, e, pe in rows]
+    return "\n".join(lines) + "\n"
+
+
 def _numba_version():
     import numba
     return numba.__version__
@@ -123,11 +274,26 @@ if __name__ == "__main__":
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--window", type=float, default=1.0, help="simulated seconds for meshes above 16 elements")
     ap.add_argument("--record-every", type=int, default=10, help="record every n-th step")
+    ap.add_argument("--catalogue-steps", type=int, default=200, help="steps per catalogue scene and scheme")
+    ap.add_argument("--no-loop", action="store_true", help="skip the spin-up/pendulum time-loop table")
+    ap.add_argument("--no-catalogue", action="store_true", help="skip the table of every catalogue scene")
+    ap.add_argument("--no-peer", action="store_true", help="skip the side-by-side runs with exudyn")
     ap.add_argument("--out", default=str(Path(__file__).parent / "output"))
     args = ap.parse_args()
-    cold = cold_compile()
-    warm = warm_up()
-    text = table(run(args.repeat, args.window, args.record_every), args.record_every, warm, cold)
+    parts = []
+    if not args.no_loop:
+        cold = cold_compile()
+        warm = warm_up()
+        parts.append(table(run(args.repeat, args.window, args.record_every), args.record_every, warm, cold))
+    if not args.no_catalogue:
+        parts.append(catalogue_table(catalogue_rows(args.catalogue_steps), args.catalogue_steps))
+    if not args.no_peer:
+        import peer_exudyn
+        if peer_exudyn.available():
+            parts.append(peer_table(peer_rows(args.out, args.repeat), args.repeat))
+        else:
+            parts.append("exudyn is not installed (pip install \".[bench]\"): no side-by-side table.\n")
+    text = "\n".join(parts)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "benchmark.md").write_text(text)

@@ -4,6 +4,7 @@ Timoshenko beams (linear, floating frame of reference, geometrically exact),
 rigid bodies and point masses, joined by constraints and integrated in time
 by an energy-conserving scheme, the trapezoidal rule or generalized-α.
 """
+from . import jit_cache  # noqa: F401  (first: compiled kernels must see the package's cache rule)
 from .section import Section
 from .beam import TimoshenkoBeam
 from .bodies import Body, BodyGeometry, BodyPoint, PointMass
@@ -24,6 +25,8 @@ from .result import Result
 from .simulate import simulate
 from .sweep import open_sweep, sweep
 from .output import VTKSeries
+from .analysis import (CampbellDiagram, EquilibriumState, LinearSystem, Modes, campbell, linearize, modes,
+                       static_equilibrium)
 from . import scenes
 
 __version__ = "0.1.0"

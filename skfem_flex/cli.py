@@ -8,7 +8,10 @@
     skfem-flex list
     skfem-flex study work-precision [CASE] [--schemes ...] [--quick] [--out DIR]
     skfem-flex study stability [--cases ...] [--schemes ...] [--quick] [--out DIR]
-    skfem-flex sweep SCENE --vary key=v1,v2,... [--vary ...] [--set key=value ...]
+    skfem-flex modes SCENE [--set key=value ...] [--n N] [--about static|steady|initial]
+                     [--out DIR] [--frames F] [--no-vtk] [--quiet]
+    skfem-flex campbell SCENE --vary NAME=VALUES [--set ...] [--n N] [--about ...] [--out DIR]
+    skfem-flex sweep SCENE --vary KEY=VALUES [--vary ...] [--set key=value ...]
                      [--t-end T] [--dt DT] [--integrator NAME] [--workers N | --scheduler ADDRESS]
                      [--resume | --no-resume] [--format netcdf|zarr] [--probe NAME] [--out DIR]
 
@@ -419,9 +422,153 @@ def _add_study(sub):
     p.set_defaults(func=_cmd_study)
 
 
+# --------------------------------------------------------------- modes, campbell
+def _catalogue_scene(name):
+    from . import scenes
+
+    if name not in scenes.CATALOGUE:
+        raise UsageError(f"unknown scene {name!r}; known scenes: {', '.join(sorted(scenes.CATALOGUE))}")
+    return scenes.get(name)
+
+
+def _analysis(name, compute):
+    """``compute()``; bad input becomes a UsageError (exit 2), an equilibrium that cannot be found
+    (a SimulationError) is reported in one line and gives None (exit 1)."""
+    from .errors import SimulationError
+
+    try:
+        return compute()
+    except SimulationError as exc:
+        print(f"skfem-flex: error: {_one_line(exc)}", file=sys.stderr)
+        return None
+    except (ValueError, TypeError) as exc:
+        raise UsageError(f"scene {name!r}: {_one_line(exc)}") from None
+
+
+def _cmd_modes(args):
+    from .analysis import modes, write_mode_series
+    from .output import _atomic_write_text
+
+    factory = _catalogue_scene(args.scene)
+    params = _scene_settings(args.scene, args.set)
+    out = Path(args.out) if args.out is not None else Path("results") / f"{args.scene}-modes"
+    scene = _analysis(args.scene, lambda: factory(**params))
+    result = None if scene is None else _analysis(args.scene, lambda: modes(scene, about=args.about,
+                                                                          n_modes=args.n))
+    if result is None:
+        return 1
+    _prepare_out(out)
+    rows = result.table()
+    lines = ["mode,omega_rad_s,frequency_hz,damping_ratio,growth_rate_1_s"]
+    lines += [f"{r['mode']},{r['omega_rad_s']!r},{r['frequency_hz']!r},{r['damping_ratio']!r},"
+              f"{r['growth_rate_1_s']!r}" for r in rows]
+    _atomic_write_text(out / "modes.csv", "\n".join(lines) + "\n")
+    pvds = [] if args.no_vtk else write_mode_series(scene, result, out, frames=args.frames)
+    summary = {"scene": args.scene, "parameters": dict(scene.parameters) or params, "about": result.about,
+               "modes": rows, "stable": result.stable, "vtk": [str(p) for p in pvds]}
+    _atomic_write_text(out / "summary.json", json.dumps(_jsonable(summary), indent=2) + "\n")
+    if not args.quiet:
+        print(f"{args.scene}: {len(rows)} modes about the {result.about} state"
+              f"{'' if result.stable else ' (UNSTABLE: a mode grows)'}")
+        print(f"{'mode':>4} {'omega (rad/s)':>15} {'f (Hz)':>13} {'damping ratio':>14} {'growth (1/s)':>13}")
+        for r in rows:
+            print(f"{r['mode']:>4} {r['omega_rad_s']:>15.8g} {r['frequency_hz']:>13.8g} "
+                  f"{r['damping_ratio']:>14.4g} {r['growth_rate_1_s']:>13.4g}")
+        print(f"outputs in {out.resolve()}/: modes.csv, summary.json"
+              + (f", {len(pvds)} VTK series (one .pvd per mode, a cycle from t = 0 to 1)" if pvds else ""))
+    return 0
+
+
+def _vary_values(key, text, default):
+    """Values of ``--vary NAME=VALUES``: a comma list, or START:STOP:COUNT (evenly spaced)."""
+    import numpy as np
+
+    if not text:
+        raise UsageError(f"--vary {key}= needs values: a comma list (0,4,8) or START:STOP:COUNT")
+    if text.count(":") == 2:
+        a, b, c = text.split(":")
+        lo, hi = convert_setting(key, a, 0.0), convert_setting(key, b, 0.0)
+        count = convert_setting(key, c, 0)
+        if count < 1:
+            raise UsageError(f"--vary {key}={text}: COUNT must be a positive integer")
+        return [float(x) for x in np.linspace(lo, hi, count)]
+    return [convert_setting(key, item, 0.0 if default is None else default) for item in text.split(",")]
+
+
+def _cmd_campbell(args):
+    import inspect as _inspect
+
+    from .analysis import campbell
+    from . import scenes
+
+    _catalogue_scene(args.scene)
+    params = _scene_settings(args.scene, args.set)
+    key, sep, text = args.vary.partition("=")
+    key = key.strip()
+    known = {p: d for p, d, _ in scenes.parameters(args.scene)}
+    if not sep or not key:
+        raise UsageError(f"--vary expects NAME=VALUES, got {args.vary!r}")
+    if key not in known:
+        raise UsageError(f"scene {args.scene!r} has no parameter {key!r}; it has: {', '.join(known) or 'none'}")
+    default = None if known[key] is _inspect.Parameter.empty else known[key]
+    if isinstance(default, (bool, str)):
+        raise UsageError(f"--vary {key}: only numeric parameters can be varied, {key} is {type(default).__name__}")
+    values = _vary_values(key, text.strip(), default)
+    params.pop(key, None)
+    out = Path(args.out) if args.out is not None else Path("results") / f"{args.scene}-campbell"
+    diagram = _analysis(args.scene, lambda: campbell(args.scene, key, values, n_modes=args.n, about=args.about,
+                                                     **params))
+    if diagram is None:
+        return 1
+    _prepare_out(out)
+    csv_path, md_path = diagram.write_table(out / "campbell")
+    png = out / "campbell.png"
+    diagram.plot(png)
+    if not args.quiet:
+        print(md_path.read_text(), end="")
+        print(f"wrote {md_path}, {csv_path} and {png}")
+    return 0
+
+
+def _add_analysis_options(p, about_default):
+    p.add_argument("scene", metavar="SCENE", help="scene name from 'skfem-flex list'")
+    p.add_argument("--set", action="extend", nargs="+", metavar="KEY=VALUE", default=[],
+                   help="scene parameter, converted to the type of its default (repeatable)")
+    p.add_argument("--n", type=_positive_int, default=6, metavar="N", help="number of modes (default 6)")
+    p.add_argument("--about", choices=["static", "steady", "initial"], default=about_default,
+                   help=f"state to linearize about (default: {about_default})")
+    p.add_argument("--out", default=None, metavar="DIR", help="output directory")
+    p.add_argument("--quiet", action="store_true", help="no table on stdout")
+
+
+def _add_modes(sub):
+    p = sub.add_parser("modes", help="modes of a scene about its static, steady or initial state",
+                       description="Linearize a catalogue scene about its static equilibrium, its steady "
+                                   "motion or its initial state and write the lowest modes (modes.csv, "
+                                   "summary.json) and one VTK series per mode animating it (default "
+                                   "results/SCENE-modes).")
+    _add_analysis_options(p, "static")
+    p.add_argument("--frames", type=_positive_int, default=24, metavar="F",
+                   help="frames per cycle of each mode's VTK series (default 24)")
+    p.add_argument("--no-vtk", action="store_true", help="skip the VTK series")
+    p.set_defaults(func=_cmd_modes)
+
+
+def _add_campbell(sub):
+    p = sub.add_parser("campbell", help="Campbell diagram: frequencies against a scene parameter",
+                       description="Frequencies of a catalogue scene against one parameter, each point "
+                                   "linearized about its own steady (or static/initial) state; writes "
+                                   "campbell.csv, campbell.md and campbell.png (default results/SCENE-campbell).")
+    _add_analysis_options(p, "steady")
+    p.add_argument("--vary", required=True, metavar="NAME=VALUES",
+                   help="parameter and its values: a comma list (0,4,8) or START:STOP:COUNT")
+    p.set_defaults(func=_cmd_campbell)
+
+
 # --------------------------------------------------------------------- sweep
 def _sweep_grid(name, items):
-    """{name: [values]} from ``--vary key=v1,v2,...``, each value converted like ``--set`` (run settings too)."""
+    """{name: [values]} from ``--vary KEY=VALUES`` (as for ``campbell``: a comma list or START:STOP:COUNT),
+    converted to the type of the parameter's default; ``t_end``, ``dt`` and ``integrator`` may be varied too."""
     from . import scenes
     from .sweep import RUN_SETTINGS
 
@@ -431,16 +578,14 @@ def _sweep_grid(name, items):
     for item in items or ():
         key, sep, text = item.partition("=")
         key = key.strip()
-        values = [v.strip() for v in text.split(",")]
-        if not sep or not key or not all(values):
-            raise UsageError(f"--vary expects key=value1,value2,..., got {item!r}")
+        if not sep or not key:
+            raise UsageError(f"--vary expects KEY=VALUES, got {item!r}")
         if key in grid:
             raise UsageError(f"--vary {key} is given twice")
-        default = params.get(key, run_defaults.get(key) if key in RUN_SETTINGS else None)
-        default = None if default is inspect.Parameter.empty else default
-        # unknown names are reported by the sweep's plan, in the same words as for the API
+        # unknown names pass as text: the sweep's plan reports them, in the same words as for the API
+        default = params.get(key, run_defaults[key] if key in RUN_SETTINGS else "")
         try:
-            grid[key] = [convert_setting(key, v, default) for v in values]
+            grid[key] = _vary_values(key, text.strip(), None if default is inspect.Parameter.empty else default)
         except UsageError as exc:
             raise UsageError(str(exc).replace(f"--set {key}=", f"--vary {key}=", 1)) from None
     return grid
@@ -530,8 +675,9 @@ def _add_sweep(sub):
                                    "parameters into --out. Cases already in the store are not run again "
                                    "(--no-resume recomputes them).")
     p.add_argument("scene", metavar="SCENE", help="scene name from 'skfem-flex list'")
-    p.add_argument("--vary", action="append", default=[], metavar="KEY=V1,V2,...",
-                   help="a scene parameter (or t_end, dt, integrator) and its values (repeatable: a grid)")
+    p.add_argument("--vary", action="append", default=[], metavar="KEY=VALUES",
+                   help="a scene parameter (or t_end, dt, integrator) and its values: a comma list or "
+                        "START:STOP:COUNT (repeatable: a grid)")
     p.add_argument("--set", action="extend", nargs="+", metavar="KEY=VALUE", default=[],
                    help="a scene parameter fixed for every case (repeatable)")
     p.add_argument("--t-end", type=_number, default=None, metavar="T", help="end time, s (default: the scene's)")
@@ -559,7 +705,7 @@ def _add_sweep(sub):
 
 
 #: functions adding one subcommand each to the subparsers
-SUBCOMMANDS = [_add_run, _add_list, _add_study, _add_sweep]
+SUBCOMMANDS = [_add_run, _add_list, _add_study, _add_modes, _add_campbell, _add_sweep]
 
 
 def build_parser():

@@ -373,10 +373,18 @@ class Constraint:
         """2 Φ_qt v + Φ_tt, the explicit-time part of the acceleration equation."""
         return np.zeros(self.n_equations)
 
+    def velocity_jacobian(self, q, v, t):
+        """∂(Φ_q v)/∂q at fixed v, shape (n_equations, len(q)).
+
+        Row i is vᵀ ∂²Φ_i/∂q² (the Hessian of a scalar is symmetric), taken
+        from :meth:`hessian_product` with μ = e_i.
+        """
+        rows = [v @ to_dense(self.hessian_product(q, e, t)) for e in np.eye(self.n_equations)]
+        return np.asarray(rows, dtype=float).reshape(self.n_equations, len(q))
+
     def acceleration_rhs(self, q, v, t):
         """γ with Φ_q q̈ = γ: γ = −(Φ_q v)_q v − 2 Φ_qt v − Φ_tt."""
-        rows = [v @ self.hessian_product(q, e, t) @ v for e in np.eye(self.n_equations)]
-        return -np.asarray(rows, dtype=float) - self.time_terms(q, v, t)
+        return -(self.velocity_jacobian(q, v, t) @ v) - self.time_terms(q, v, t)
 
     def discrete_gradient(self, q0, q1, t):
         """D with D (q1 − q0) = Φ(q1, t) − Φ(q0, t).

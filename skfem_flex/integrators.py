@@ -22,7 +22,11 @@ itself, so that v_{n+1} keeps its digits as q grows; see
     the Newton residual: the energy balance holds to the Newton tolerance for
     nonlinear, constrained systems.
 ``trapezoidal``
-    Average-acceleration Newmark (β = ¼, γ = ½), equilibrium at t_{n+1}.
+    Average-acceleration Newmark (β = ¼, γ = ½), equilibrium at t_{n+1},
+    constraints at velocity level (index 2): Φ_q(q_{n+1}) v_{n+1} +
+    Φ_t = 0, as the established multibody codes run it. Positions then
+    drift off Φ = 0 by O(Δt²) (reported as the constraint residual) but the
+    weak instability of the index-3 form is gone.
 ``generalized-alpha``
     Chung–Hulbert with spectral radius ρ∞, constraints at position level in
     the form of Arnold & Brüls (2007); the velocity-level residual
@@ -41,7 +45,7 @@ from .errors import ConvergenceError, SimulationError
 from .rotations import MAX_INCREMENT, cayley, cayley_derivative, cayley_ratio, cayley_ratio_derivative
 from .scene import add_matrices
 
-__all__ = ["SimulationError", "ConvergenceError", "NewtonSettings", "State", "Integrator",
+__all__ = ["SimulationError", "ConvergenceError", "NewtonSettings", "State", "Integrator", "newton_solve", "linear_solve",
            "EnergyMomentum", "Newmark", "Trapezoidal", "GeneralizedAlpha", "make_integrator", "INTEGRATORS"]
 
 _EPS = np.finfo(float).eps
@@ -232,8 +236,96 @@ def _solve(a, b):
     return np.linalg.solve(a, b)
 
 
+def linear_solve(a, b):
+    """x with a x = b for a dense, banded-sparse or general sparse ``a`` (the core's one linear solver).
+
+    Raises ``numpy.linalg.LinAlgError`` when ``a`` is singular.
+    """
+    return _solve(a, b)
+
+
 def _inf(x):
     return float(np.abs(x).max()) if np.size(x) else 0.0
+
+
+def newton_solve(fun, x0, settings, name, where, x_scale=0.0):
+    """Solve fun(x) = 0 by Newton–Raphson under the rules every solver of the package shares.
+
+    Parameters
+    ----------
+    fun : callable x -> (r, J, err)
+        Residual r, its Jacobian J (dense or sparse) and the scaled error
+        err (≤ 1 means converged; the caller scales its own measures).
+    x0 : ndarray
+        Start.
+    settings : NewtonSettings
+        ``max_iterations`` and ``line_search`` are used here.
+    name : str
+        Solver name for messages.
+    where : str
+        Where the solve happens (time and step, load factor) for messages.
+    x_scale : float
+        Size of the state x belongs to when x is an increment of it (the time steppers'
+        Δq); a step that starts at rest has x ≈ 0, and its updates are then judged
+        against this size for the stagnation exit.
+
+    Returns
+    -------
+    x, r, iterations
+
+    Raises
+    ------
+    ConvergenceError
+        On a non-finite residual, a singular Jacobian or no convergence
+        within ``settings.max_iterations``.
+
+    Notes
+    -----
+    An update below round-off of x, or a stagnating residual at its
+    round-off floor, also ends the iteration; when the residual grows the
+    update is halved (line search, at most 6 times).
+    """
+    s = settings
+    x = x0.copy()
+    r, jac, err = fun(x)
+    err_prev = np.inf
+    for it in range(s.max_iterations + 1):
+        if not (np.all(np.isfinite(r)) and np.isfinite(err)):
+            raise ConvergenceError(f"{name}: residual is not finite at {where} after {it} iterations "
+                                   f"(the solution escaped or the step is far too large)",
+                                   iterations=it, residual=float("nan"))
+        if err <= 1.0:
+            return x, r, it
+        if it == s.max_iterations:
+            break
+        try:
+            dx = -_solve(jac, r)
+        except np.linalg.LinAlgError:
+            raise ConvergenceError(f"{name}: singular Newton matrix at {where}, iteration {it} "
+                                   f"(redundant constraints or a coordinate without inertia or stiffness)",
+                                   iterations=it, residual=err) from None
+        if not np.all(np.isfinite(dx)):
+            raise ConvergenceError(f"{name}: Newton update is not finite at {where}, iteration {it}",
+                                   iterations=it, residual=err)
+        if _inf(dx) <= 8 * _EPS * max(_inf(x), _TINY) and err < 1e6:
+            return x, r, it + 1          # update below round-off: as converged as floating point allows
+        if it >= 2 and err >= 0.25 * err_prev and _inf(dx) <= 1.5e-8 * max(_inf(x), x_scale) and err < 1e4:
+            return x, r, it + 1          # stagnated at the round-off floor of the residual's own terms
+        err_prev = err
+        step = 1.0
+        for _ in range(7 if s.line_search else 1):
+            x_try = x + step * dx
+            r_try, jac_try, err_try = fun(x_try)
+            # backtrack only on a real increase far from convergence: near the round-off floor
+            # (err_try ≤ _NEAR_FLOOR) the scaled residual jitters by factors of a few between
+            # equally good iterates, and halving would only burn residual evaluations
+            if not s.line_search or (np.isfinite(err_try) and (err_try < max(err, 1.0)
+                                                               or err_try <= _NEAR_FLOOR)):
+                break
+            step *= 0.5
+        x, r, jac, err = x_try, r_try, jac_try, err_try
+    raise ConvergenceError(f"{name}: Newton did not converge at {where}: scaled residual {err:.3g} "
+                           f"after {s.max_iterations} iterations", iterations=s.max_iterations, residual=err)
 
 
 class Integrator:
@@ -293,49 +385,9 @@ class Integrator:
         return replace(state, acc=acc, pseudo=acc.copy(), lam=lam, prescribed_force=reaction)
 
     # ---------------------------------------------------------------- Newton
-    def _newton(self, fun, x0, where):
-        """Solve fun(x) = 0; ``fun`` returns (r, J, err) with err ≤ 1 meaning converged."""
-        s = self.newton
-        x = x0.copy()
-        r, jac, err = fun(x)
-        err_prev = np.inf
-        for it in range(s.max_iterations + 1):
-            if not (np.all(np.isfinite(r)) and np.isfinite(err)):
-                raise ConvergenceError(f"{self.name}: residual is not finite at {where} after {it} iterations "
-                                       f"(the solution escaped or the step is far too large)",
-                                       iterations=it, residual=float("nan"))
-            if err <= 1.0:
-                return x, r, it
-            if it == s.max_iterations:
-                break
-            try:
-                dx = -_solve(jac, r)
-            except np.linalg.LinAlgError:
-                raise ConvergenceError(f"{self.name}: singular Newton matrix at {where}, iteration {it} "
-                                       f"(redundant constraints or a coordinate without inertia or stiffness)",
-                                       iterations=it, residual=err) from None
-            if not np.all(np.isfinite(dx)):
-                raise ConvergenceError(f"{self.name}: Newton update is not finite at {where}, iteration {it}",
-                                       iterations=it, residual=err)
-            if _inf(dx) <= 8 * _EPS * max(_inf(x), _TINY) and err < 1e6:
-                return x, r, it + 1          # update below round-off: as converged as floating point allows
-            if it >= 2 and err >= 0.25 * err_prev and _inf(dx) <= 1.5e-8 * _inf(x) and err < 1e4:
-                return x, r, it + 1          # stagnated at the round-off floor of the residual's own terms
-            err_prev = err
-            step = 1.0
-            for _ in range(7 if s.line_search else 1):
-                x_try = x + step * dx
-                r_try, jac_try, err_try = fun(x_try)
-                # backtrack only on a real increase far from convergence: near the round-off floor
-                # (err_try ≤ _NEAR_FLOOR) the scaled residual jitters by factors of a few between
-                # equally good iterates, and halving would only burn residual evaluations
-                if not s.line_search or (np.isfinite(err_try) and (err_try < max(err, 1.0)
-                                                                   or err_try <= _NEAR_FLOOR)):
-                    break
-                step *= 0.5
-            x, r, jac, err = x_try, r_try, jac_try, err_try
-        raise ConvergenceError(f"{self.name}: Newton did not converge at {where}: scaled residual {err:.3g} "
-                               f"after {s.max_iterations} iterations", iterations=s.max_iterations, residual=err)
+    def _newton(self, fun, x0, where, x_scale=0.0):
+        """Solve fun(x) = 0 by :func:`newton_solve` with this scheme's settings and name."""
+        return newton_solve(fun, x0, self.newton, self.name, where, x_scale)
 
     def step(self, scene, state, dt):
         """Advance ``state`` by ``dt``; returns (new State, StepInfo)."""
@@ -451,7 +503,9 @@ class EnergyMomentum(Integrator):
             on = np.isin(free, cay)
             dq_guess[on] = 2.0 * np.arctan(0.5 * dq_guess[on])
         x0 = np.concatenate([dq_guess, state.lam * dt if state.lam.size == m else np.zeros(m)])
-        x, _, its = self._newton(fun, x0, f"t = {t1:.6g} s (dt = {dt:.3g} s)")
+        # a step from rest in a stressed equilibrium (a run started from statics) has Δq ≈ 0 and a
+        # residual at the round-off floor of the internal forces: updates are judged against q
+        x, _, its = self._newton(fun, x0, f"t = {t1:.6g} s (dt = {dt:.3g} s)", _inf(q0[free]))
         dq, z, mu, q1, v1, r, d, ext = (cache[k] for k in ("dq", "z", "mu", "q1", "v1", "r", "d", "ext"))
         work = 0.0
         if ext is not None:
@@ -512,14 +566,22 @@ class Newmark(Integrator):
     ----------
     alpha_m, alpha_f, beta, gamma : float
         Algorithmic parameters.
+    constraint_level : {"position", "velocity"}
+        Enforce Φ(q_{n+1}, t_{n+1}) = 0 (index 3) or Φ_q v_{n+1} + Φ_t = 0
+        (index 2). The velocity-level row is multiplied by βΔt/γ, so that
+        its Jacobian is Φ_q + (βΔt/γ) ∂(Φ_q v)/∂q, the same size as the
+        position-level one (∂Φ_t/∂q is left out: zero for drivers).
     newton : NewtonSettings, optional
     """
 
     name = "newmark"
 
-    def __init__(self, alpha_m=0.0, alpha_f=0.0, beta=0.25, gamma=0.5, newton=None):
+    def __init__(self, alpha_m=0.0, alpha_f=0.0, beta=0.25, gamma=0.5, newton=None, constraint_level="position"):
         super().__init__(newton)
         self.alpha_m, self.alpha_f, self.beta, self.gamma = map(float, (alpha_m, alpha_f, beta, gamma))
+        if constraint_level not in ("position", "velocity"):
+            raise ValueError(f"constraint_level must be 'position' or 'velocity', got {constraint_level!r}")
+        self.constraint_level = constraint_level
 
     def step(self, scene, state, dt):
         am, af, beta, gamma = self.alpha_m, self.alpha_f, self.beta, self.gamma
@@ -532,6 +594,7 @@ class Newmark(Integrator):
         c_a = (1.0 - am) / ((1.0 - af) * beta * dt * dt)
         c_v = gamma / (beta * dt)
         rows_c = np.arange(m)
+        by_velocity = self.constraint_level == "velocity"
         s = self.newton
         cache = {}
 
@@ -574,10 +637,17 @@ class Newmark(Integrator):
                 r += ctmu
                 scale = max(scale, _inf(ctmu))
                 jac = add_matrices(jac, scene.constraint_hessian_product(q1, mu, t1))
-                c = scene.constraint_value(q1, t1)
                 c_scale = max(_inf(abs(cq) @ np.abs(q1)), _inf(abs(cq)) * scene.length_scale, _TINY)
-                cq_f = _sub_block(cq, rows_c, free)
-                full = _bordered(_sub_block(jac, free, free), cq_f.T, cq_f, scene.dense)
+                if by_velocity:
+                    # (βΔt/γ)(Φ_q v1 + Φ_t): a length, like Φ, so the same scale and tolerance apply
+                    phit = scene.constraint_time_derivative(q1, t1)
+                    c = (cq @ v1 + phit) / c_v
+                    c_scale = max(c_scale, _inf(abs(cq) @ np.abs(v1)) / c_v, _inf(phit) / c_v)
+                    cq_c = add_matrices(cq, scene.constraint_velocity_jacobian(q1, v1, t1) / c_v)
+                else:
+                    c, cq_c = scene.constraint_value(q1, t1), cq
+                cq_f = _sub_block(cq_c, rows_c, free)
+                full = _bordered(_sub_block(jac, free, free), _sub_block(cq, rows_c, free).T, cq_f, scene.dense)
                 res = np.concatenate([r[free], c])
                 err_c = _inf(c) / (s.ctol * c_scale)
             else:
@@ -588,7 +658,9 @@ class Newmark(Integrator):
 
         lam0 = state.lam if state.lam.size == m else np.zeros(m)
         x0 = np.concatenate([dt * v0[free] + 0.5 * dt * dt * x0acc[free], dt * lam0])
-        x, _, its = self._newton(fun, x0, f"t = {t1:.6g} s (dt = {dt:.3g} s)")
+        # a step from rest in a stressed equilibrium (a run started from statics) has Δq ≈ 0 and a
+        # residual at the round-off floor of the internal forces: updates are judged against q
+        x, _, its = self._newton(fun, x0, f"t = {t1:.6g} s (dt = {dt:.3g} s)", _inf(q0[free]))
         dq, mu, q1, v1, a1, acc1, r, ext, cq = (cache[k] for k in
                                                 ("dq", "mu", "q1", "v1", "a1", "acc1", "r", "ext", "cq"))
         lam1 = mu / dt
@@ -614,12 +686,18 @@ class Newmark(Integrator):
 
 
 class Trapezoidal(Newmark):
-    """Average-acceleration Newmark (β = ¼, γ = ½), ``"trapezoidal"``."""
+    """Average-acceleration Newmark (β = ¼, γ = ½) with velocity-level constraints, ``"trapezoidal"``.
+
+    Index 2, as the established multibody codes run the trapezoidal rule:
+    Φ_q(q_{n+1}) v_{n+1} + Φ_t(t_{n+1}) = 0. The position-level (index-3)
+    form is ``Newmark(constraint_level="position")``; it drives the
+    multipliers into a growing zigzag on a swinging pendulum.
+    """
 
     name = "trapezoidal"
 
     def __init__(self, newton=None):
-        super().__init__(0.0, 0.0, 0.25, 0.5, newton)
+        super().__init__(0.0, 0.0, 0.25, 0.5, newton, constraint_level="velocity")
 
 
 class GeneralizedAlpha(Newmark):

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["plot_energy", "plot_probes", "plot_constraints", "plot_snapshots", "save_plots", "pyplot_for",
-           "plot_sweep_extremes"]
+           "plot_campbell", "plot_sweep_extremes"]
 
 
 def pyplot_for(directory):
@@ -173,6 +173,35 @@ def plot_snapshots(scene, result, path=None, count=6):
     ax[0, 0].set_xlabel("x (m)", fontsize="small")
     ax[0, 0].set_ylabel("y (m)", fontsize="small")
     fig.suptitle(scene.name)
+    return _finish(fig, path)
+
+
+def plot_campbell(diagram, path=None, orders=None):
+    """Campbell diagram: frequencies (Hz) against the parameter, one line per mode order.
+
+    ``diagram`` is a :class:`~skfem_flex.analysis.CampbellDiagram`. Points of growing modes
+    (Re s > 0) are marked with a red ×. ``orders``: excitation orders n drawn as lines
+    f = n · value/2π (for a spin rate in rad/s); default (1,) when the parameter's unit is
+    rad/s, none otherwise.
+    """
+    fig, ax = _figure(1, 1, size=(7.0, 4.5))
+    a = ax[0, 0]
+    values = np.asarray(diagram.values, dtype=float)
+    f = diagram.frequency_hz
+    for k in range(f.shape[1]):
+        a.plot(values, f[:, k], ".-", label=f"mode {k + 1}")
+        bad = diagram.growth_rate[:, k] > 1e-9 * np.maximum(np.abs(diagram.omega[:, k]), 1.0)
+        if np.any(bad):
+            a.plot(values[bad], f[bad, k], "x", color="C3", ms=8)
+    if orders is None:
+        orders = (1,) if diagram.unit == "rad/s" else ()
+    for n in orders:
+        a.plot(values, n * values / (2 * np.pi), "k--", lw=0.8, label=f"{n}× excitation")
+    a.set_xlabel(f"{diagram.parameter} ({diagram.unit})" if diagram.unit else diagram.parameter)
+    a.set_ylabel("frequency (Hz)")
+    a.set_title(f"Campbell diagram: {diagram.scene_name} (about the {diagram.about} state; × growing)")
+    a.grid(alpha=0.3)
+    a.legend(fontsize="small", ncols=2)
     return _finish(fig, path)
 
 

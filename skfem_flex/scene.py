@@ -460,6 +460,11 @@ class Scene:
             out[r] = c.acceleration_rhs(q[i], v[i], t)
         return out
 
+    def constraint_velocity_jacobian(self, q, v, t):
+        """∂(Φ_q v)/∂q at fixed v, shape (n_constraints, n)."""
+        return self._assemble_rows([(c.velocity_jacobian(q[i], v[i], t), i, r)
+                                    for c, i, r in zip(self.constraints, self._con_idx, self._con_rows)])
+
     def constraint_hessian_product(self, q, mu, t):
         """∂(Φ_qᵀ μ)/∂q, shape (n, n)."""
         acc = self._zeros()
@@ -478,6 +483,23 @@ class Scene:
         for c, i, r in zip(self.constraints, self._con_idx, self._con_rows):
             self._add(acc, c.discrete_gradient_jacobian(q0[i], q1[i], mu[r], t), i)
         return acc.result()
+
+    @property
+    def reaction_names(self):
+        """Unique names of the constraints in multiplier order (repeated names get #2, #3, ...)."""
+        out, seen = [], {}
+        for c in self.constraints:
+            seen[c.name] = seen.get(c.name, 0) + 1
+            out.append(c.name if seen[c.name] == 1 else f"{c.name}#{seen[c.name]}")
+        return tuple(out)
+
+    def constraint_reactions(self, q, lam):
+        """{unique constraint name: reaction} at q with multipliers λ (``Constraint.reaction``)."""
+        lam = np.asarray(lam, dtype=float)
+        if lam.size != self.n_constraints:
+            raise ValueError(f"lam must have {self.n_constraints} entries, got {lam.size}")
+        return {name: np.atleast_1d(np.asarray(c.reaction(q[i], lam[r]), dtype=float))
+                for name, c, i, r in zip(self.reaction_names, self.constraints, self._con_idx, self._con_rows)}
 
     # ---------------------------------------------------------------- momenta
     def linear_momentum(self, q, v):

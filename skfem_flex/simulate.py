@@ -77,13 +77,8 @@ class _Recorder:
 
 def _reaction_maps(scene):
     """[(unique name, fn(q, lam) -> reaction)] for the scene's constraints (names made unique with #2, #3...)."""
-    out, seen = [], {}
-    for c, idx, rows in zip(scene.constraints, scene._con_idx, scene._con_rows):
-        name = c.name
-        seen[name] = seen.get(name, 0) + 1
-        if seen[name] > 1:
-            name = f"{name}#{seen[name]}"
-
+    out = []
+    for name, c, idx, rows in zip(scene.reaction_names, scene.constraints, scene._con_idx, scene._con_rows):
         def fn(q, lam, c=c, idx=idx, rows=rows):
             if lam.size != scene.n_constraints:
                 return np.full(len(c.reaction_labels) or c.n_equations, np.nan)
@@ -93,7 +88,7 @@ def _reaction_maps(scene):
 
 
 def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newton=None, record_every=1,
-             output=(), progress=False, max_halvings=8, project=True, compiled=None):
+             output=(), progress=False, max_halvings=8, project=True, compiled=None, start="initial"):
     """Integrate a scene in time.
 
     Parameters
@@ -134,6 +129,12 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
         ``SKFEM_FLEX_COMPILED`` is ``0``. False forces the Python path; other
         scenes and schemes always take it. A step the compiled loop cannot
         finish is re-run on the Python path (halving, errors as there).
+    start : "initial", "static", (q, v) or a state with ``q`` and ``v``
+        ``"initial"`` (default): the scene's initial state. ``"static"``: the static
+        equilibrium under the loads at t = 0 (:func:`skfem_flex.analysis.static_equilibrium`)
+        with the scene's initial velocities. A pair (q, v) or an object with ``q`` and ``v``
+        (e.g. an :class:`~skfem_flex.analysis.EquilibriumState`, whose velocities are those
+        of the equilibrium, zero at rest): that state.
 
     Returns
     -------
@@ -160,7 +161,7 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
         raise ValueError(f"record_every must be a positive integer, got {record_every!r}")
     record_every = int(record_every)
     scheme = make_integrator(integrator, rho_inf=rho_inf, newton=newton)
-    q, v = scene.initial_state()
+    q, v = _start_state(scene, start)
     q, v = consistent_initial_state(scene, q, v, 0.0, project=bool(project))
     state = scheme.start(scene, State(0.0, q, v))
     n_steps = int(math.ceil(t_end / dt - 1e-9)) if t_end > 0 else 0
@@ -234,6 +235,25 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
         for s in sinks:
             s.close()
     return rec.result(wall_time=time.perf_counter() - start, steps=n_steps, halvings=halvings, **meta)
+
+
+def _start_state(scene, start):
+    """(q, v) at t = 0 for ``simulate(..., start=...)``."""
+    if isinstance(start, str):
+        if start == "initial":
+            return scene.initial_state()
+        if start == "static":
+            from .analysis import static_equilibrium
+            return static_equilibrium(scene, 0.0).q, scene.initial_state()[1]
+        raise ValueError(f"start must be 'initial', 'static', a (q, v) pair or a state, got {start!r}")
+    q, v = start if isinstance(start, tuple) and len(start) == 2 else (getattr(start, "q", None),
+                                                                         getattr(start, "v", None))
+    if q is None or v is None:
+        raise ValueError(f"start must be 'initial', 'static', a (q, v) pair or a state with q and v, got {start!r}")
+    q, v = np.array(q, dtype=float).ravel(), np.array(v, dtype=float).ravel()
+    if q.size != scene.n or v.size != scene.n:
+        raise ValueError(f"start state must have {scene.n} coordinates and velocities, got {q.size} and {v.size}")
+    return q, v
 
 
 def _advance(scheme, scene, state, dt, depth):

@@ -92,7 +92,13 @@ def rigid_slider(t, l1=0.15, l2=0.30, omega=150.0):
 def test_slider_crank_full_revolution(integrator):
     res = sf.simulate(sf.scenes.slider_crank(), CRANK_PERIOD, CRANK_PERIOD / 200, integrator=integrator)
     assert res.completed and res.steps == 200
-    assert np.max(res.constraint_residual) <= 1e-10
+    if integrator == "trapezoidal":
+        # index 2: the velocity constraints hold to round-off, positions drift by O(Δt²) (1.2e-5 here;
+        # 4× less at half the step)
+        assert np.max(res.velocity_constraint_residual) <= 1e-10 * 150.0 * 0.15
+        assert np.max(res.constraint_residual) <= 3e-5
+    else:
+        assert np.max(res.constraint_residual) <= 1e-10
     np.testing.assert_allclose(res.probes["crank_angle"], 150.0 * res.t, atol=1e-10)
     x, phi2 = rigid_slider(res.t)
     # the elastic rod stays close to the rigid kinematics; its mid-point vibrates by about a millimetre

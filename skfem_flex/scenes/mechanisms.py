@@ -165,10 +165,10 @@ def _simeon_fields(length, q):
 
 @register(t_end=0.1, dt=1e-4, crank_length="m", crank_mass="kg", crank_inertia="kg m^2", rod_length="m", E="Pa", nu="-",
           rho="kg/m^3", width="m", height="m", slider_mass="kg", omega="rad/s", n_elements="-", strain="-",
-          start="-")
+          start="-", crank_angle="rad")
 def slider_crank(crank_length=0.15, crank_mass=0.36, crank_inertia=0.002727, rod_length=0.30, E=2e11, nu=0.3,
                  rho=7870.0, width=0.008, height=0.008, slider_mass=0.075552, omega=150.0, n_elements=8,
-                 strain="green-lagrange", start="rigid"):
+                 strain="green-lagrange", start="rigid", crank_angle=0.0):
     """Flexible slider–crank of Simeon (1996), the "crank" problem of the DAE test set.
 
     B. Simeon, *Modelling a flexible slider crank mechanism by a mixed system of DAEs and
@@ -190,6 +190,9 @@ def slider_crank(crank_length=0.15, crank_mass=0.36, crank_inertia=0.002727, rod
     test set's smooth initial values ``init`` (:data:`SIMEON_INIT`: small axial stretch, lateral
     mode rates; default data only), mapped onto the beam's nodes through the test set's shape
     functions — the start to which the published reference values belong.
+    ``crank_angle`` (rad, ``start="rigid"`` only) starts the mechanism at that crank angle, the
+    driver law φ1 = crank_angle + Ω t; with ``omega=0`` the crank is held there (for statics and
+    modes at a crank angle, e.g. a Campbell diagram over it).
 
     Probes: ``"slider"`` = slider x (m), ``"rod_angle"`` = angle of the rod's chord (rad),
     ``"midpoint"`` = transverse deflection of the rod's mid-point relative to its chord (m,
@@ -208,13 +211,25 @@ def slider_crank(crank_length=0.15, crank_mass=0.36, crank_inertia=0.002727, rod
         raise ValueError(f"omega must be finite, got {omega!r}")
     if start not in ("rigid", "testset"):
         raise ValueError(f"start must be 'rigid' or 'testset', got {start!r}")
-    crank = RigidBody(m1, jc, (0.5 * l1, 0.0), 0.0, velocity=(0.0, 0.5 * l1 * om), angular_velocity=om,
-                      outline=[[-0.5 * l1, 0.0], [0.5 * l1, 0.0]], name="crank")
+    phi1 = float(crank_angle)
+    if not np.isfinite(phi1):
+        raise ValueError(f"crank_angle must be finite, got {crank_angle!r}")
+    if start == "testset" and phi1 != 0.0:
+        raise ValueError(f"start='testset' begins at crank angle 0, got crank_angle={crank_angle!r}")
+    c1, s1 = np.cos(phi1), np.sin(phi1)
+    if l1 >= l2:
+        raise ValueError(f"crank_length {l1!r} must be shorter than rod_length {l2!r} (the crank must turn)")
+    crank = RigidBody(m1, jc, (0.5 * l1 * c1, 0.5 * l1 * s1), phi1, velocity=(-0.5 * l1 * om * s1, 0.5 * l1 * om * c1),
+                      angular_velocity=om, outline=[[-0.5 * l1, 0.0], [0.5 * l1, 0.0]], name="crank")
     sec = Section.rectangle(E=E, nu=nu, b=width, h=height, rho=rho)
-    w_rod = -l1 * om / l2                           # rod angular velocity at φ1 = φ2 = 0
-    rod = _beam(l2, sec, n_elements, reference="pinned", name="rod", strain=strain, position=(l1, 0.0),
-                velocity=(0.0, l1 * om), angular_velocity=w_rod)
-    x_slider, v_slider = l1 + l2, 0.0
+    # rigid mechanism at φ1: l1 sin φ1 + l2 sin φ2 = 0 (slider on the x axis), and its rates
+    phi2 = float(np.arcsin(-l1 * s1 / l2))
+    c2 = np.cos(phi2)
+    w_rod = -l1 * om * c1 / (l2 * c2)
+    rod = _beam(l2, sec, n_elements, reference="pinned", name="rod", strain=strain, position=(l1 * c1, l1 * s1),
+                angle=phi2, velocity=(-l1 * om * s1, l1 * om * c1), angular_velocity=w_rod)
+    x_slider = l1 * c1 + l2 * c2
+    v_slider = -l1 * om * s1 - l2 * w_rod * np.sin(phi2)
     if start == "testset":
         ini = SIMEON_INIT
         rod.q0[3:] = rod.elastic_vector(**_simeon_fields(l2, ini["q"]))
@@ -223,7 +238,7 @@ def slider_crank(crank_length=0.15, crank_mass=0.36, crank_inertia=0.002727, rod
         x_slider, v_slider = ini["slider"], ini["slider_rate"]
     slider = PointMass(_positive("slider_mass", slider_mass), [x_slider, 0.0], [v_slider, 0.0], name="slider")
     cons = [Pin(crank.point((-0.5 * l1, 0.0)), (0.0, 0.0), name="crank pivot"),
-            Driver(crank, MotionLaw.constant_rate(om), coordinate="theta", name="crank drive"),
+            Driver(crank, MotionLaw.constant_rate(om, start=phi1), coordinate="theta", name="crank drive"),
             Revolute(crank.point((0.5 * l1, 0.0)), rod.point(0.0), name="crank pin"),
             Revolute(rod.point(l2), slider.point(), name="wrist pin"),
             Slider(slider.point(), (1.0, 0.0), (0.0, 0.0), name="guide")]
@@ -246,7 +261,7 @@ def slider_crank(crank_length=0.15, crank_mass=0.36, crank_inertia=0.002727, rod
                  parameters=dict(crank_length=crank_length, crank_mass=crank_mass, crank_inertia=crank_inertia,
                                  rod_length=rod_length, E=E, nu=nu, rho=rho, width=width, height=height,
                                  slider_mass=slider_mass, omega=omega, n_elements=n_elements, strain=strain,
-                                 start=start))
+                                 start=start, crank_angle=crank_angle))
 
 
 @register(t_end=4.0, dt=5e-3, length="m", force="N", duration="s", **_SECTION_UNITS)
