@@ -688,6 +688,7 @@ def _run_on_dask(specs, client, n_workers, finished):
         elif not isinstance(client, Client):
             raise TypeError(f"client must be None, 'serial', a scheduler address or a distributed.Client, "
                             f"got {client!r}")
+        _warm_up(client, specs[0])
         futures = {client.submit(run_case, s, key=s.task_name, pure=False): s for s in specs}
         for fut in as_completed(futures):
             s = futures.pop(fut)
@@ -702,6 +703,22 @@ def _run_on_dask(specs, client, n_workers, finished):
             own_client.close()
         if own_cluster is not None:
             own_cluster.close()
+
+
+def _warm_up(client, spec):
+    """Run ``spec`` for one step on one worker per machine first, so that the Numba kernels are
+    compiled once per machine (into numba's on-disk cache) rather than by every worker at once;
+    the other workers of that machine then load them from the cache."""
+    hosts = {}
+    for addr, info in client.scheduler_info(n_workers=-1)["workers"].items():
+        hosts.setdefault(info.get("host", addr), []).append(addr)
+    first = [addrs[0] for addrs in hosts.values() if len(addrs) > 1]
+    if first:
+        short = dataclasses.replace(spec, settings={**spec.settings, "t_end": spec.settings["dt"]}, measures={})
+        try:
+            client.run(run_case, short, workers=first)
+        except Exception:            # only a warm-up: the cases themselves report any failure
+            pass
 
 
 def sweep(scene, vary=None, cases=None, *, t_end=None, dt=None, integrator="energy-momentum", record=DEFAULT_RECORD,
