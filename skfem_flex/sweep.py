@@ -553,7 +553,9 @@ def _combine(cases, attrs=None):
     padded = []
     for ds in cases:
         short = {d: (0, size[d] - n) for d, n in ds.sizes.items() if n < size[d]}
-        padded.append((ds.pad(short) if short else ds).drop_attrs())
+        bare = (ds.pad(short) if short else ds).copy(deep=False)
+        bare.attrs = {}              # (Dataset.drop_attrs rebuilds every variable: slow)
+        padded.append(bare)
     out = xr.concat(padded, dim="case", join="outer", data_vars="all", coords="different", compat="equals")
     params = [json.loads(ds.attrs["parameters"]) for ds in cases]
     settings = [json.loads(ds.attrs["settings"]) for ds in cases]
