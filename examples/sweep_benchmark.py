@@ -20,8 +20,11 @@ Per-case overhead = (sweep wall time × N − Σ time the cases spent in
 transfer, scene building, the Dataset, the store, cluster start-up shared
 out). A last sweep of the same 16 cases with a single step each measures that
 overhead alone. The
-load average of the machine is printed with the table: on a shared machine
-other processes compete for the cores and slow the parallel run most.
+load average of the machine is printed with the table, and a capacity check
+first runs the same spin-up alone and then in N plain processes at once: the
+ratio is the number of cores this machine actually gives us at that moment
+(N on an idle machine; on a shared one other processes take the rest), the
+most any N-worker sweep can gain over serial.
 
 Run ``python examples/sweep_benchmark.py [--workers 2] [--t-end 30] [--out DIR]``;
 writes ``OUT/sweep_benchmark.md`` (default ``examples/output``).
@@ -67,6 +70,25 @@ def sweep(t_end, dt, record_every, workers, client=None):
     return wall, float(ds.run_time.sum()), ds
 
 
+def _one_run(_=None):
+    scene = sf.scenes.spin_up_beam(n_elements=16)
+    sf.simulate(scene, 0.01, 1e-3)                      # kernels loaded
+    start = time.perf_counter()
+    sf.simulate(scene, 5.0, 1e-3, record_every=10)
+    return time.perf_counter() - start
+
+
+def capacity(workers):
+    """How many cores this machine gives us now: the time of one 5 s spin-up run alone divided by its
+    mean time when ``workers`` plain processes run it at once (``workers`` on an idle machine)."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    alone = _one_run()
+    with ProcessPoolExecutor(workers) as pool:
+        together = list(pool.map(_one_run, range(workers)))
+    return workers * alone / (sum(together) / workers)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--workers", type=int, default=2)
@@ -76,6 +98,7 @@ def main():
     ap.add_argument("--out", default=str(Path(__file__).parent / "output"))
     args = ap.parse_args()
     load0 = os.getloadavg()
+    cores = capacity(args.workers)
     t_serial, loop_serial = serial(args.t_end, args.dt, args.record_every)
     t_sweep, run_sweep, ds = sweep(args.t_end, args.dt, args.record_every, args.workers)
     import dask
@@ -100,7 +123,9 @@ def main():
     ]
     lines = [f"Spin-up sweep, {n} cases (ω × elements), Δt = {args.dt:g} s, t_end = {args.t_end:g} s, "
              f"every {args.record_every}th step recorded; {platform.processor() or platform.machine()}, "
-             f"{os.cpu_count()} cores, load average {load0[0]:.1f} before / {load1[0]:.1f} after",
+             f"{os.cpu_count()} cores, load average {load0[0]:.1f} before / {load1[0]:.1f} after; "
+             f"{args.workers} plain processes running at once got the throughput of {cores:.2f} cores "
+             f"(the most a {args.workers}-worker sweep can gain over serial)",
              "",
              "| run | wall time (s) | × serial | Σ time in simulate (s) | overhead per case (s) |",
              "|---|---|---|---|---|"]
