@@ -626,16 +626,84 @@ class FloatingBeam(FloatingFrame):
             raise ValueError(f"{what}: x = {x!r} lies outside beam {self.name!r} [{self.x_min}, {self.x_max}]")
         return float(np.clip(x, self.x_min, self.x_max))
 
-    def shape_at(self, x):
-        """(S(x) (2, n_elastic), N_φ(x) (n_elastic,)) at axial coordinate x (m)."""
+    def _full_shape_at(self, x):
+        """(u, w, φ) at axial coordinate x per beam DOF, (3, beam.n_dofs)."""
         x = self._check_x(x)
         beam = self.beam
         pr = beam.field_basis.probes(np.array([[x]])).tocsr()
         S = np.zeros((3, beam.n_dofs))
         for k in range(3):
             S[k, beam.field_dofs[k][pr.indices]] = pr.data
-        S = S[:, self.free_dofs]
+        return S
+
+    def shape_at(self, x):
+        """(S(x) (2, n_elastic), N_φ(x) (n_elastic,)) at axial coordinate x (m)."""
+        S = self._full_shape_at(x)[:, self.free_dofs]
         return S[:2].copy(), S[2].copy()
+
+    # ================================================================ reduction
+    def elastic_model(self):
+        """The beam as an :class:`~skfem_flex.bodies.modal.ElasticModel` on all its DOFs (u, w, φ per node).
+
+        Interfaces ``"root"`` and ``"tip"`` (u, w, φ of the end nodes); Green–Lagrange data: the axial
+        strain ε = u' + ½(u'² + w'²) with EA on the exact rule (its linear part is the axial part of
+        the beam stiffness). Built once per body."""
+        if getattr(self, "_model", None) is not None:
+            return self._model
+        from .modal import ElasticModel, Interface
+        from .stiffening import GreenLagrange
+        beam, sec = self.beam, self.section
+        n, nd = beam.n_dofs, beam.node_dofs
+        trans = np.zeros((n, 2))
+        trans[nd[:, 0], 0] = 1.0
+        trans[nd[:, 1], 1] = 1.0
+        pos = np.zeros(n)
+        pos[nd[:, 0]] = beam.x_nodes
+        unit = np.zeros(n)
+        unit[nd[:, 2]] = 1.0
+        turn = sps.csr_matrix((np.r_[-np.ones(len(nd)), np.ones(len(nd))],
+                               (np.r_[nd[:, 0], nd[:, 1]], np.r_[nd[:, 1], nd[:, 0]])), shape=(n, n))
+        qd = beam.quadrature
+        nl, nel, nqp = qd.dNdx.shape
+        rows = np.broadcast_to((np.arange(nel)[:, None] * nqp + np.arange(nqp))[None], (nl, nel, nqp))
+        grads = [sps.csr_matrix((qd.dNdx.ravel(), (rows.ravel(), np.broadcast_to(
+            self.beam.element_dofs[:, k::3].T[:, :, None], (nl, nel, nqp)).ravel())), shape=(nel * nqp, n))
+            for k in (0, 1)]
+        strain = GreenLagrange(grads, np.array([[1.0, 0.0]]), np.eye(2)[None], np.array([[sec.EA]]), qd.dx.ravel())
+        itf = {}
+        for label, x in (("root", self.x_min), ("tip", self.x_max)):
+            itf[label] = Interface(label, np.array([x, 0.0]), sps.csr_matrix(self._full_shape_at(x)))
+        order = np.argsort(beam.x_nodes)
+        conn = np.stack([order[:-1], order[1:]], axis=1)
+
+        def locate(X):
+            if abs(X[1]) > 1e-9 * beam.length:
+                raise ValueError(f"point {tuple(X)} is off the axis of beam {self.name!r} (y must be 0)")
+            S = self._full_shape_at(X[0])
+            return S[:2], S[2]
+
+        def output(d):
+            pts = np.stack([beam.x_nodes, np.zeros_like(beam.x_nodes)], axis=1)
+            return pts, np.stack([d[nd[:, 0]], d[nd[:, 1]]], axis=1), [("line", conn)], {}
+
+        self._model = ElasticModel(mass=asm(translational_mass, beam.basis, rhoA=sec.rhoA).tocsr(),
+                                   stiffness=beam.stiffness(), translation=trans, position=pos, turn=turn,
+                                   interfaces=itf, rotary_mass=asm(rotary_mass, beam.basis, rhoI=sec.rhoI).tocsr(),
+                                   rotary_unit=unit, strain=strain, name=self.name, locate=locate, output=output)
+        return self._model
+
+    def reduced(self, n_modes, interfaces=("root", "tip"), **kwargs):
+        """This beam reduced to a :class:`~skfem_flex.bodies.modal.ModalBody` (same initial frame state).
+
+        ``n_modes`` fixed-interface (Craig–Bampton) or free-interface modes; interfaces ``"root"``,
+        ``"tip"``; further keywords go to :func:`~skfem_flex.bodies.reduction.reduce` (``method``,
+        ``reference``, ``strain`` (default: this beam's), ``n_derivatives``, ``centrifugal``, ``name``).
+        The beam's elastic initial state is not carried over (η starts at 0)."""
+        from .reduction import reduce
+        state = dict(position=self.q0[:2], angle=self.q0[2], velocity=self.v0[:2], angular_velocity=self.v0[2],
+                     strain=self.strain, name=self.name)
+        state.update(kwargs)
+        return reduce(self.elastic_model(), n_modes, interfaces=list(interfaces), **state)
 
     def point(self, locator=None):
         """The material point of the axis at x = ``locator`` (m; default the tip)."""
