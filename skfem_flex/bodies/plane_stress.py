@@ -83,9 +83,9 @@ def load_mesh(path):
         pts = pts[:, :2]
     cells = {c.type: c.data for c in raw.cells}
     if "triangle" in cells:
-        mesh = skfem.MeshTri(pts.T, cells["triangle"].T)
+        mesh = skfem.MeshTri(np.ascontiguousarray(pts.T), np.ascontiguousarray(cells["triangle"].T))
     elif "quad" in cells:
-        mesh = skfem.MeshQuad(pts.T, cells["quad"].T)
+        mesh = skfem.MeshQuad(np.ascontiguousarray(pts.T), np.ascontiguousarray(cells["quad"].T))
     else:
         raise ValueError(f"mesh {path!r} has no triangles or quadrilaterals (cells: {sorted(cells)})")
     used = np.unique(mesh.t)
@@ -93,7 +93,7 @@ def load_mesh(path):
         new = -np.ones(mesh.p.shape[1], dtype=int)
         new[used] = np.arange(used.size)
         old_to_new = new
-        mesh = type(mesh)(mesh.p[:, used], new[mesh.t])
+        mesh = type(mesh)(np.ascontiguousarray(mesh.p[:, used]), np.ascontiguousarray(new[mesh.t]))
     else:
         old_to_new = np.arange(mesh.p.shape[1])
     names = {int(tag): name for name, (tag, dim) in raw.field_data.items() if dim == 1}
