@@ -168,7 +168,8 @@ def craig_bampton(model, interfaces, n_modes):
     Koo = (To.T @ K @ To).tocsc()
     Kob = (To.T @ K @ Tb).toarray()
     lu = spla.splu(Koo)
-    Psi = -lu.solve(Kob)
+    # one right-hand side at a time: SuperLU's multi-column solve was ~100× slower here (scipy 1.x)
+    Psi = -np.column_stack([lu.solve(np.ascontiguousarray(Kob[:, j])) for j in range(Kob.shape[1])])
     if not np.all(np.isfinite(Psi)) or np.abs(Koo @ Psi + Kob).max() > 1e-6 * max(np.abs(Kob).max(), 1e-300):
         raise ValueError(f"interfaces {names} do not hold body {model.name!r} (K_oo is singular: a rigid motion "
                          f"leaves them fixed); give an interface with a rotation or two interfaces")

@@ -23,7 +23,7 @@ import skfem
 
 from ..beam import TimoshenkoBeam
 from ..bodies.floating import FloatingBeam
-from ..bodies.plane_stress import PlaneStress
+from ..bodies.plane_stress import PlaneStress, load_mesh
 from ..section import Section
 from ._registry import positive_count, positive_value
 
@@ -74,7 +74,7 @@ def _strip(length, E, nu, rho, height, thickness, n_elements, n_across, name):
 
 
 def link(kind, length, section, n_elements, n_modes=3, n_across=2, reference="clamped", strain="green-lagrange",
-         material=None, name="beam", **state):
+         material=None, mesh=None, name="beam", **state):
     """A straight link of ``kind`` (module docstring) along the body x axis from 0 to ``length``.
 
     Parameters
@@ -95,6 +95,10 @@ def link(kind, length, section, n_elements, n_modes=3, n_across=2, reference="cl
     strain : {"green-lagrange", "linear"}
     material : (E, ν, ρ, height, thickness), optional
         Strip material and cross-section; default from :func:`strip_material` (unit thickness).
+    mesh : str or Path, optional
+        Plane-stress kinds: a mesh file (gmsh ``.msh``, read by meshio) instead of the strip, with
+        physical groups ``big_end`` (root, at the origin) and ``small_end`` (tip, at (length, 0))
+        around the two holes; ``n_elements``, ``n_across`` and the height do not apply.
     **state
         Initial frame state (position, angle, velocity, angular_velocity).
 
@@ -111,6 +115,8 @@ def link(kind, length, section, n_elements, n_modes=3, n_across=2, reference="cl
         tb = TimoshenkoBeam(skfem.MeshLine(np.linspace(0.0, length, n + 1)), section)
         beam = FloatingBeam(tb, reference=reference if kind == "beam" else "clamped", strain=strain, name=name,
                             **state)
+        if mesh is not None:
+            raise ValueError(f"mesh applies to the plane-stress kinds, not to body={kind!r}")
         if kind == "beam":
             return Link(beam, beam.point(0.0), beam.point(length), beam.point(0.5 * length))
         body = beam.reduced(positive_count("n_modes", n_modes), interfaces=("root", "tip"), strain=strain)
@@ -119,7 +125,14 @@ def link(kind, length, section, n_elements, n_modes=3, n_across=2, reference="cl
             E, nu, rho, h = strip_material(section, length)
             material = (E, nu, rho, h, 1.0)
         E, nu, rho, h, t = material
-        strip = _strip(length, E, nu, rho, h, t, n, positive_count("n_across", n_across), name)
+        if mesh is None:
+            strip = _strip(length, E, nu, rho, h, t, n, positive_count("n_across", n_across), name)
+        else:
+            strip = PlaneStress(load_mesh(mesh), E, nu, rho, thickness=t, name=name,
+                                interfaces={"root": "big_end", "tip": "small_end"})
+            ends = np.array([strip.interfaces["root"].position, strip.interfaces["tip"].position])
+            if np.abs(ends - [[0.0, 0.0], [length, 0.0]]).max() > 1e-3 * length:
+                raise ValueError(f"mesh {mesh!r}: hole centres {ends.tolist()} are not at (0, 0) and ({length}, 0)")
         if kind == "plane-stress":
             body = strip.body(strain="linear", name=name, **state)
         else:

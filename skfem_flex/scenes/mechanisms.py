@@ -175,10 +175,10 @@ def _simeon_fields(length, q):
 
 @register(t_end=0.1, dt=1e-4, crank_length="m", crank_mass="kg", crank_inertia="kg m^2", rod_length="m", E="Pa", nu="-",
           rho="kg/m^3", width="m", height="m", slider_mass="kg", omega="rad/s", n_elements="-", strain="-",
-          start="-", body=" | ".join(LINK_KINDS), n_modes="-", n_across="-")
+          start="-", body=" | ".join(LINK_KINDS), n_modes="-", n_across="-", mesh="path")
 def slider_crank(crank_length=0.15, crank_mass=0.36, crank_inertia=0.002727, rod_length=0.30, E=2e11, nu=0.3,
                  rho=7870.0, width=0.008, height=0.008, slider_mass=0.075552, omega=150.0, n_elements=8,
-                 strain="green-lagrange", start="rigid", body="beam", n_modes=3, n_across=2):
+                 strain="green-lagrange", start="rigid", body="beam", n_modes=3, n_across=2, mesh=None):
     """Flexible slider–crank of Simeon (1996), the "crank" problem of the DAE test set.
 
     B. Simeon, *Modelling a flexible slider crank mechanism by a mixed system of DAEs and
@@ -211,7 +211,9 @@ def slider_crank(crank_length=0.15, crank_mass=0.36, crank_inertia=0.002727, rod
     ``"beam-modal"`` (Craig–Bampton with ``n_modes`` fixed-interface modes, frame attached to the
     crank end), ``"plane-stress"`` (a strip ``height`` high and ``width`` thick, Q2, ``n_elements``
     × ``n_across`` elements, unreduced and linear) or ``"plane-stress-modal"`` (that strip
-    reduced). ``start="testset"`` needs ``body="beam"``.
+    reduced). ``mesh`` replaces the strip by a meshed rod read from a gmsh file, with physical
+    groups ``big_end`` and ``small_end`` around its holes (centres at (0, 0) and (L2, 0); e.g.
+    ``examples/meshes/conrod.msh``, thickness ``width``). ``start="testset"`` needs ``body="beam"``.
     """
     l1, l2 = _positive("crank_length", crank_length), _positive("rod_length", rod_length)
     m1 = _positive("crank_mass", crank_mass)
@@ -232,7 +234,7 @@ def slider_crank(crank_length=0.15, crank_mass=0.36, crank_inertia=0.002727, rod
     sec = Section.rectangle(E=E, nu=nu, b=width, h=height, rho=rho)
     w_rod = -l1 * om / l2                           # rod angular velocity at φ1 = φ2 = 0
     lk = link(body, l2, sec, n_elements, n_modes=n_modes, n_across=n_across, reference="pinned", strain=strain,
-              material=(E, nu, rho, height, width), name="rod", position=(l1, 0.0), velocity=(0.0, l1 * om),
+              material=(E, nu, rho, height, width), mesh=mesh, name="rod", position=(l1, 0.0), velocity=(0.0, l1 * om),
               angular_velocity=w_rod)
     rod = lk.body
     x_slider, v_slider = l1 + l2, 0.0
@@ -267,7 +269,7 @@ def slider_crank(crank_length=0.15, crank_mass=0.36, crank_inertia=0.002727, rod
                  parameters=dict(crank_length=crank_length, crank_mass=crank_mass, crank_inertia=crank_inertia,
                                  rod_length=rod_length, E=E, nu=nu, rho=rho, width=width, height=height,
                                  slider_mass=slider_mass, omega=omega, n_elements=n_elements, strain=strain,
-                                 start=start, body=body, n_modes=n_modes, n_across=n_across))
+                                 start=start, body=body, n_modes=n_modes, n_across=n_across, mesh=mesh))
 
 
 @register(t_end=4.0, dt=5e-3, length="m", force="N", duration="s", **_SECTION_UNITS)
