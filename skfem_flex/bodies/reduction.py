@@ -121,7 +121,7 @@ def _coupling(model, names):
         blocks.append((itf, P, s))
     slave = np.concatenate(slaves) if slaves else np.zeros(0, dtype=int)
     other = np.setdiff1d(np.arange(n), slave)
-    n_o, n_b = other.size, slave.size
+    n_o, n_b = other.size, sum(P.shape[0] for _, P, _ in blocks)
     col_of = -np.ones(n, dtype=int)
     col_of[other] = np.arange(n_o)
     rows, cols, vals = [other], [np.arange(n_o)], [np.ones(n_o)]
