@@ -183,7 +183,7 @@ def craig_bampton(model, interfaces, n_modes):
 
 
 def free_modes(model, n_modes):
-    """The ``n_modes`` lowest elastic free–free modes (n_dofs, n_modes) and frequencies (rad/s).
+    """(frequencies (rad/s), shapes (n_dofs, n_modes)) of the ``n_modes`` lowest elastic free–free modes.
 
     Solved about a small negative shift so that the three rigid modes stay regular; they are dropped.
     """
@@ -192,7 +192,7 @@ def free_modes(model, n_modes):
     K, M = model.stiffness, model.total_mass()
     scale = abs(K.diagonal()).max() / abs(M.diagonal()).max()
     lam, vec = _lowest_modes(K, M, n_modes + 3, sigma=-1e-3 * scale)
-    return vec[:, 3:], np.sqrt(np.clip(lam[3:], 0.0, None))
+    return np.sqrt(np.clip(lam[3:], 0.0, None)), vec[:, 3:]
 
 
 def modal_derivatives(model, cb, n_modes):
@@ -303,7 +303,7 @@ def reduce(model, n_modes, interfaces=None, method=None, reference=None, strain=
     elif method == "free":
         if n_derivatives or centrifugal:
             raise ValueError("modal derivatives and centrifugal static modes need method='craig-bampton'")
-        B, _ = free_modes(model, n_modes)
+        _, B = free_modes(model, n_modes)
     else:
         raise ValueError(f"method must be 'craig-bampton' or 'free', got {method!r}")
     B = B / np.maximum(np.abs(B).max(axis=0), 1e-300)
