@@ -339,6 +339,29 @@ class FloatingFrame(Body):
         return _cross(q[:2], p[:2]) + float(p[2])
 
 
+    # ================================================================ fused evaluation
+    def energy_momentum_terms(self, q0, q1, v0, v1, dt):
+        """Everything one Newton evaluation of the energy-momentum scheme needs, in one call.
+
+        The optional fused form of the body contract (the scene uses it when present): the same
+        numbers as :meth:`mass_matrix`, :meth:`momentum_jacobian`, :meth:`kinetic_discrete_gradient`
+        and :meth:`potential_discrete_gradient`, each evaluated once (FloatingBeam overrides it with
+        its compiled kernel).
+
+        Returns
+        -------
+        p1, g_kin, g_pot, jac, floor
+            M(q1) v1; the discrete gradients of G = ½ v0ᵀ M v1 and of V;
+            (2/Δt) M(q1) + B(q1, v1) − Δt ∂g_kin/∂q1 − 2 ∂g_kin/∂v1 + Δt ∂g_pot/∂q1;
+            Δt |∂g_pot/∂q1| (|q0| + |q1|), the round-off floor of the internal forces.
+        """
+        M1 = self.mass_matrix(q1)
+        gk, gq, gv = self.kinetic_discrete_gradient(q0, q1, v0, v1)
+        gp, hp = self.potential_discrete_gradient(q0, q1)
+        jac = (2.0 / dt) * M1 + self.momentum_jacobian(q1, v1) - dt * gq - 2.0 * gv + dt * hp
+        floor = dt * (abs(hp) @ (np.abs(q0) + np.abs(q1)))
+        return M1 @ v1, gk, gp, jac, floor
+
 class FramePoint(BodyPoint):
     """A material point of a floating-frame body: r = R + A(θ)(y0 + S q_f), angle θ + N_φ q_f.
 

@@ -100,6 +100,18 @@ class QuarticEnergy:
     K3: np.ndarray = None
     K4: np.ndarray = None
 
+    def __post_init__(self):
+        if self.K3 is not None:
+            m = self.K.shape[0]
+            K3, K4 = self.K3, self.K4
+            # the contractions of the discrete gradient as matrix products (BLAS), arranged once
+            self._K3_m_jk = K3.reshape(m, m * m)
+            self._K3_j_mk = np.ascontiguousarray(K3.transpose(1, 0, 2)).reshape(m, m * m)
+            self._K3_mn_k = K3.reshape(m * m, m)
+            self._K3_sym_mn_k = np.ascontiguousarray(K3.transpose(1, 0, 2) + K3.transpose(1, 2, 0)).reshape(m * m, m)
+            self._K4_mk_jl = K4.reshape(m * m, m * m)
+            self._K4_mn_kl = np.ascontiguousarray(K4.transpose(0, 2, 1, 3)).reshape(m * m, m * m)
+
     @property
     def linear(self):
         return self.K3 is None
@@ -140,11 +152,10 @@ class QuarticEnergy:
         dg = 0.5 * np.array(self.K, dtype=float)
         if self.linear:
             return g, dg
-        K3, K4 = self.K3, self.K4
-        P = 0.5 * (np.outer(eta0, eta0) + np.outer(eta1, eta1))
-        g = g + 0.5 * np.einsum("mjk,jk->m", K3, P) + np.einsum("jmk,j,k->m", K3, em, em)
-        g += 0.5 * np.einsum("mkjl,k,jl->m", K4, em, P)
-        dg += 0.5 * np.einsum("mnk,k->mn", K3, eta1)
-        dg += 0.5 * np.einsum("mnk,k->mn", K3.transpose(1, 0, 2) + K3.transpose(1, 2, 0), em)
-        dg += 0.25 * np.einsum("mnjl,jl->mn", K4, P) + 0.5 * np.einsum("mknl,k,l->mn", K4, em, eta1)
+        m = em.size
+        P = (0.5 * (np.outer(eta0, eta0) + np.outer(eta1, eta1))).ravel()
+        A = (self._K4_mk_jl @ P).reshape(m, m)                              # A_mk = K4_mkjl P_jl
+        g = g + 0.5 * (self._K3_m_jk @ P) + self._K3_j_mk @ np.outer(em, em).ravel() + 0.5 * (A @ em)
+        dg += 0.5 * (self._K3_mn_k @ eta1).reshape(m, m) + 0.5 * (self._K3_sym_mn_k @ em).reshape(m, m)
+        dg += 0.25 * A + 0.5 * (self._K4_mn_kl @ np.outer(em, eta1).ravel()).reshape(m, m)
         return g, dg
