@@ -154,3 +154,23 @@ def test_bad_material_and_interface_input():
         body.point((1.5, 0.0))
     with pytest.raises(ValueError, match="no interface"):
         body.point("middle")
+
+
+def test_averaging_coupling_is_softer_than_rigid_and_constraint_modes_move_their_interface():
+    """CB constraint modes give the interface unit motion (P Φ_b = I) and hold the others; an averaging root leaves the
+    root section free to warp, so the clamped frequency drops below that of the rigid root."""
+    ps = strip(20, 2)
+    ps.add_interface("soft_root", lambda X: np.isclose(X[0], 0.0), coupling="average")
+    model = ps.model()
+    cb = craig_bampton(model, ["soft_root", "tip"], 2)
+    Pb = np.vstack([model.interface(n).P.toarray() for n in ("soft_root", "tip")])
+    assert np.allclose(Pb @ cb.basis[:, :6], np.eye(6), atol=1e-12)
+    assert np.allclose(Pb @ cb.basis[:, 6:], 0.0, atol=1e-12)
+    rigid = craig_bampton(model, ["root"], 1).frequencies[0]
+    soft = craig_bampton(model, ["soft_root"], 1).frequencies[0]
+    assert 0.95 * rigid < soft < rigid
+
+
+def test_unreduced_plane_stress_pendulum_conserves_energy():
+    res = sf.simulate(sf.scenes.flexible_pendulum(body="plane-stress", n_elements=4), 0.05, 1e-3)
+    assert res.relative_energy_error(9.81 / 2) <= 1e-9 and np.max(res.constraint_residual) <= 1e-10
