@@ -140,7 +140,7 @@ class PlaneStress:
     interfaces : dict of str to spec, optional
         Interface points. A spec is a boundary name of the mesh (its facets' nodes, averaging
         coupling), a callable ``X (2, n) -> bool mask`` on node positions (averaging coupling),
-        an array of node indices, or a point (X, Y) inside the body (the nearest node; no rotation).
+        an array of node indices, or a point (X, Y) of floats inside the body (the nearest node; no rotation).
         Node sets are coupled rigidly (see :meth:`add_interface`).
     name : str
 
