@@ -61,7 +61,7 @@ def plot_peak(scene, res, path, magnify=200.0):
     tip = crank[:2] + 0.5 * 0.15 * np.array([np.cos(crank[2]), np.sin(crank[2])])
     ax.plot([0.0, tip[0]], [0.0, tip[1]], "k-", lw=3, label="crank")
     ax.set_aspect("equal")
-    ax.set_title(f"von Mises stress at t = {res.t[k]:.4f} s (rod deformation × {magnify:g} in its frame, "
+    ax.set_title(f"von Mises stress at t = {res.t[k]:.4f} s\n(rod deformation × {magnify:g} in its frame, "
                  f"which is attached to the big end)", fontsize=9)
     fig.colorbar(pc, ax=ax, label="MPa")
     ax.set_xlabel("x (m)")
