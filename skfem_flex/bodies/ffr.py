@@ -230,7 +230,7 @@ class FloatingFrame(Body):
                              c0x, c0y, c1x, c1y, Hf0, Hf1, X, SbEwb, SbTwb)
 
     def kinetic_discrete_gradient(self, q0, q1, v0, v1):
-        """Exact discrete gradient of G(q) = ½ v0ᵀ M(q) v1 with its derivatives (ENERGY_SCHEME.md).
+        """Exact discrete gradient of G(q) = ½ v0ᵀ M(q) v1 with its derivatives (docs/flexible_bodies.md §1).
 
         With b_i = A(θ_m)ᵀ Ṙ_i, s̄_m = s̄(q_f,m), c_i = ω_i E s̄_m + S̄ f_i, σ = sinc(Δθ/2), κ = cos(Δθ/2)::
 
