@@ -12,7 +12,6 @@ from scipy.optimize import minimize_scalar
 import skfem_flex as sf
 from skfem_flex.bodies import PlaneStress, craig_bampton, load_mesh
 from skfem_flex.bodies.plane_stress import von_mises
-from skfem_flex.output import VTKSeries
 
 ROOT = Path(__file__).resolve().parents[1]
 CONROD = ROOT / "examples" / "meshes" / "conrod.msh"

@@ -24,7 +24,6 @@ import skfem
 from ..beam import TimoshenkoBeam
 from ..bodies.floating import FloatingBeam
 from ..bodies.plane_stress import PlaneStress, load_mesh
-from ..section import Section
 from ._registry import positive_count, positive_value
 
 __all__ = ["LINK_KINDS", "Link", "link", "strip_material"]
