@@ -241,6 +241,7 @@ class PlaneStress:
                 rmap[:k, 2], rmap[k:, 2] = -r[:, 1], r[:, 0]
                 itf = Interface(key, centre, P, np.concatenate([self.xdofs[nodes], self.ydofs[nodes]]), rmap)
         self.interfaces[key] = itf
+        self._model = None                       # a model built before no longer lists every interface
         return itf
 
     # ------------------------------------------------------------- strain and stress
