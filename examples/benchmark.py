@@ -7,7 +7,13 @@
   (:mod:`skfem_flex.compiled_loop`);
 * the same 30 s spin-up at 8 elements with every step recorded, and on the
   pure-Python path (``compiled=False``), once each, for comparison;
-* the pendulum, 10 000 steps at Δt = 1e-3 (Python path: it has a constraint).
+* the pendulum, 10 000 steps at Δt = 1e-3 (Python path: it has a constraint);
+* flexible bodies (``--flexible`` runs only these): the spin-up beam reduced by Craig–Bampton
+  (``body="beam-modal"``, 10 modal coordinates) against the full 8-element beam, 5 s at
+  Δt = 1e-3; the slider–crank (one crank revolution, Δt = 1e-4) with the 8-element beam rod and
+  with a plane-stress rod of 250 × 8 = 2 000 Q2 elements reduced to 12 coordinates
+  (``body="plane-stress-modal"``), whose one-off set-up (assembly, reduction, tensors) is
+  timed separately.
 
 Every run records every ``--record-every``-th step (default 10; energies,
 momenta, probe and prescribed force are evaluated in Python at those steps)
@@ -110,9 +116,30 @@ def run(repeat=3, window=1.0, record_every=10, elements=SPIN_UP_ELEMENTS):
     return rows
 
 
+def flexible(repeat=1, record_every=10):
+    """Rows of the flexible-body cases (same columns as :func:`run`) and the reduced rod's set-up time, s."""
+    rows = []
+    for label, kw, compiled in (("spin-up, 8 P1 elements, 5 s", {}, True),
+                                ("spin-up, 8 P1 elements, 5 s", {}, False),
+                                ("spin-up, Craig–Bampton beam (10 coordinates), 5 s", dict(body="beam-modal"), True)):
+        wall, us, its, steps = time_case(lambda: sf.scenes.spin_up_beam(omega=4.0, n_elements=8, **kw), 5.0, 1e-3,
+                                         repeat, record_every, compiled=compiled)
+        rows.append((label, "compiled" if compiled and not kw else "Python", steps, wall, us, its))
+    revolution = 2 * np.pi / 150.0
+    wall, us, its, steps = time_case(lambda: sf.scenes.slider_crank(), revolution, 1e-4, repeat, record_every)
+    rows.append(("slider–crank, 8-element beam rod, one revolution, dt = 1e-4 s", "Python", steps, wall, us, its))
+    start = time.perf_counter()
+    rod_scene = sf.scenes.slider_crank(body="plane-stress-modal", n_elements=250, n_across=8)
+    setup = time.perf_counter() - start
+    wall, us, its, steps = time_case(lambda: rod_scene, revolution, 1e-4, repeat, record_every)
+    rows.append((f"slider–crank, plane-stress rod 2 000 Q2 elements → {rod_scene.bodies[1].n_elastic} coordinates, "
+                 f"one revolution, dt = 1e-4 s", "Python", steps, wall, us, its))
+    return rows, setup
+
+
 def table(rows, record_every, warm, cold=None):
     lines = [f"Machine: {platform.processor() or platform.machine()}, Python {platform.python_version()}, "
-             f"numpy {np.__version__}, numba {_numba_version()}; energy-momentum scheme, dt = 1e-3 s; "
+             f"numpy {np.__version__}, numba {_numba_version()}; energy-momentum scheme, dt = 1e-3 s unless stated; "
              f"every {record_every}th step recorded (energies, momenta, probes), no file output; "
              f"median of the repeats, after a warm-up run that compiled or loaded the kernels "
              f"({warm:.1f} s, not counted).", "",
@@ -279,12 +306,24 @@ if __name__ == "__main__":
     ap.add_argument("--no-catalogue", action="store_true", help="skip the table of every catalogue scene")
     ap.add_argument("--no-peer", action="store_true", help="skip the side-by-side runs with exudyn")
     ap.add_argument("--out", default=str(Path(__file__).parent / "output"))
+    ap.add_argument("--flexible", action="store_true", help="only the flexible-body cases (flexible.md)")
     args = ap.parse_args()
+    if args.flexible:
+        warm = warm_up()
+        rows, setup = flexible(args.repeat, args.record_every)
+        text = table(rows, args.record_every, warm) + (f"\nOne-off set-up of the reduced 2 000-element rod (assembly, "
+                                                        f"Craig–Bampton, modal derivatives, tensors): {setup:.1f} s.\n")
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "flexible.md").write_text(text)
+        print(text)
+        raise SystemExit
     parts = []
     if not args.no_loop:
         cold = cold_compile()
         warm = warm_up()
-        parts.append(table(run(args.repeat, args.window, args.record_every), args.record_every, warm, cold))
+        rows = run(args.repeat, args.window, args.record_every) + flexible(args.repeat, args.record_every)[0]
+        parts.append(table(rows, args.record_every, warm, cold))
     if not args.no_catalogue:
         parts.append(catalogue_table(catalogue_rows(args.catalogue_steps), args.catalogue_steps))
     if not args.no_peer:

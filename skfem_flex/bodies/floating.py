@@ -57,7 +57,6 @@ in the chord frame (``reference="pinned"``).
 from __future__ import annotations
 
 import math
-from collections import namedtuple
 
 import numpy as np
 import scipy.linalg as sla
@@ -69,24 +68,16 @@ from ..beam import TimoshenkoBeam
 from ..forces import ForceElement
 from ..forms import bending, shear, translational_mass, rotary_mass
 from . import floating_kernel as _kernel
-from .floating_kernel import _sinc_half
-from .base import Body, BodyGeometry, BodyPoint, check_finite_vector, to_dense
+from .base import BodyGeometry, check_finite_vector, to_dense
+from .ffr import FloatingFrame, FramePoint
 from .rigid import E_MATRIX as E2, rotation as _rot
 
 __all__ = ["FloatingBeam", "DistributedLoad"]
-
-#: intermediates of the kinetic discrete gradient shared by the contract method and the fused time-loop call
-_KineticTerms = namedtuple("_KineticTerms", "g sig dsig kap dkap ca sa smx smy cmm w0 w1 b0x b0y b1x b1y "
-                                            "c0x c0y c1x c1y Hf0 Hf1 X SbEwb SbTwb")
 
 #: bodies with more coordinates than this use scipy.sparse matrices (same crossover as scene.DENSE_LIMIT)
 SPARSE_LIMIT = 150
 _FIELDS = {"u": 0, "w": 1, "theta": 2, "th": 2, "phi": 2}
 _FIELD_NAMES = ("u", "w", "th")
-
-
-def _cross(a, b):
-    return float(a[0] * b[1] - a[1] * b[0])
 
 
 # ---------------------------------------------------------------- scikit-fem forms (assembled once)
@@ -109,7 +100,7 @@ def _restrict(mat, free):
     return sps.csr_matrix(mat)[free][:, free].tocsr()
 
 
-class FloatingBeam(Body):
+class FloatingBeam(FloatingFrame):
     """A Timoshenko beam in the floating frame of reference.
 
     Coordinates q = (R_x, R_y, θ, q_f), named ``"Rx", "Ry", "theta"`` and then
@@ -197,30 +188,16 @@ class FloatingBeam(Body):
         zero = dict(au=0.0, bu=0.0, aw=0.0, bw=0.0, at=0.0)
         lin = lambda **kw: asm(axis_moments, b, **{**zero, **kw})[free]   # noqa: E731
         Nu, Nw = lin(au=sec.rhoA), lin(aw=sec.rhoA)
-        self._Sbar = np.vstack([Nu, Nw])                 # ∫ρA S, (2, nf)
-        self._c = lin(bu=sec.rhoA)                        # ∫ρA Sᵀ x0
         k0 = lin(bw=sec.rhoA)                             # ∫ρA Sᵀ E x0 = ∫ρA x N_w
         nphi = lin(at=sec.rhoI)                           # ∫ρI N_φ
-        self._k0n = k0 + nphi
         qd = beam.quadrature
-        self.mass_total = float(np.sum(sec.rhoA * qd.dx))
-        self._S0 = np.array([float(np.sum(sec.rhoA * qd.x * qd.dx)), 0.0])
         self._I00 = float(np.sum(sec.rhoA * qd.x ** 2 * qd.dx))
         self._Jr = float(np.sum(sec.rhoI * qd.dx))
-        self._I0 = self._I00 + self._Jr
-        mats = dict(MA=MA, H=H, Mff=(MA + MI).tocsr())
-        for k, v in mats.items():
-            setattr(self, "_" + k, v if self.sparse else v.toarray())
-        self._SbarT = self._Sbar.T.copy()
-        self._SbEt = self._SbarT @ E2.T                  # S̄ᵀEᵀ, (nf, 2)
-        stack = sps.vstack if self.sparse else np.vstack
-        self._Pq = stack([self._Sbar, self._MA, self._H])  # q_f -> (S̄ q_f, M_A q_f, H q_f)
-        self._Pf = stack([self._Sbar, self._H])            # f -> (S̄ f, H f)
-        if self.sparse:
-            self._Pq, self._Pf = self._Pq.tocsr(), self._Pf.tocsr()
-        self._top_template = np.zeros((3, 3 + nf))
-        self._top_template[:2, :2] = self.mass_total * np.eye(2)
-        self._cache_key, self._cache_val = None, None
+        dense = (lambda m: m) if self.sparse else (lambda m: m.toarray())   # noqa: E731
+        self._set_invariants(mass=float(np.sum(sec.rhoA * qd.dx)),
+                             S0=np.array([float(np.sum(sec.rhoA * qd.x * qd.dx)), 0.0]),
+                             I0=self._I00 + self._Jr, Sbar=np.vstack([Nu, Nw]), c=lin(bu=sec.rhoA),
+                             k0n=k0 + nphi, MA=dense(MA), H=dense(H), Mff=dense((MA + MI).tocsr()))
         self._pcache = (None, None)                       # ((q, v) bytes, M(q) v) of the last momentum
         self._v0cache = (None, None)
 
@@ -387,17 +364,7 @@ class FloatingBeam(Body):
         COO conversion per call)."""
         n = self.n_dofs
         if not self.sparse:
-            out = np.zeros((n, n))
-            if top is not None:
-                out[:3] = top
-            if left is not None:
-                out[3:, :3] = left
-            ff = out[3:, 3:]
-            for coef, key in terms:
-                ff += coef * self._ffd[key]
-            if extra is not None:
-                ff += extra
-            return out
+            return super()._compose(top, left, terms, extra)
         data = np.zeros(self._pat_nnz)
         if top is not None:
             data[self._map_top] = top.ravel()
@@ -480,39 +447,6 @@ class FloatingBeam(Body):
                             self._wq, map_loc)
 
     # ================================================================ kinetic
-    def _parts(self, q):
-        """(A, q_f, s̄, c_m = c + M_A q_f, a = k0 + n_φ + H q_f, J) at q; one-entry cache (Newton
-        evaluates M, p, B at the same q several times per iteration)."""
-        key = q.tobytes()
-        if key == self._cache_key:
-            return self._cache_val
-        A = _rot(q[2])
-        qf = np.array(q[3:], dtype=float)
-        y = self._Pq @ qf
-        nf = self.n_elastic
-        sbar = self._S0 + y[:2]
-        cm = self._c + y[2:2 + nf]
-        a = self._k0n + y[2 + nf:]
-        J = self._I0 + float(qf @ (self._c + cm))
-        self._cache_key, self._cache_val = key, (A, qf, sbar, cm, a, J)
-        return self._cache_val
-
-    def mass_matrix(self, q):
-        """M(q) (eq. 16), kg, kg m, kg m²."""
-        A, qf, sbar, cm, a, J = self._parts(q)
-        AEs = A @ (E2 @ sbar)
-        ASb = A @ self._Sbar
-        top = self._top_template.copy()
-        top[:2, 2] = AEs
-        top[:2, 3:] = ASb
-        top[2, :2] = AEs
-        top[2, 2] = J
-        top[2, 3:] = a
-        left = np.empty((self.n_elastic, 3))
-        left[:, :2] = ASb.T
-        left[:, 2] = a
-        return self._compose(top, left, [(1.0, "Mff")])
-
     def momentum(self, q, v):
         """p = M(q) v (compiled kernel :func:`.floating_kernel.momentum`; cached for the last (q, v))."""
         q, v = np.ascontiguousarray(q, dtype=float), np.ascontiguousarray(v, dtype=float)
@@ -524,116 +458,6 @@ class FloatingBeam(Body):
     def kinetic_energy(self, q, v):
         return 0.5 * float(v @ self.momentum(q, v))
 
-    def momentum_jacobian(self, q, v):
-        """B(q, v) = ∂(M(q) v)/∂q."""
-        A, qf, sbar, cm, a, J = self._parts(q)
-        V, om, f = v[:2], float(v[2]), v[3:]
-        n = self.n_dofs
-        b = A.T @ V
-        AE = A @ E2
-        Sf = self._Sbar @ f
-        SbEb = self._SbEt @ b
-        top = np.zeros((3, n))
-        top[:2, 2] = -om * (A @ sbar) + AE @ Sf
-        top[:2, 3:] = om * (AE @ self._Sbar)
-        top[2, 2] = -float(b @ sbar)
-        top[2, 3:] = SbEb + 2.0 * om * cm - self._H @ f
-        left = np.zeros((self.n_elastic, 3))
-        left[:, 2] = SbEb
-        return self._compose(top, left, [(om, "H")])
-
-    def quadratic_velocity_force(self, q, v):
-        """Q_v = ∂T/∂q − Ṁ v (eq. 26) with ∂Q_v/∂q and ∂Q_v/∂v."""
-        A, qf, sbar, cm, a, J = self._parts(q)
-        om, f = float(v[2]), v[3:]
-        n = self.n_dofs
-        AE = A @ E2
-        Sf = self._Sbar @ f
-        Hf = self._H @ f
-        g = np.empty(n)
-        inner = om * om * sbar - 2.0 * om * (E2 @ Sf)
-        g[:2] = A @ inner
-        g[2] = -2.0 * om * float(cm @ f)
-        g[3:] = om * om * cm - 2.0 * om * Hf
-        tq = np.zeros((3, n))
-        tq[:2, 2] = AE @ inner
-        tq[:2, 3:] = om * om * (A @ self._Sbar)
-        tq[2, 3:] = -2.0 * om * (self._MA @ f)
-        gq = self._compose(tq, None, [(om * om, "MA")])
-        tv = np.zeros((3, n))
-        tv[:2, 2] = A @ (2.0 * om * sbar - 2.0 * (E2 @ Sf))
-        tv[:2, 3:] = -2.0 * om * (AE @ self._Sbar)
-        tv[2, 2] = -2.0 * float(cm @ f)
-        tv[2, 3:] = -2.0 * om * cm
-        lv = np.zeros((self.n_elastic, 3))
-        lv[:, 2] = 2.0 * om * cm - 2.0 * Hf
-        gv = self._compose(tv, lv, [(-2.0 * om, "H")])
-        return g, gq, gv
-
-    def _kinetic_terms(self, q0, q1, v0, v1, yf0, yf1):
-        """Value and intermediates of the kinetic discrete gradient (formulas in kinetic_discrete_gradient).
-
-        ``yf_i`` = P_f f_i = (S̄ f_i, H f_i) for the elastic velocities f_i of v_i.
-        """
-        nf = self.n_elastic
-        d = float(q1[2] - q0[2])
-        tm = 0.5 * float(q0[2] + q1[2])
-        ca, sa = math.cos(tm), math.sin(tm)
-        sig, dsig = _sinc_half(d)
-        kap, dkap = math.cos(0.5 * d), -0.5 * math.sin(0.5 * d)
-        y = self._Pq @ (0.5 * (q0[3:] + q1[3:]))
-        smx, smy = self._S0[0] + y[0], y[1]
-        cmm = self._c + y[2:2 + nf]
-        w0, w1 = float(v0[2]), float(v1[2])
-        b0x, b0y = ca * v0[0] + sa * v0[1], -sa * v0[0] + ca * v0[1]
-        b1x, b1y = ca * v1[0] + sa * v1[1], -sa * v1[0] + ca * v1[1]
-        Hf0, Hf1 = yf0[2:], yf1[2:]
-        c0x, c0y = -w0 * smy + yf0[0], w0 * smx + yf0[1]     # c_i = ω_i E s̄_m + S̄ f_i
-        c1x, c1y = -w1 * smy + yf1[0], w1 * smx + yf1[1]
-        X = (-b0x * c1y + b0y * c1x) + (-b1x * c0y + b1y * c0x)  # b0·E c1 + b1·E c0
-        wb = np.array([w1 * b0x + w0 * b1x, w1 * b0y + w0 * b1y])
-        SbEwb = self._SbEt @ wb
-        SbTwb = self._SbarT @ wb
-        g = np.zeros(self.n_dofs)
-        g[2] = 0.5 * sig * X
-        g[3:] = 0.5 * kap * SbEwb + (w0 * w1) * cmm - 0.5 * (w0 * Hf1 + w1 * Hf0)
-        return _KineticTerms(g, sig, dsig, kap, dkap, ca, sa, smx, smy, cmm, w0, w1, b0x, b0y, b1x, b1y,
-                             c0x, c0y, c1x, c1y, Hf0, Hf1, X, SbEwb, SbTwb)
-
-    def kinetic_discrete_gradient(self, q0, q1, v0, v1):
-        """Exact discrete gradient of G(q) = ½ v0ᵀ M(q) v1 with its derivatives (ENERGY_SCHEME.md).
-
-        With b_i = A(θ_m)ᵀ Ṙ_i, s̄_m = s̄(q_f,m), c_i = ω_i E s̄_m + S̄ f_i, σ = sinc(Δθ/2), κ = cos(Δθ/2)::
-
-            g_R = 0,   g_θ = ½ σ (b_0·E c_1 + b_1·E c_0)
-            g_f = ½ κ S̄ᵀEᵀ(ω_1 b_0 + ω_0 b_1) + ω_0 ω_1 (c + M_A q_f,m) − ½ H (ω_0 f_1 + ω_1 f_0)
-
-        The derivatives include those of σ and κ (exact tangent).
-        """
-        n, nf = self.n_dofs, self.n_elastic
-        yf = self._Pf @ np.stack([v0[3:], v1[3:]], axis=1)   # (2 + nf, 2): S̄ f_i, H f_i
-        (g, sig, dsig, kap, dkap, ca, sa, smx, smy, cmm, w0, w1, b0x, b0y, b1x, b1y,
-         c0x, c0y, c1x, c1y, Hf0, Hf1, X, SbEwb, SbTwb) = self._kinetic_terms(q0, q1, v0, v1, yf[:, 0], yf[:, 1])
-        tq = np.zeros((3, n))
-        tq[2, 2] = 0.5 * dsig * X - 0.25 * sig * (b0x * c1x + b0y * c1y + b1x * c0x + b1y * c0y)
-        tq[2, 3:] = -0.25 * sig * SbTwb
-        lq = np.zeros((nf, 3))
-        lq[:, 2] = 0.5 * dkap * SbEwb - 0.25 * kap * SbTwb
-        gq = self._compose(tq, lq, [(0.5 * w0 * w1, "MA")])
-        SbEb0 = self._SbEt @ np.array([b0x, b0y])
-        tv = np.zeros((3, n))
-        e0x, e0y = -c0y, c0x                                       # E c_0, then A_m E c_0
-        tv[2, 0] = 0.5 * sig * (ca * e0x - sa * e0y)
-        tv[2, 1] = 0.5 * sig * (sa * e0x + ca * e0y)
-        tv[2, 2] = -0.5 * sig * (b0x * smx + b0y * smy)
-        tv[2, 3:] = 0.5 * sig * SbEb0
-        lv = np.zeros((nf, 3))
-        lv[:, :2] = (0.5 * kap * w0) * (self._SbEt @ np.array([[ca, sa], [-sa, ca]]))
-        lv[:, 2] = 0.5 * kap * SbEb0 + w0 * cmm - 0.5 * Hf0
-        gv = self._compose(tv, lv, [(-0.5 * w0, "H")])
-        return g, gq, gv
-
-    # ================================================================ strain energy
     def _axial(self, qf):
         """u', w' at the quadrature points (flattened, length n_q) of the elastic vector qf."""
         y = self._D @ qf
@@ -793,81 +617,6 @@ class FloatingBeam(Body):
         return (0.5 * np.sum((s.EA * st["axial_strain"] ** 2 + s.EI * st["curvature"] ** 2) * self._dx, axis=1)
                 + 0.5 * s.kGA * np.sum(st["shear_strain"] ** 2 * self._sq.dx, axis=1))
 
-    # ================================================================ frame-linear maps
-    def _lin_parts(self, q, y0, Y):
-        A = _rot(q[2])
-        return A, y0 + Y @ q[3:]
-
-    def _map_hessian(self, q, f, y0, Y):
-        """∂/∂q of (∂r/∂q)ᵀ f for r = R + A(θ)(y0 + Y q_f)."""
-        A, s = self._lin_parts(q, y0, Y)
-        top = np.zeros((3, self.n_dofs))
-        top[2, 2] = -float(f @ (A @ s))
-        row = (f @ (A @ E2)) @ Y
-        top[2, 3:] = row
-        left = np.zeros((self.n_elastic, 3))
-        left[:, 2] = row
-        return self._compose(top, left)
-
-    def _map_dg(self, q0, q1, y0, Y, mR=1.0):
-        """D (2, n) with D (q1 − q0) = r(q1) − r(q0), r = mR R + A(θ)(y0 + Y q_f)."""
-        d = q1[2] - q0[2]
-        Am = _rot(0.5 * (q0[2] + q1[2]))
-        sig, _ = _sinc_half(d)
-        sm = y0 + Y @ (0.5 * (q0[3:] + q1[3:]))
-        D = np.empty((2, self.n_dofs))
-        D[:, :2] = mR * np.eye(2)
-        D[:, 2] = sig * (Am @ (E2 @ sm))
-        D[:, 3:] = math.cos(0.5 * d) * (Am @ Y)
-        return D
-
-    def _map_dg_jacobian(self, q0, q1, f, y0, Y):
-        """∂(Dᵀ f)/∂q1 for :meth:`_map_dg`."""
-        d = q1[2] - q0[2]
-        Am = _rot(0.5 * (q0[2] + q1[2]))
-        sig, dsig = _sinc_half(d)
-        kap = math.cos(0.5 * d)
-        sm = y0 + Y @ (0.5 * (q0[3:] + q1[3:]))
-        fA = f @ Am
-        top = np.zeros((3, self.n_dofs))
-        top[2, 2] = dsig * float(fA @ (E2 @ sm)) - 0.5 * sig * float(fA @ sm)
-        top[2, 3:] = 0.5 * sig * ((fA @ E2) @ Y)
-        left = np.zeros((self.n_elastic, 3))
-        left[:, 2] = -0.5 * math.sin(0.5 * d) * (Y.T @ fA) + 0.5 * kap * (Y.T @ (E2.T @ fA))
-        return self._compose(top, left)
-
-    # ================================================================ gravity
-    def mass_moment(self):
-        """Not linear in q (the frame turns): gravity goes through :meth:`gravity_potential`."""
-        raise NotImplementedError("FloatingBeam positions are not linear in q; use gravity_potential")
-
-    def gravity_potential(self, q, g):
-        """V = −g · ∫ρA r dx = −g · (m R + A s̄), with gradient and Hessian."""
-        g = np.asarray(g, dtype=float)
-        A, s = self._lin_parts(q, self._S0, self._Sbar)
-        V = -float(g @ (self.mass_total * q[:2] + A @ s))
-        grad = np.empty(self.n_dofs)
-        grad[:2] = -self.mass_total * g
-        grad[2] = -float(g @ (A @ (E2 @ s)))
-        grad[3:] = -(self._Sbar.T @ (A.T @ g))
-        return V, grad, self._map_hessian(q, -g, self._S0, self._Sbar)
-
-    def gravity_discrete_gradient(self, q0, q1, g):
-        """Exact discrete gradient of the gravity potential (sinc/cos identities), with ∂/∂q1."""
-        g = np.asarray(g, dtype=float)
-        D = self._map_dg(q0, q1, self._S0, self._Sbar, self.mass_total)
-        return -(g @ D), self._map_dg_jacobian(q0, q1, -g, self._S0, self._Sbar)
-
-    # ================================================================ momenta
-    def linear_momentum(self, q, v):
-        """∫ρA ṙ dx = p_R, kg m/s."""
-        return self.momentum(q, v)[:2].copy()
-
-    def angular_momentum(self, q, v):
-        """∫ρA r × ṙ + ρI (θ̇ + φ̇) dx about the origin = R × p_R + p_θ, kg m²/s."""
-        p = self.momentum(q, v)
-        return _cross(q[:2], p[:2]) + float(p[2])
-
     # ================================================================ points, probes, output
     def _check_x(self, x, what="point"):
         if isinstance(x, bool) or not np.isscalar(x) or not np.isfinite(x):
@@ -877,21 +626,91 @@ class FloatingBeam(Body):
             raise ValueError(f"{what}: x = {x!r} lies outside beam {self.name!r} [{self.x_min}, {self.x_max}]")
         return float(np.clip(x, self.x_min, self.x_max))
 
-    def shape_at(self, x):
-        """(S(x) (2, n_elastic), N_φ(x) (n_elastic,)) at axial coordinate x (m)."""
+    def _full_shape_at(self, x):
+        """(u, w, φ) at axial coordinate x per beam DOF, (3, beam.n_dofs)."""
         x = self._check_x(x)
         beam = self.beam
         pr = beam.field_basis.probes(np.array([[x]])).tocsr()
         S = np.zeros((3, beam.n_dofs))
         for k in range(3):
             S[k, beam.field_dofs[k][pr.indices]] = pr.data
-        S = S[:, self.free_dofs]
+        return S
+
+    def shape_at(self, x):
+        """(S(x) (2, n_elastic), N_φ(x) (n_elastic,)) at axial coordinate x (m)."""
+        S = self._full_shape_at(x)[:, self.free_dofs]
         return S[:2].copy(), S[2].copy()
+
+    # ================================================================ reduction
+    def elastic_model(self):
+        """The beam as an :class:`~skfem_flex.bodies.modal.ElasticModel` on all its DOFs (u, w, φ per node).
+
+        Interfaces ``"root"`` and ``"tip"`` (u, w, φ of the end nodes); Green–Lagrange data: the axial
+        strain ε = u' + ½(u'² + w'²) with EA on the exact rule (its linear part is the axial part of
+        the beam stiffness). Built once per body."""
+        if getattr(self, "_model", None) is not None:
+            return self._model
+        from .modal import ElasticModel, Interface
+        from .stiffening import GreenLagrange
+        beam, sec = self.beam, self.section
+        n, nd = beam.n_dofs, beam.node_dofs
+        trans = np.zeros((n, 2))
+        trans[nd[:, 0], 0] = 1.0
+        trans[nd[:, 1], 1] = 1.0
+        pos = np.zeros(n)
+        pos[nd[:, 0]] = beam.x_nodes
+        unit = np.zeros(n)
+        unit[nd[:, 2]] = 1.0
+        turn = sps.csr_matrix((np.r_[-np.ones(len(nd)), np.ones(len(nd))],
+                               (np.r_[nd[:, 0], nd[:, 1]], np.r_[nd[:, 1], nd[:, 0]])), shape=(n, n))
+        qd = beam.quadrature
+        nl, nel, nqp = qd.dNdx.shape
+        rows = np.broadcast_to((np.arange(nel)[:, None] * nqp + np.arange(nqp))[None], (nl, nel, nqp))
+        grads = [sps.csr_matrix((qd.dNdx.ravel(), (rows.ravel(), np.broadcast_to(
+            self.beam.element_dofs[:, k::3].T[:, :, None], (nl, nel, nqp)).ravel())), shape=(nel * nqp, n))
+            for k in (0, 1)]
+        strain = GreenLagrange(grads, np.array([[1.0, 0.0]]), np.eye(2)[None], np.array([[sec.EA]]), qd.dx.ravel())
+        itf = {}
+        for label, x in (("root", self.x_min), ("tip", self.x_max)):
+            itf[label] = Interface(label, np.array([x, 0.0]), sps.csr_matrix(self._full_shape_at(x)))
+        order = np.argsort(beam.x_nodes)
+        conn = np.stack([order[:-1], order[1:]], axis=1)
+
+        def locate(X):
+            if abs(X[1]) > 1e-9 * beam.length:
+                raise ValueError(f"point {tuple(X)} is off the axis of beam {self.name!r} (y must be 0)")
+            S = self._full_shape_at(X[0])
+            return S[:2], S[2]
+
+        def output(d):
+            pts = np.stack([beam.x_nodes, np.zeros_like(beam.x_nodes)], axis=1)
+            return pts, np.stack([d[nd[:, 0]], d[nd[:, 1]]], axis=1), [("line", conn)], {}
+
+        self._model = ElasticModel(mass=asm(translational_mass, beam.basis, rhoA=sec.rhoA).tocsr(),
+                                   stiffness=beam.stiffness(), translation=trans, position=pos, turn=turn,
+                                   interfaces=itf, rotary_mass=asm(rotary_mass, beam.basis, rhoI=sec.rhoI).tocsr(),
+                                   rotary_unit=unit, strain=strain, name=self.name, locate=locate, output=output)
+        return self._model
+
+    def reduced(self, n_modes, interfaces=("root", "tip"), **kwargs):
+        """This beam reduced to a :class:`~skfem_flex.bodies.modal.ModalBody` (same initial frame state).
+
+        ``n_modes`` fixed-interface (Craig–Bampton) or free-interface modes; interfaces ``"root"``,
+        ``"tip"``; further keywords go to :func:`~skfem_flex.bodies.reduction.reduce` (``method``,
+        ``reference``, ``strain`` (default: this beam's), ``n_derivatives``, ``centrifugal``, ``name``).
+        The beam's elastic initial state is not carried over (η starts at 0)."""
+        from .reduction import reduce
+        state = dict(position=self.q0[:2], angle=self.q0[2], velocity=self.v0[:2], angular_velocity=self.v0[2],
+                     strain=self.strain, name=self.name)
+        state.update(kwargs)
+        return reduce(self.elastic_model(), n_modes, interfaces=list(interfaces), **state)
 
     def point(self, locator=None):
         """The material point of the axis at x = ``locator`` (m; default the tip)."""
         x = self.x_max if locator is None else locator
-        return _BeamPoint(self, self._check_x(x))
+        x = self._check_x(x)
+        S, Nphi = self.shape_at(x)
+        return FramePoint(self, (x, 0.0), S, Nphi)
 
     def displacement(self, q, x=None):
         """Elastic displacement (u, w) of the axis at x in the body frame, m (default: tip)."""
@@ -1016,48 +835,6 @@ class FloatingBeam(Body):
                                                                         np.arange(n_modes)])))
         shapes /= np.abs(shapes).max(axis=0)
         return lam.imag[:n_modes].copy(), shapes
-
-
-class _BeamPoint(BodyPoint):
-    """Material point of the axis of a :class:`FloatingBeam`: r = R + A(θ)(x0 + S(x) q_f)."""
-
-    has_angle = True
-
-    def __init__(self, body, x):
-        self.body, self.x = body, x
-        self.S, self.Nphi = body.shape_at(x)
-        self.y0 = np.array([x, 0.0])
-        grad = np.zeros(body.n_dofs)
-        grad[2] = 1.0
-        grad[3:] = self.Nphi
-        self._angle_grad = grad
-
-    def position(self, q):
-        return q[:2] + _rot(q[2]) @ (self.y0 + self.S @ q[3:])
-
-    def position_jacobian(self, q):
-        A = _rot(q[2])
-        s = self.y0 + self.S @ q[3:]
-        J = np.empty((2, self.body.n_dofs))
-        J[:, :2] = np.eye(2)
-        J[:, 2] = A @ (E2 @ s)
-        J[:, 3:] = A @ self.S
-        return J
-
-    def position_hessian_product(self, q, f):
-        return self.body._map_hessian(q, np.asarray(f, dtype=float), self.y0, self.S)
-
-    def position_discrete_gradient(self, q0, q1):
-        return self.body._map_dg(q0, q1, self.y0, self.S)
-
-    def position_discrete_gradient_jacobian(self, q0, q1, f):
-        return self.body._map_dg_jacobian(q0, q1, np.asarray(f, dtype=float), self.y0, self.S)
-
-    def angle(self, q):
-        return float(q[2] + self.Nphi @ q[3:])
-
-    def angle_jacobian(self, q):
-        return self._angle_grad.copy()
 
 
 class DistributedLoad(ForceElement):

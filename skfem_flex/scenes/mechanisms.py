@@ -27,6 +27,7 @@ from ..motion import MotionLaw, spin_up_law
 from ..scene import Scene
 from ..section import Section
 from ._registry import positive_count as _count, positive_value as _positive, register
+from .links import LINK_KINDS, link
 from .rotating import hub_beam
 
 __all__ = ["flexible_pendulum", "double_pendulum", "slider_crank", "free_beam", "spin_up_pinned",
@@ -57,11 +58,13 @@ def chord_deflection(body, q_body, x=None):
 
 
 class _ChordDeflection:
-    """Callable q_body -> deflection of the point at x from the chord (body points built once)."""
+    """Callable q_body -> deflection of a point from the chord through two others (points built once)."""
 
-    def __init__(self, body, x=None):
-        x = 0.5 * (body.x_min + body.x_max) if x is None else x
-        self.root, self.tip, self.mid = body.point(body.x_min), body.point(body.x_max), body.point(x)
+    def __init__(self, body, x=None, points=None):
+        if points is None:
+            x = 0.5 * (body.x_min + body.x_max) if x is None else x
+            points = body.point(body.x_min), body.point(body.x_max), body.point(x)
+        self.root, self.tip, self.mid = points
 
     def __call__(self, q_body):
         r0 = self.root.position(q_body)
@@ -70,8 +73,9 @@ class _ChordDeflection:
         return float(c[0] * d[1] - c[1] * d[0]) / float(np.hypot(*c))
 
 
-@register(t_end=2.0, dt=1e-3, length="m", g="m/s^2", **_SECTION_UNITS)
-def flexible_pendulum(length=1.0, EA=1e6, EI=1e2, kGA=3.205e5, rhoA=1.0, rhoI=1e-4, n_elements=8, g=9.81):
+@register(t_end=2.0, dt=1e-3, length="m", g="m/s^2", body=" | ".join(LINK_KINDS), n_modes="-", **_SECTION_UNITS)
+def flexible_pendulum(length=1.0, EA=1e6, EI=1e2, kGA=3.205e5, rhoA=1.0, rhoI=1e-4, n_elements=8, g=9.81,
+                      body="beam", n_modes=3):
     """A flexible beam pinned at one end, released at rest from horizontal under gravity.
 
     FloatingBeam along [0, L] (clamped reference: the body frame is tangent to the root),
@@ -79,17 +83,23 @@ def flexible_pendulum(length=1.0, EA=1e6, EI=1e2, kGA=3.205e5, rhoA=1.0, rhoI=1e
     The mass centre falls by at most L/2, so m g L/2 (m = ρA L) is the natural energy scale.
     DESIGN.md §5 (also run with EI = 1e4, the stiffer case).
 
+    ``body`` chooses the link (:mod:`skfem_flex.scenes.links`): ``"beam"`` (above),
+    ``"beam-modal"`` (Craig–Bampton, ``n_modes`` fixed-interface modes), ``"plane-stress"``
+    (a unit-thickness strip of the same EA, EI, kGA, ρA, ρI; Q2, ``n_elements`` × 2 elements)
+    or ``"plane-stress-modal"`` (that strip reduced; 12 coordinates for n_modes = 3).
+
     Probes: ``"tip"`` = tip position in the global frame (m); ``"tip_deflection"`` =
     elastic tip displacement (u, w) in the body frame (m).
     """
     sec = Section(EA=EA, EI=EI, kGA=kGA, rhoA=rhoA, rhoI=rhoI)
-    body = _beam(length, sec, n_elements, name="pendulum")
-    pin = Pin(body.point(0.0), (0.0, 0.0), name="pivot")
-    tip = body.point(body.x_max)
-    return Scene([body], constraints=[pin], forces=[Gravity((0.0, -float(g)), [body])], name="flexible_pendulum",
-                 probes={"tip": _position_probe(body, tip), "tip_deflection": body.displacement_probe()},
+    lk = link(body, length, sec, n_elements, n_modes=n_modes, name="pendulum")
+    b = lk.body
+    pin = Pin(lk.root, (0.0, 0.0), name="pivot")
+    tip_defl = b.displacement_probe() if body == "beam" else b.displacement_probe("tip")
+    return Scene([b], constraints=[pin], forces=[Gravity((0.0, -float(g)), [b])], name="flexible_pendulum",
+                 probes={"tip": _position_probe(b, lk.tip), "tip_deflection": tip_defl},
                  parameters=dict(length=length, EA=EA, EI=EI, kGA=kGA, rhoA=rhoA, rhoI=rhoI,
-                                 n_elements=n_elements, g=g))
+                                 n_elements=n_elements, g=g, body=body, n_modes=n_modes))
 
 
 @register(t_end=2.0, dt=1e-3, bar_length="m", bar_mass="kg", beam_length="m", g="m/s^2", **_SECTION_UNITS)
@@ -165,10 +175,11 @@ def _simeon_fields(length, q):
 
 @register(t_end=0.1, dt=1e-4, crank_length="m", crank_mass="kg", crank_inertia="kg m^2", rod_length="m", E="Pa", nu="-",
           rho="kg/m^3", width="m", height="m", slider_mass="kg", omega="rad/s", n_elements="-", strain="-",
-          start="-", crank_angle="rad")
+          start="-", crank_angle="rad", body=" | ".join(LINK_KINDS), n_modes="-", n_across="-", mesh="path")
 def slider_crank(crank_length=0.15, crank_mass=0.36, crank_inertia=0.002727, rod_length=0.30, E=2e11, nu=0.3,
                  rho=7870.0, width=0.008, height=0.008, slider_mass=0.075552, omega=150.0, n_elements=8,
-                 strain="green-lagrange", start="rigid", crank_angle=0.0):
+                 strain="green-lagrange", start="rigid", crank_angle=0.0, body="beam", n_modes=3, n_across=2,
+                 mesh=None):
     """Flexible slider–crank of Simeon (1996), the "crank" problem of the DAE test set.
 
     B. Simeon, *Modelling a flexible slider crank mechanism by a mixed system of DAEs and
@@ -199,6 +210,14 @@ def slider_crank(crank_length=0.15, crank_mass=0.36, crank_inertia=0.002727, rod
     positive to the left of the chord from crank to slider), ``"crank_angle"`` (rad).
     :data:`SIMEON_REFERENCE` holds the published reference values at t = 0.1 s (of the reduced
     model started from the test set's smooth initial values ``init``, not from ``init2``).
+
+    ``body`` chooses the rod (:mod:`skfem_flex.scenes.links`): ``"beam"`` (above),
+    ``"beam-modal"`` (Craig–Bampton with ``n_modes`` fixed-interface modes, frame attached to the
+    crank end), ``"plane-stress"`` (a strip ``height`` high and ``width`` thick, Q2, ``n_elements``
+    × ``n_across`` elements, unreduced and linear) or ``"plane-stress-modal"`` (that strip
+    reduced). ``mesh`` replaces the strip by a meshed rod read from a gmsh file, with physical
+    groups ``big_end`` and ``small_end`` around its holes (centres at (0, 0) and (L2, 0); e.g.
+    ``examples/meshes/conrod.msh``, thickness ``width``). ``start="testset"`` needs ``body="beam"``.
     """
     l1, l2 = _positive("crank_length", crank_length), _positive("rod_length", rod_length)
     m1 = _positive("crank_mass", crank_mass)
@@ -216,6 +235,9 @@ def slider_crank(crank_length=0.15, crank_mass=0.36, crank_inertia=0.002727, rod
         raise ValueError(f"crank_angle must be finite, got {crank_angle!r}")
     if start == "testset" and phi1 != 0.0:
         raise ValueError(f"start='testset' begins at crank angle 0, got crank_angle={crank_angle!r}")
+    if start == "testset" and body != "beam":
+        raise ValueError(f"start='testset' maps the test set's beam modes onto a FloatingBeam: it needs body='beam', "
+                         f"got {body!r}")
     c1, s1 = np.cos(phi1), np.sin(phi1)
     if l1 >= l2:
         raise ValueError(f"crank_length {l1!r} must be shorter than rod_length {l2!r} (the crank must turn)")
@@ -226,8 +248,10 @@ def slider_crank(crank_length=0.15, crank_mass=0.36, crank_inertia=0.002727, rod
     phi2 = float(np.arcsin(-l1 * s1 / l2))
     c2 = np.cos(phi2)
     w_rod = -l1 * om * c1 / (l2 * c2)
-    rod = _beam(l2, sec, n_elements, reference="pinned", name="rod", strain=strain, position=(l1 * c1, l1 * s1),
-                angle=phi2, velocity=(-l1 * om * s1, l1 * om * c1), angular_velocity=w_rod)
+    lk = link(body, l2, sec, n_elements, n_modes=n_modes, n_across=n_across, reference="pinned", strain=strain,
+              material=(E, nu, rho, height, width), mesh=mesh, name="rod", position=(l1 * c1, l1 * s1), angle=phi2,
+              velocity=(-l1 * om * s1, l1 * om * c1), angular_velocity=w_rod)
+    rod = lk.body
     x_slider = l1 * c1 + l2 * c2
     v_slider = -l1 * om * s1 - l2 * w_rod * np.sin(phi2)
     if start == "testset":
@@ -239,17 +263,17 @@ def slider_crank(crank_length=0.15, crank_mass=0.36, crank_inertia=0.002727, rod
     slider = PointMass(_positive("slider_mass", slider_mass), [x_slider, 0.0], [v_slider, 0.0], name="slider")
     cons = [Pin(crank.point((-0.5 * l1, 0.0)), (0.0, 0.0), name="crank pivot"),
             Driver(crank, MotionLaw.constant_rate(om, start=phi1), coordinate="theta", name="crank drive"),
-            Revolute(crank.point((0.5 * l1, 0.0)), rod.point(0.0), name="crank pin"),
-            Revolute(rod.point(l2), slider.point(), name="wrist pin"),
+            Revolute(crank.point((0.5 * l1, 0.0)), lk.root, name="crank pin"),
+            Revolute(lk.tip, slider.point(), name="wrist pin"),
             Slider(slider.point(), (1.0, 0.0), (0.0, 0.0), name="guide")]
-    root, tip = rod.point(0.0), rod.point(l2)
+    root, tip = lk.root, lk.tip
 
     def rod_angle(scene, t, q, v):
         qr = scene.coordinates(rod, q)
         c = tip.position(qr) - root.position(qr)
         return float(np.arctan2(c[1], c[0]))
 
-    deflection = _ChordDeflection(rod)
+    deflection = _ChordDeflection(rod, points=(lk.root, lk.tip, lk.mid))
 
     def midpoint(scene, t, q, v):
         return deflection(scene.coordinates(rod, q))
@@ -261,7 +285,8 @@ def slider_crank(crank_length=0.15, crank_mass=0.36, crank_inertia=0.002727, rod
                  parameters=dict(crank_length=crank_length, crank_mass=crank_mass, crank_inertia=crank_inertia,
                                  rod_length=rod_length, E=E, nu=nu, rho=rho, width=width, height=height,
                                  slider_mass=slider_mass, omega=omega, n_elements=n_elements, strain=strain,
-                                 start=start, crank_angle=crank_angle))
+                                 start=start, crank_angle=crank_angle, body=body, n_modes=n_modes,
+                                 n_across=n_across, mesh=mesh))
 
 
 @register(t_end=4.0, dt=5e-3, length="m", force="N", duration="s", **_SECTION_UNITS)

@@ -1,0 +1,87 @@
+"""Slider–crank with a meshed connecting rod: Craig–Bampton reduction, Green–Lagrange stiffening, stress series.
+
+The rod is ``examples/meshes/conrod.msh`` (made by ``examples/meshes/make_conrod.py``: a planar
+rod with a big-end and a small-end hole, 8 mm thick steel), read by meshio; the node sets around
+the holes (physical groups ``big_end``, ``small_end``) are the interfaces where the crank pin and
+the wrist pin attach. The rod is reduced to 3 fixed-interface modes, their modal derivatives and
+the small end's constraint modes, and runs in Simeon's slider–crank (crank 0.15 m at 150 rad/s).
+The run writes a ParaView series (``meshed_rod.pvd``) whose cells carry σxx, σyy, σxy and von Mises
+(Pa) in the rod, prints the peak von Mises stress and the energy balance, and draws the rod's von
+Mises field at the instant of peak stress (``meshed_rod.png``: the mechanism in the global frame,
+the rod's deformation magnified).
+
+Run ``python examples/meshed_rod.py [OUT_DIR] [--revolutions 1]`` (default ``examples/output/meshed_rod``).
+"""
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+import skfem_flex as sf
+from skfem_flex.output import VTKSeries
+from skfem_flex.plots import pyplot_for
+
+HERE = Path(__file__).resolve().parent
+MESH = HERE / "meshes" / "conrod.msh"
+OMEGA = 150.0
+
+
+def run(out_dir, t_end, dt=1e-4, record_every=10, n_modes=3):
+    """Simulate and write the VTK series; returns (result, scene)."""
+    if not MESH.exists():
+        from meshes.make_conrod import write
+        write(MESH)
+    scene = sf.scenes.slider_crank(body="plane-stress-modal", mesh=str(MESH), n_modes=n_modes, omega=OMEGA)
+    sink = VTKSeries(out_dir, name="meshed_rod")
+    res = sf.simulate(scene, t_end, dt, output=[sink], record_every=record_every)
+    return res, scene
+
+
+def peak_von_mises(scene, res):
+    """Largest cell von Mises stress (Pa) of the rod at each recorded step."""
+    rod = scene.bodies[1]
+    return np.array([rod.stresses(scene.coordinates(rod, q))["von_mises"].max() for q in res.q])
+
+
+def plot_peak(scene, res, path, magnify=200.0):
+    """Von Mises stress of the rod (MPa) on its deformed mesh (displacement × ``magnify``) at peak stress."""
+    plt, out = pyplot_for(Path(path).parent)
+    rod = scene.bodies[1]
+    vm = peak_von_mises(scene, res)
+    k = int(np.argmax(vm))
+    q = scene.coordinates(rod, res.q[k])
+    qm = q.copy()
+    qm[3:] *= magnify
+    geo = rod.geometry(qm, np.zeros_like(q))
+    tri = geo.cells[0][1]
+    fig, ax = plt.subplots(figsize=(8.0, 2.6), layout="constrained")
+    pc = ax.tripcolor(geo.points[:, 0], geo.points[:, 1], tri, facecolors=rod.stresses(q)["von_mises"] / 1e6,
+                      cmap="viridis")
+    crank = scene.coordinates(scene.bodies[0], res.q[k])
+    tip = crank[:2] + 0.5 * 0.15 * np.array([np.cos(crank[2]), np.sin(crank[2])])
+    ax.plot([0.0, tip[0]], [0.0, tip[1]], "k-", lw=3, label="crank")
+    ax.set_aspect("equal")
+    ax.set_title(f"von Mises stress at t = {res.t[k]:.4f} s\n(rod deformation × {magnify:g} in its frame, "
+                 f"which is attached to the big end)", fontsize=9)
+    fig.colorbar(pc, ax=ax, label="MPa")
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    fig.savefig(out / Path(path).name, dpi=110)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("out", nargs="?", default=str(HERE / "output" / "meshed_rod"))
+    ap.add_argument("--revolutions", type=float, default=1.0)
+    args = ap.parse_args()
+    res, scene = run(args.out, args.revolutions * 2 * np.pi / OMEGA)
+    rod = scene.bodies[1]
+    vm = peak_von_mises(scene, res)
+    print(f"rod: {rod.model.n_dofs} DOFs reduced to {rod.n_elastic} coordinates ({rod.reference}); "
+          f"lowest frequencies {np.round(rod.frequencies[:3], 1)} rad/s")
+    print(f"{res.steps} steps in {res.wall_time:.1f} s; relative energy balance error {res.relative_energy_error():.2e}; "
+          f"max |joint residual| {res.constraint_residual.max():.1e}")
+    print(f"peak von Mises stress {vm.max() / 1e6:.2f} MPa at t = {res.t[np.argmax(vm)]:.4f} s")
+    plot_peak(scene, res, Path(args.out) / "meshed_rod.png")
+    print(f"series and figure written to {Path(args.out) / 'meshed_rod.pvd'}, {Path(args.out) / 'meshed_rod.png'}")
