@@ -89,7 +89,8 @@ def find_redundant(scene, q, t=0.0, rtol=1e-9):
     scaled = cq / np.where(empty, 1.0, norms)[:, None]
     if cq.shape[1] == 0:
         return 0, _names_of_rows(scene, np.ones(m, dtype=bool))
-    u, sv, _ = np.linalg.svd(scaled, full_matrices=True)
+    # the left null space needs all m columns of U, never the n × n V (n may be 10⁵ coordinates)
+    u, sv, _ = np.linalg.svd(scaled, full_matrices=m > cq.shape[1])
     smax = sv[0] if sv.size else 0.0
     rank = int(np.sum(sv > rtol * max(smax, 1e-300)))
     if rank == m:

@@ -18,8 +18,9 @@ from .motion import Prescribed
 __all__ = ["Scene", "DENSE_LIMIT", "add_matrices"]
 
 #: scenes with at most this many coordinates use dense matrices (measured crossover of the time loop:
-#: dense LAPACK wins below ~100 coordinates, banded/sparse LU above ~150; examples/benchmark.py)
-DENSE_LIMIT = 150
+#: dense LAPACK wins below ~100 coordinates, banded/sparse LU above ~150; examples/benchmark.py);
+#: the same small-system threshold the bodies' and constraints' zero blocks follow
+from .bodies.base import DENSE_LIMIT  # noqa: E402
 
 
 def add_matrices(a, b):
