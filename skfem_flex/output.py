@@ -4,17 +4,23 @@
 step (``simulate(scene, ..., output=[VTKSeries(out_dir, name, every=10)])``).
 It merges every body's :class:`~skfem_flex.bodies.base.BodyGeometry` into one
 unstructured grid per output step (points in 3-D with z = 0), writes it as a
-``.vtu`` with meshio, and rewrites two collection files that list every step
+``.vtu`` with meshio, and keeps two collection files that list every step
 written so far with its time:
 
 * ``NAME.pvd``, the ParaView collection (``<DataSet timestep=.. file=../>``);
 * ``NAME.vtu.series``, the JSON series ParaView also opens directly.
 
-"Nothing lost" (DESIGN.md §6): each ``.vtu`` and each collection file is first
-written to a temporary name in the same directory and then renamed over its
-final name (``os.replace``, atomic on POSIX), and a step enters the collection
-only after its ``.vtu`` is in place. A run killed at any moment therefore
-leaves collection files that parse and name only complete ``.vtu`` files.
+"Nothing lost": each ``.vtu`` is first written to a temporary name in the
+same directory and then renamed over its final name (``os.replace``, atomic on
+POSIX), and a step enters the collections only after its ``.vtu`` is in place.
+The collections are written whole the same way (temporary file, rename) when
+a series starts, resumes or closes; in between, each new step is *appended in
+place*: one ``pwrite`` at the offset of the closing tags writes the new entry
+followed by the closing tags again, so writing N steps costs O(N), not O(N²),
+and a run killed at any moment leaves collections that parse and list every
+step whose ``.vtu`` was complete. If an append fails (disk full), the closing
+tags are put back, the step's ``.vtu`` is removed and the ``OSError`` is
+raised: no temporary file is left and no file is unlisted.
 
 Arrays in every file (the same set at every step, so ParaView can colour by
 them throughout):
@@ -35,6 +41,7 @@ gets zeros there, never NaN.
 """
 from __future__ import annotations
 
+import errno
 import json
 import math
 import os
@@ -163,9 +170,13 @@ def _atomic_write_text(path, text):
     """Write ``text`` to ``path`` through a temporary file and a rename."""
     path = Path(path)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with open(tmp, "w", encoding="utf-8") as fh:
-        fh.write(text)
-    os.replace(tmp, path)
+    try:
+        with open(tmp, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)          # a full disk leaves no temporary file behind
+        raise
 
 
 def read_pvd(path):
@@ -242,6 +253,8 @@ class VTKSeries:
         self._reference = None
         self._point_names = None
         self._cell_names = None
+        self._failed = False
+        self._tails = {}
 
     # ----------------------------------------------------------------- paths
     @property
@@ -260,9 +273,9 @@ class VTKSeries:
         if self.name is None:
             self.name = re.sub(r"[^\w.+-]", "_", str(scene.name)) or "scene"
         self.directory.mkdir(parents=True, exist_ok=True)
+        # an empty collection first, so that no collection ever names a removed file
+        self._write_collections()
         if self.clean:
-            # an empty collection first, so that no collection ever names a removed file
-            self._write_collections()
             name = re.escape(self.name)
             pattern = re.compile(rf"^(\.?{name}_\d+\.vtu|\.{name}_\d+\.vtu\.\d+\.tmp"
                                  rf"|\.{name}\.(pvd|vtu\.series)\.\d+\.tmp)$")
@@ -306,13 +319,67 @@ class VTKSeries:
             self._pending = (scene, float(t), np.array(q, dtype=float), np.array(v, dtype=float))
 
     def close(self):
-        """Write the last state if it was skipped, and finish. Safe to call twice."""
+        """Write the last state if it was skipped, rewrite the collections whole, and finish.
+
+        Safe to call twice; after a failed write (disk full) it only finishes."""
         if self._closed:
+            return
+        self._closed = True
+        if self._failed or not self._started:
             return
         if self._pending is not None and self.every is not None:
             self._write_step(*self._pending)
             self._pending = None
-        self._closed = True
+        self._write_collections()
+
+    def resume(self, scene, prior):
+        """Continue the series of an earlier run that this one resumes (``simulate(..., resume=...)``).
+
+        Keeps the steps the existing ``NAME.vtu.series`` (else ``NAME.pvd``) lists up to the
+        earlier run's last time and removes this series' other ``.vtu`` files (steps written
+        after the last checkpoint of a killed run); displacements keep the earlier run's
+        initial state as reference, and ``every`` continues counting from its recorded steps.
+
+        Parameters
+        ----------
+        scene : Scene
+        prior : Result
+            The earlier run's result (its ``t``, ``q`` and ``v`` histories).
+        """
+        if self._started:
+            raise RuntimeError("resume() must come before the first write")
+        if self.name is None:
+            self.name = re.sub(r"[^\w.+-]", "_", str(scene.name)) or "scene"
+        self.directory.mkdir(parents=True, exist_ok=True)
+        t_last = float(prior.t[-1])
+        listed = []
+        try:
+            listed = [(float(e["time"]), self.directory / e["name"])
+                      for e in json.loads(self.series_path.read_text(encoding="utf-8"))["files"]]
+        except (OSError, ValueError, KeyError, TypeError):
+            try:
+                listed = read_pvd(self.pvd_path)
+            except (OSError, ValueError, SyntaxError):
+                listed = []
+        tol = 1e-9 * max(1.0, abs(t_last))
+        kept = []
+        for t, p in listed:
+            if t > t_last + tol or not p.exists() or p.name != f"{self.name}_{len(kept):06d}.vtu":
+                break
+            kept.append((t, p))
+        self.written = kept
+        keep = {p.name for _, p in kept}
+        name = re.escape(self.name)
+        pattern = re.compile(rf"^(\.?{name}_\d+\.vtu|\.{name}_\d+\.vtu\.\d+\.tmp|\.{name}\.(pvd|vtu\.series)\.\d+\.tmp)$")
+        for p in self.directory.iterdir():
+            if pattern.match(p.name) and p.name not in keep:
+                p.unlink()
+        self._started = True
+        self._calls = len(prior.t)
+        if self.times is not None:
+            self._next_time = int(np.searchsorted(self.times, t_last + tol, side="right"))
+        self._init_arrays(scene, np.asarray(prior.q[0], dtype=float), np.asarray(prior.v[0], dtype=float))
+        self._write_collections()
 
     def mesh(self, scene, q, v):
         """The merged meshio mesh of the scene at (q, v), as it would be written."""
@@ -336,20 +403,67 @@ class VTKSeries:
         index = len(self.written)
         final = self.directory / f"{self.name}_{index:06d}.vtu"
         tmp = self.directory / f".{final.name}.{os.getpid()}.tmp"
-        meshio.write(tmp, mesh, file_format="vtu")
-        os.replace(tmp, final)
+        try:
+            meshio.write(tmp, mesh, file_format="vtu")
+            os.replace(tmp, final)
+        except BaseException:
+            self._failed = True
+            tmp.unlink(missing_ok=True)
+            raise
+        try:
+            self._append_collections(float(t), final)
+        except BaseException:
+            self._failed = True
+            final.unlink(missing_ok=True)
+            raise
         self.written.append((float(t), final))
-        self._write_collections()
+
+    # ----------------------------------------------------------- collections
+    _PVD_HEAD = ('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
+                 "  <Collection>\n")
+    _PVD_TAIL = "  </Collection>\n</VTKFile>\n"
+    _SERIES_HEAD = '{\n  "file-series-version": "1.0",\n  "files": [\n'
+    _SERIES_TAIL = "\n  ]\n}\n"
+
+    @staticmethod
+    def _pvd_entry(t, p):
+        return f'    <DataSet timestep="{t!r}" group="" part="0" file={quoteattr(p.name)}/>\n'
+
+    @staticmethod
+    def _series_entry(t, p):
+        return f"    {json.dumps({'name': p.name, 'time': t if math.isfinite(t) else 0.0})}"
 
     def _write_collections(self):
-        lines = ['<?xml version="1.0"?>',
-                 '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
-                 "  <Collection>"]
-        for t, p in self.written:
-            lines.append(f'    <DataSet timestep="{t!r}" group="" part="0" file={quoteattr(p.name)}/>')
-        lines += ["  </Collection>", "</VTKFile>", ""]
-        _atomic_write_text(self.pvd_path, "\n".join(lines))
-        entries = ",\n".join(f"    {json.dumps({'name': p.name, 'time': t if math.isfinite(t) else 0.0})}"
-                              for t, p in self.written)
-        _atomic_write_text(self.series_path,
-                           '{\n  "file-series-version": "1.0",\n  "files": [\n' + entries + "\n  ]\n}\n")
+        """Both collections written whole (temporary file and rename); remembers where their tails start."""
+        pvd = self._PVD_HEAD + "".join(self._pvd_entry(t, p) for t, p in self.written) + self._PVD_TAIL
+        series = (self._SERIES_HEAD + ",\n".join(self._series_entry(t, p) for t, p in self.written)
+                  + self._SERIES_TAIL)
+        _atomic_write_text(self.pvd_path, pvd)
+        _atomic_write_text(self.series_path, series)
+        self._tails = {self.pvd_path: len(pvd.encode()) - len(self._PVD_TAIL),
+                       self.series_path: len(series.encode()) - len(self._SERIES_TAIL)}
+
+    def _append_collections(self, t, final):
+        """List one more step in both collections, in place: O(1) per step."""
+        first = not self.written
+        self._append(self.pvd_path, self._pvd_entry(t, final) + self._PVD_TAIL, self._PVD_TAIL)
+        self._append(self.series_path, ("" if first else ",\n") + self._series_entry(t, final) + self._SERIES_TAIL,
+                     self._SERIES_TAIL)
+
+    def _append(self, path, text, tail):
+        """Overwrite the closing ``tail`` of ``path`` with ``text`` (which ends with it) in one write."""
+        data = text.encode()
+        offset = self._tails[path]
+        fd = os.open(path, os.O_WRONLY)
+        try:
+            try:
+                if os.pwrite(fd, data, offset) != len(data):
+                    raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+            except BaseException:
+                # put the old closing tags back (their blocks exist already), drop anything after them
+                os.pwrite(fd, tail.encode(), offset)
+                os.ftruncate(fd, offset + len(tail.encode()))
+                raise
+        finally:
+            os.close(fd)
+        self._tails[path] = offset + len(data) - len(tail.encode())

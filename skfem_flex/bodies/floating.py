@@ -425,12 +425,14 @@ class FloatingBeam(Body):
             X.sort_indices()
             xc = X.tocoo()
             self._ffs_data[key] = X.data.copy()
-            ff_keys[key] = (xc.row + 3) * n + xc.col + 3
-            rows.append(xc.row + 3), cols.append(xc.col + 3)
+            # flat keys row·n + col exceed int32 (scipy's index type) beyond 46 340 coordinates
+            xr, xcol = xc.row.astype(np.int64), xc.col.astype(np.int64)
+            ff_keys[key] = (xr + 3) * n + xcol + 3
+            rows.append(xr + 3), cols.append(xcol + 3)
         lr = np.broadcast_to(self._loc[:, :, None], (self._loc.shape[0],) + (self._loc.shape[1],) * 2)
         lc = np.broadcast_to(self._loc[:, None, :], lr.shape)
         self._loc_mask = (lr >= 0) & (lc >= 0)
-        loc_keys = (lr[self._loc_mask] + 3) * n + lc[self._loc_mask] + 3
+        loc_keys = (lr[self._loc_mask].astype(np.int64) + 3) * n + lc[self._loc_mask] + 3
         keys = np.unique(np.concatenate([np.asarray(r) * n + np.asarray(c) for r, c in zip(rows, cols)]
                                         + [loc_keys]))
         prow, pcol = np.divmod(keys, n)
@@ -454,7 +456,7 @@ class FloatingBeam(Body):
             ptr, idx = self._pat_indptr, self._pat_indices
         else:
             ptr, idx = np.arange(0, n * n + 1, n), np.tile(np.arange(n), n)
-        keys = np.repeat(np.arange(n), np.diff(ptr)) * n + idx       # row-major keys of the pattern
+        keys = np.repeat(np.arange(n, dtype=np.int64), np.diff(ptr)) * n + idx   # row-major keys of the pattern
 
         def at(flat):
             pos = np.searchsorted(keys, flat)
@@ -467,14 +469,14 @@ class FloatingBeam(Body):
         maps["left"] = at((r + 3) * n + c)
         for key, mat in blocks.items():
             ptr_b, idx_b, _ = _kernel._csr_parts(mat)
-            rows_b = np.repeat(np.arange(nf), np.diff(ptr_b))
+            rows_b = np.repeat(np.arange(nf, dtype=np.int64), np.diff(ptr_b))
             maps[key] = at((rows_b + 3) * n + idx_b + 3)
         loc = self._loc
         lr = np.broadcast_to(loc[:, :, None], (loc.shape[0],) + (loc.shape[1],) * 2)
         lc = np.broadcast_to(loc[:, None, :], lr.shape)
         keep = (lr >= 0) & (lc >= 0)
         map_loc = -np.ones(lr.shape, dtype=np.int64)
-        map_loc[keep] = at((lr[keep] + 3) * n + lc[keep] + 3)
+        map_loc[keep] = at((lr[keep].astype(np.int64) + 3) * n + lc[keep] + 3)
         return _kernel.pack(n, nf, self.strain == "green-lagrange", self.mass_total, self._S0, self._I0,
                             self._Sbar, self._c, self._k0n, blocks, (ptr, idx), maps, self._dNt, loc,
                             self._wq, map_loc)
