@@ -32,6 +32,7 @@ import skfem
 from skfem import Basis, ElementLineP1, ElementLineP2, asm, condense, solve
 
 from . import forms
+from .resources import BYTES_PER_ELEMENT, check_fits
 from .section import Section
 
 __all__ = ["TimoshenkoBeam", "ElementQuadrature", "gauss_line"]
@@ -231,6 +232,8 @@ class TimoshenkoBeam:
             raise ValueError(f"order must be 1 or 2, got {order!r}")
         if not isinstance(shear, str) or shear not in ("reduced", "full"):
             raise ValueError(f"shear must be 'reduced' or 'full', got {shear!r}")
+        n_el = mesh.t.shape[1]
+        check_fits(BYTES_PER_ELEMENT * order * n_el, f"a beam of {n_el} elements (order {order})")
         self.mesh = mesh
         self.section = section
         self.order = int(order)

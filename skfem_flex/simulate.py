@@ -15,6 +15,7 @@ from . import compiled_loop
 from .errors import DivergenceError, Interrupted
 from .initial_conditions import consistent_initial_state
 from .integrators import ConvergenceError, SimulationError, State, make_integrator
+from .resources import check_fits
 from .result import Result
 from .scene import Scene
 
@@ -225,7 +226,7 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
     if cold and progress:
         print(compiled_loop.COMPILE_NOTICE, file=sys.stderr, flush=True)
     compile_start = time.perf_counter()
-    n_steps = int(math.ceil(t_end / dt - 1e-9)) if t_end > 0 else 0
+    n_steps = _step_count(scene, t_end, dt, record_every)
     rec = _Recorder(scene)
     prior = _resume_source(resume, scene, scheme, dt)
     if prior is None:
@@ -335,6 +336,19 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
         for s in sinks:
             s.close()
     return result()
+
+
+def _step_count(scene, t_end, dt, record_every):
+    """Steps of the run; InsufficientMemoryError if its histories cannot fit in the memory available."""
+    ratio = t_end / dt
+    if not math.isfinite(ratio) or ratio > 1e15:
+        raise ValueError(f"t_end / dt = {t_end!r} / {dt!r} asks for {ratio:.3g} steps; that run cannot end")
+    n_steps = int(math.ceil(ratio - 1e-9)) if t_end > 0 else 0
+    n_records = n_steps // record_every + 2
+    # q and v per record (Python lists of arrays: ~100 bytes of overhead each) plus ~16 scalars
+    check_fits(n_records * (16 * scene.n + 400), f"recording {n_records:.3g} states of {scene.n} coordinates "
+                                                 f"(t_end = {t_end:g} s, dt = {dt:g} s, record_every = {record_every})")
+    return n_steps
 
 
 def _finite_number(name, x):
