@@ -35,6 +35,7 @@ import inspect
 import json
 import math
 import os
+import signal
 import sys
 import time
 from pathlib import Path
@@ -310,7 +311,7 @@ def _cmd_run(args):
     from .errors import DivergenceError, Interrupted
     from .integrators import SimulationError
     from .output import VTKSeries, _atomic_write_text
-    from .simulate import simulate
+    from .simulate import SignalStop, simulate
 
     name, params, t_end, dt, integrator, rho_inf, every, no_vtk, out = _run_settings(args)
     if not math.isfinite(dt) or dt <= 0:
@@ -344,7 +345,7 @@ def _cmd_run(args):
     start = time.perf_counter()
     try:
         result = simulate(scene, t_end, dt, integrator=integrator, rho_inf=rho_inf, output=sinks,
-                          progress=not args.quiet, checkpoint=out / CHECKPOINT, checkpoint_every=CHECKPOINT_EVERY,
+                          progress=not args.quiet, checkpoint=out / CHECKPOINT, checkpoint_every=args.checkpoint_every,
                           resume=resume)
     except SimulationError as exc:
         result, error = exc.result, _one_line(exc)
@@ -356,14 +357,22 @@ def _cmd_run(args):
         raise UsageError(_one_line(exc)) from None
     wall = time.perf_counter() - start
 
-    files = _write_run_outputs(scene, result, sinks, out)
-    summary = _summary(name, scene, effective, integrator, rho_inf, t_end, dt, result, error, files, wall)
+    held = SignalStop(True)                   # a signal now waits until the outputs are complete
     try:
-        _atomic_write_text(out / "summary.json", json.dumps(summary, indent=2) + "\n")
-    except OSError as exc:
-        raise _OutputError(exc) from None
-    if status == 0 and result is not None:
-        (out / CHECKPOINT).unlink(missing_ok=True)        # result.npz holds all of it now
+        files = _write_run_outputs(scene, result, sinks, out)
+        summary = _summary(name, scene, effective, integrator, rho_inf, t_end, dt, result, error, files, wall)
+        try:
+            _atomic_write_text(out / "summary.json", json.dumps(summary, indent=2) + "\n")
+        except OSError as exc:
+            raise _OutputError(exc) from None
+        if status == 0 and result is not None:
+            (out / CHECKPOINT).unlink(missing_ok=True)        # result.npz holds all of it now
+    finally:
+        held.restore()
+    if held.signum is not None and status == 0:
+        print(f"skfem-flex: {signal.Signals(held.signum).name} while writing the outputs: the run is complete "
+              f"and so are its outputs in {out}", file=sys.stderr)
+        return EXIT_SIGNAL.get(held.signum, 130)
     for warning in summary.get("warnings", []):
         print(f"skfem-flex: warning: {warning}", file=sys.stderr)
     if error is not None:
@@ -488,6 +497,8 @@ def _add_run(sub):
                    help=f"write a VTK file every N steps (default: at most about {MAX_FRAMES} files)")
     p.add_argument("--no-vtk", action="store_true", help="skip the VTK series")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no report")
+    p.add_argument("--checkpoint-every", type=_positive_number, default=CHECKPOINT_EVERY, metavar="S",
+                   help=f"save the histories to {CHECKPOINT} every S seconds of wall time (default {CHECKPOINT_EVERY:g})")
     p.add_argument("--resume", default=None, metavar="DIR",
                    help=f"continue the interrupted or killed run in DIR from its last saved state (result.npz or "
                         f"{CHECKPOINT}), with its own settings; --t-end may extend it")
@@ -601,7 +612,6 @@ def build_parser():
 
 def main(argv=None):
     """Entry point of the ``skfem-flex`` console script; returns the exit status."""
-    import signal
     import threading
 
     old_term = None

@@ -19,7 +19,7 @@ from .resources import check_fits
 from .result import Result
 from .scene import Scene
 
-__all__ = ["simulate"]
+__all__ = ["simulate", "SignalStop"]
 
 
 class _Recorder:
@@ -280,7 +280,7 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
         return rec.result(wall_time=time.perf_counter() - start - compile_time, steps=step, halvings=halvings,
                           compile_time=compile_time, final_state=fs, **meta, **extra)
 
-    stop = _SignalStop(handle_signals)
+    stop = SignalStop(handle_signals)
     try:
         first = True
         while step < n_steps:
@@ -416,8 +416,12 @@ def _resume_source(resume, scene, scheme, dt):
     return prior
 
 
-class _SignalStop:
-    """While alive (main thread only), SIGINT/SIGTERM set ``signum``; a second signal raises at once."""
+class SignalStop:
+    """While alive (main thread only), SIGINT/SIGTERM set ``signum`` instead of stopping the program;
+    a second signal raises KeyboardInterrupt at once. ``restore()`` puts the earlier handlers back.
+
+    The time loop polls ``signum`` between steps; the CLI also holds signals this way while it
+    writes a run's outputs, so that they are complete."""
 
     def __init__(self, enabled):
         self.signum, self.old = None, {}
