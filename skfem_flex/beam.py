@@ -35,7 +35,7 @@ from . import forms
 from .resources import BYTES_PER_ELEMENT, check_fits
 from .section import Section
 
-__all__ = ["TimoshenkoBeam", "ElementQuadrature", "gauss_line"]
+__all__ = ["TimoshenkoBeam", "ElementQuadrature", "gauss_line", "line_mesh"]
 
 # Fields of the composite element, in scikit-fem's node-major DOF order.
 FIELDS = ("u", "w", "theta")
@@ -149,6 +149,20 @@ def _check_mesh(mesh):
             f"{x_sorted[0]} to {x_sorted[-1]} (duplicate or overlapping elements, "
             "gaps or unused points)"
         )
+
+
+def line_mesh(length, n_elements, order=1):
+    """A uniform :class:`skfem.MeshLine` of ``n_elements`` on [0, length] (m).
+
+    Checks first that a beam of that many elements fits in the memory available
+    (:func:`skfem_flex.resources.check_fits`), so that a request of 10⁸ elements is
+    refused at once instead of allocating its mesh.
+    """
+    if isinstance(n_elements, bool) or int(n_elements) != n_elements or n_elements < 1:
+        raise ValueError(f"n_elements must be a positive integer, got {n_elements!r}")
+    n = int(n_elements)
+    check_fits(BYTES_PER_ELEMENT * order * n, f"a beam of {n} elements (order {order})")
+    return skfem.MeshLine(np.linspace(0.0, float(length), n + 1))
 
 
 class TimoshenkoBeam:

@@ -151,6 +151,8 @@ def _scene_settings(name, items):
             raise UsageError(f"--set expects key=value, got {item!r} (give the scene name before --set)")
         if key not in params:
             raise UsageError(f"scene {name!r} has no parameter {key!r}; it has: {', '.join(params) or 'none'}")
+        if key in out:
+            raise UsageError(f"--set {key} is given twice ({key}={out[key]!r} and {item!r}); give it once")
         default = params[key]
         out[key] = convert_setting(key, text, None if default is inspect.Parameter.empty else default)
     missing = [p for p, d in params.items() if d is inspect.Parameter.empty and p not in out]
@@ -642,6 +644,16 @@ def main(argv=None):
     except _Terminated:
         print("skfem-flex: terminated; outputs written so far are kept", file=sys.stderr)
         return EXIT_SIGNAL[15]
+    except (ArithmeticError, MemoryError, RecursionError) as exc:
+        # numbers beyond double precision deep inside a computation: one line, not a traceback
+        print(f"skfem-flex: error: {type(exc).__name__}: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_STOPPED
+    except Exception as exc:
+        if os.environ.get("SKFEM_FLEX_DEBUG"):
+            raise
+        print(f"skfem-flex: internal error: {type(exc).__name__}: {_one_line(exc)} (please report it; "
+              f"SKFEM_FLEX_DEBUG=1 shows the traceback)", file=sys.stderr)
+        return EXIT_STOPPED
     finally:
         if old_term is not None:
             signal.signal(signal.SIGTERM, old_term)

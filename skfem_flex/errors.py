@@ -4,7 +4,7 @@ They live in their own module so that bodies can raise them without
 importing the integrators (imports point one way: DESIGN.md §2).
 """
 
-__all__ = ["SimulationError", "ConvergenceError", "Interrupted", "DivergenceError"]
+__all__ = ["SimulationError", "ConvergenceError", "Interrupted", "DivergenceError", "OutputError"]
 
 
 class SimulationError(RuntimeError):
@@ -30,3 +30,7 @@ class Interrupted(SimulationError):
 class DivergenceError(SimulationError):
     """The solution left every sane bound (non-finite, coordinates or energy grown by orders of
     magnitude): the run is stopped rather than reported as a success."""
+
+
+class OutputError(SimulationError):
+    """An output (VTK frame, checkpoint) could not be written: disk full, no permission."""

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from . import compiled_loop
-from .errors import DivergenceError, Interrupted
+from .errors import DivergenceError, Interrupted, OutputError
 from .initial_conditions import consistent_initial_state
 from .integrators import ConvergenceError, SimulationError, State, make_integrator
 from .resources import check_fits
@@ -235,8 +235,7 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
         state = scheme.start(scene, State(0.0, q, v))
         step, work, halvings = 0, 0.0, 0
         rec.record(state, 0.0, 0, 0.0)
-        for s in sinks:
-            s.write(scene, state.t, state.q, state.v)
+        _write_sinks(sinks, scene, state)
     else:
         fs = prior.final_state
         # acc and pseudo are saved empty for the schemes that carry none
@@ -260,9 +259,10 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
     last_checkpoint = start
 
     def recorded(state, work, its, vres, derived=None):
+        # the sinks first: a step whose output failed is not in the histories either, so that
+        # the histories and the final state of the result stay those of one step
+        _write_sinks(sinks, scene, state)
         rec.record(state, work, its, vres, derived)
-        for s in sinks:
-            s.write(scene, state.t, state.q, state.v)
         guard.check_energy(state.t)
 
     def advanced(n, its):
@@ -277,9 +277,12 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
         fs = {k: np.zeros(0) if getattr(state, k) is None else np.array(getattr(state, k), dtype=float)
               for k in ("q", "v", "acc", "pseudo", "lam", "prescribed_force")}
         fs.update(t=np.float64(state.t), work=np.float64(work), step=np.int64(step), halvings=np.int64(halvings))
+        if not resumable:
+            fs = None
         return rec.result(wall_time=time.perf_counter() - start - compile_time, steps=step, halvings=halvings,
                           compile_time=compile_time, final_state=fs, **meta, **extra)
 
+    resumable = True
     stop = SignalStop(handle_signals)
     try:
         first = True
@@ -288,9 +291,17 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
                 chunk = min(1 if first and cold else compiled_loop.chunk_steps(scene), n_steps - step)
                 out = compiled_loop.run_chunk(scene, scheme, state, dt, t_end, step + 1, chunk, n_steps, record_every,
                                               work)
-                for t_r, q_r, v_r, w_r, its_r, reac_r, derived in out["records"]:
-                    recorded(State(t_r, q_r, v_r, lam=np.zeros(0), prescribed_force=reac_r), w_r, its_r, 0.0,
-                             derived)
+                for i, (t_r, q_r, v_r, w_r, its_r, reac_r, derived) in enumerate(out["records"]):
+                    s_r = State(t_r, q_r, v_r, lam=np.zeros(0), prescribed_force=reac_r)
+                    try:
+                        recorded(s_r, w_r, its_r, 0.0, derived)
+                    except OutputError:
+                        if record_every == 1 and i:   # the result ends at the last step recorded
+                            state, work, step = prev, out["records"][i - 1][3], step + i
+                        elif record_every != 1:
+                            resumable = False
+                        raise
+                    prev = s_r
                 if out["done"]:
                     state = State(out["t"], out["q"], out["v"], lam=np.zeros(0), prescribed_force=out["reaction"])
                     work = out["work"]
@@ -320,10 +331,13 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
                 raise Interrupted(f"interrupted at t = {state.t:.6g} s by {signal.Signals(stop.signum).name}",
                                   signal=stop.signum)
             if checkpoint is not None and time.perf_counter() - last_checkpoint >= checkpoint_every:
-                result(completed=False, stopped=f"checkpoint at t = {state.t:.6g} s").save(checkpoint)
+                try:
+                    result(completed=False, stopped=f"checkpoint at t = {state.t:.6g} s").save(checkpoint)
+                except OSError as exc:
+                    raise _output_error(exc, state.t) from None
                 last_checkpoint = time.perf_counter()
     except SimulationError as exc:
-        if not isinstance(exc, Interrupted):
+        if not isinstance(exc, (Interrupted, DivergenceError, OutputError)):
             exc.args = (f"{exc.args[0]} [step {step + 1} of {n_steps}]",) + exc.args[1:]
         exc.info.update(step=step, time=state.t)
         exc.signal = exc.info.get("signal")
@@ -349,6 +363,19 @@ def _step_count(scene, t_end, dt, record_every):
     check_fits(n_records * (16 * scene.n + 400), f"recording {n_records:.3g} states of {scene.n} coordinates "
                                                  f"(t_end = {t_end:g} s, dt = {dt:g} s, record_every = {record_every})")
     return n_steps
+
+
+def _write_sinks(sinks, scene, state):
+    for s in sinks:
+        try:
+            s.write(scene, state.t, state.q, state.v)
+        except OSError as exc:
+            raise _output_error(exc, state.t) from None
+
+
+def _output_error(exc, t):
+    where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
+    return OutputError(f"could not write the output at t = {t:.6g} s: {exc.strerror or exc}{where}")
 
 
 def _finite_number(name, x):

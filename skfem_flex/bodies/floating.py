@@ -208,6 +208,9 @@ class FloatingBeam(Body):
         self._I00 = float(np.sum(sec.rhoA * qd.x ** 2 * qd.dx))
         self._Jr = float(np.sum(sec.rhoI * qd.dx))
         self._I0 = self._I00 + self._Jr
+        if not all(np.isfinite([self.mass_total, self._S0[0], self._I0])) or not np.all(np.isfinite(self._c)):
+            raise ValueError(f"the beam's mass and inertia overflow double precision (length {beam.length:g} m, "
+                             f"rhoA = {sec.rhoA:g} kg/m, rhoI = {sec.rhoI:g} kg m): give SI values of a physical size")
         mats = dict(MA=MA, H=H, Mff=(MA + MI).tocsr())
         for k, v in mats.items():
             setattr(self, "_" + k, v if self.sparse else v.toarray())
@@ -321,7 +324,7 @@ class FloatingBeam(Body):
         rig[nd[:, 1], 1] = 1.0
         rig[nd[:, 1], 2] = beam.x_nodes
         rig[nd[:, 2], 2] = 1.0
-        rank = np.linalg.matrix_rank(rig[fixed], tol=1e-9 * max(1.0, beam.length))
+        rank = np.linalg.matrix_rank(rig[fixed])
         if rank < 3:
             raise ValueError(f"reference condition {reference!r} leaves {3 - rank} rigid-body mode(s) in the "
                              f"elastic coordinates (singular elastic stiffness); fix u, w, theta at the root "
@@ -335,9 +338,16 @@ class FloatingBeam(Body):
         """The linear elastic stiffness on q_f must be regular (no rigid modes left)."""
         if K.shape[0] <= 600:
             ev = np.linalg.eigvalsh(K.toarray())
-            if ev[0] <= 1e-13 * ev[-1]:
-                raise ValueError(f"the elastic stiffness with reference {self.reference!r} is singular: "
-                                 f"rigid-body modes remain in q_f")
+            if not np.all(np.isfinite(ev)) or ev[0] <= 1e-13 * ev[-1]:
+                # the reference condition removed the rigid modes (checked above), so a singular K
+                # means stiffnesses too far apart (or zero) for double precision
+                sec, h = self.beam.section, self.beam.length / max(self.beam.mesh.t.shape[1], 1)
+                raise ValueError(
+                    f"the elastic stiffness is singular to double precision (smallest/largest eigenvalue "
+                    f"{ev[0] / ev[-1] if ev[-1] else 0.0:.2g}): the section's stiffnesses per element, "
+                    f"EA/h = {sec.EA / h:.3g} N/m, kGA/h = {sec.kGA / h:.3g} N/m and EI/h³ = {sec.EI / h ** 3:.3g} N/m "
+                    f"(h = {h:.3g} m), must lie within about 10¹³ of each other and be positive; "
+                    f"change EA, kGA, EI or the number of elements")
 
     @property
     def coordinate_names(self):
