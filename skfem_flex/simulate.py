@@ -471,6 +471,8 @@ class SignalStop:
 #: a run is diverged when a coordinate exceeds this many times the scene's size, or the energy this
 #: many times its initial scale plus the work done
 DIVERGENCE_FACTOR = 1e6
+#: recorded states over which the energy scale of the divergence rule is taken
+_SCALE_RECORDS = 10
 
 
 class _DivergenceGuard:
@@ -479,8 +481,10 @@ class _DivergenceGuard:
     * a coordinate or velocity is not finite;
     * a coordinate exceeds 10⁶ × max(scene size, largest initial coordinate, 1) — lengths in m,
       angles in rad (a body spinning at 10 rad/s needs 10⁵ s to reach it);
-    * |T + V| exceeds 10⁶ × (|T₀| + |V₀| + max |W|), W the work done so far, when that scale is
-      not zero (energy-conserving schemes keep T + V = E₀ + W, so this catches the others).
+    * |T + V| exceeds 10⁶ × (E_s + max |W|), W the work done so far and E_s the largest |T| + |V|
+      of the first :data:`_SCALE_RECORDS` recorded states (the scale a run released from rest
+      establishes in its first steps; energy-conserving schemes keep T + V = E₀ + W, so this
+      catches the others).
     """
 
     def __init__(self, scene, rec):
@@ -488,8 +492,9 @@ class _DivergenceGuard:
         q0 = np.asarray(rec.rows["q"][0], dtype=float)
         size = max(float(scene.length_scale), float(np.max(np.abs(q0), initial=0.0)), 1.0)
         self.q_bound = DIVERGENCE_FACTOR * size
-        self.e0 = abs(rec.rows["kinetic"][0]) + abs(rec.rows["potential"][0])
-        self.w_max = max((abs(w) for w in rec.rows["external_work"]), default=0.0)
+        r = rec.rows
+        self.e_scale = max(abs(k) + abs(p) for k, p in zip(r["kinetic"][:_SCALE_RECORDS], r["potential"]))
+        self.w_max = max((abs(w) for w in r["external_work"]), default=0.0)
 
     def check_state(self, state):
         if not (np.all(np.isfinite(state.q)) and np.all(np.isfinite(state.v))):
@@ -503,7 +508,9 @@ class _DivergenceGuard:
         r = self.rec.rows
         self.w_max = max(self.w_max, abs(r["external_work"][-1]))
         energy = r["kinetic"][-1] + r["potential"][-1]
-        scale = self.e0 + self.w_max
+        if len(r["kinetic"]) <= _SCALE_RECORDS:
+            self.e_scale = max(self.e_scale, abs(r["kinetic"][-1]) + abs(r["potential"][-1]))
+        scale = self.e_scale + self.w_max
         if not math.isfinite(energy) or (scale > 0 and abs(energy) > DIVERGENCE_FACTOR * scale):
             raise DivergenceError(f"diverged at t = {t:.6g} s: energy {energy:.3g} J against an initial energy "
                                   f"scale plus work done of {scale:.3g} J")
