@@ -309,6 +309,8 @@ def _run_settings(args):
 
 
 def _cmd_run(args):
+    import numpy as np
+
     from . import scenes
     from .errors import DivergenceError, Interrupted
     from .integrators import SimulationError
@@ -323,7 +325,8 @@ def _cmd_run(args):
     n_steps = _step_count(t_end, dt)
     factory = scenes.get(name)
     try:
-        scene = factory(**params)
+        with np.errstate(all="ignore"):       # overflow is reported by the checks, in one line
+            scene = factory(**params)
     except (ValueError, TypeError, OverflowError, ArithmeticError) as exc:
         raise UsageError(f"scene {name!r}: {_one_line(exc)}") from None
     _prepare_out(out)
