@@ -151,6 +151,10 @@ def _check_mesh(mesh):
         )
 
 
+#: longest beam :func:`line_mesh` builds, m
+MAX_LENGTH = 1e12
+
+
 def line_mesh(length, n_elements, order=1):
     """A uniform :class:`skfem.MeshLine` of ``n_elements`` on [0, length] (m).
 
@@ -161,6 +165,10 @@ def line_mesh(length, n_elements, order=1):
     if isinstance(n_elements, bool) or int(n_elements) != n_elements or n_elements < 1:
         raise ValueError(f"n_elements must be a positive integer, got {n_elements!r}")
     n = int(n_elements)
+    length = float(length)
+    if not np.isfinite(length) or length <= 0 or length > MAX_LENGTH:
+        raise ValueError(f"length must be positive and at most {MAX_LENGTH:g} m (the inertia integrals ∫ρA x² dx "
+                         f"overflow far beyond), got {length!r}")
     check_fits(BYTES_PER_ELEMENT * order * n, f"a beam of {n} elements (order {order})")
     return skfem.MeshLine(np.linspace(0.0, float(length), n + 1))
 
