@@ -349,9 +349,10 @@ def _cmd_run(args):
     error, result, status = None, None, 0
     start = time.perf_counter()
     try:
-        result = simulate(scene, t_end, dt, integrator=integrator, rho_inf=rho_inf, output=sinks,
-                          progress=not args.quiet, checkpoint=out / CHECKPOINT, checkpoint_every=args.checkpoint_every,
-                          resume=resume)
+        with np.errstate(all="ignore"):       # non-finite states are caught by simulate's divergence rule
+            result = simulate(scene, t_end, dt, integrator=integrator, rho_inf=rho_inf, output=sinks,
+                              progress=not args.quiet, checkpoint=out / CHECKPOINT,
+                              checkpoint_every=args.checkpoint_every, resume=resume)
     except SimulationError as exc:
         result, error = exc.result, _one_line(exc)
         status = (EXIT_SIGNAL.get(getattr(exc, "signal", None), 130) if isinstance(exc, Interrupted)
