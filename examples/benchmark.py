@@ -19,7 +19,9 @@ the median wall time, µs per step and Newton iterations per step, and is
 written as Markdown to ``OUT/benchmark.md`` (default ``examples/output``),
 which the README quotes.
 
-Run ``python examples/benchmark.py [--repeat 3] [--window 1.0] [--record-every 10] [--out DIR]``.
+Run ``python examples/benchmark.py [--repeat 3] [--window 1.0] [--record-every 10] [--out DIR]``;
+``--limits`` runs ``examples/benchmark_limits.py`` instead (memory against mesh size, VTK series
+cost against frame count).
 """
 import argparse
 import platform
@@ -121,7 +123,14 @@ if __name__ == "__main__":
     ap.add_argument("--window", type=float, default=1.0, help="simulated seconds for meshes above 16 elements")
     ap.add_argument("--record-every", type=int, default=10, help="record every n-th step")
     ap.add_argument("--out", default=str(Path(__file__).parent / "output"))
+    ap.add_argument("--limits", action="store_true",
+                    help="instead: peak memory at 10³–10⁵ elements and VTK series cost per frame "
+                         "(examples/benchmark_limits.py)")
     args = ap.parse_args()
+    if args.limits:
+        import benchmark_limits
+        benchmark_limits.main(["--out", args.out])
+        raise SystemExit(0)
     cold = cold_compile()
     warm = warm_up()
     text = table(run(args.repeat, args.window, args.record_every), args.record_every, warm, cold)
