@@ -461,7 +461,9 @@ def _report(name, summary, files, out):
     e = summary.get("energy", {})
     nw = summary.get("newton", {})
     print(f"{name}: {summary.get('steps', 0)} steps of {summary['dt']:.4g} s to t = {summary['t_end']:.4g} s "
-          f"with {summary['integrator']} in {summary['wall_time_s']:.2f} s")
+          f"with {summary['integrator']} in {summary['wall_time_s']:.2f} s"
+          + (f" (of which {summary['compile_time_s']:.1f} s compiling, once per machine)"
+             if summary.get("compile_time_s", 0.0) > 0 else ""))
     print(f"  energy balance error {e.get('max_balance_error_J', 0.0):.3g} J "
           f"(relative {e.get('relative_balance_error', 0.0):.3g}), "
           f"max |constraint| {summary.get('max_constraint_residual', 0.0):.3g}, "

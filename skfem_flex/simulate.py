@@ -279,7 +279,8 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
         fs.update(t=np.float64(state.t), work=np.float64(work), step=np.int64(step), halvings=np.int64(halvings))
         if not resumable:
             fs = None
-        return rec.result(wall_time=time.perf_counter() - start - compile_time, steps=step, halvings=halvings,
+        # start was reset after a compiling first step: wall_time is the loop's own time
+        return rec.result(wall_time=time.perf_counter() - start, steps=step, halvings=halvings,
                           compile_time=compile_time, final_state=fs, **meta, **extra)
 
     resumable = True
