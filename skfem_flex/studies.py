@@ -350,7 +350,7 @@ STABILITY_CASES = {
 }
 
 #: ``quick`` runs (a smoke test of the study): at most this many steps and seconds of wall time per run
-QUICK_STEPS, QUICK_BUDGET = 50, 1.0
+QUICK_STEPS, QUICK_BUDGET = 100, 1.0
 
 
 class _WallClockBudget:
