@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import argparse
 import inspect
+import re
 import json
 import math
 import os
@@ -336,6 +337,11 @@ def _cmd_run(args):
     else:
         for f in _RUN_FILES:
             (out / f).unlink(missing_ok=True)
+    # temporary files of a killed earlier run (the VTK series removes its own)
+    stale = re.compile(r"^\.(" + "|".join(re.escape(f) for f in _RUN_FILES) + r")\.\d+\.tmp$")
+    for p in out.iterdir():
+        if stale.match(p.name):
+            p.unlink(missing_ok=True)
     effective = {p: d for p, d, _ in scenes.parameters(name)}
     effective.update(params)
 

@@ -204,7 +204,8 @@ class Result:
         return res
 
     def probes_to_csv(self, path):
-        """Write the probe histories as CSV: a column ``t`` (s), then one per probe component.
+        """Write the probe histories as CSV (temporary file, then rename): a column ``t`` (s), then one
+        per probe component.
 
         A scalar probe gives a column named after it, a vector probe columns
         ``name[0]``, ``name[1]``, ... (higher dimensions flattened in C order).
@@ -223,7 +224,13 @@ class Result:
             else:
                 names.extend(f"{k}[{i}]" for i in range(a.shape[1]))
             cols.append(a)
-        np.savetxt(path, np.hstack(cols), delimiter=",", header=",".join(names), comments="", fmt="%.17g")
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        try:
+            np.savetxt(tmp, np.hstack(cols), delimiter=",", header=",".join(names), comments="", fmt="%.17g")
+            os.replace(tmp, path)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
         return path
 
 

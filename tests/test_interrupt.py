@@ -54,8 +54,9 @@ def wait_for_loop(proc, out, timeout=60.0):
     time.sleep(random.uniform(0.0, 0.5))
 
 
-def check_collections(out, unlisted_allowed):
-    """Both collections parse, agree, list increasing times of existing complete frames; no .tmp."""
+def check_collections(out, unlisted_allowed, tmp_allowed=0):
+    """Both collections parse, agree, list increasing times of existing complete frames; no .tmp
+    (after SIGKILL: the files that were being written, which the next run or resume removes)."""
     listed = read_pvd(out / f"{SCENE}.pvd")
     series = json.loads((out / f"{SCENE}.vtu.series").read_text())["files"]
     assert [p.name for _, p in listed] == [e["name"] for e in series]
@@ -66,7 +67,7 @@ def check_collections(out, unlisted_allowed):
     on_disk = {p.name for p in out.glob(f"{SCENE}_*.vtu")}
     assert {p.name for _, p in listed} <= on_disk
     assert len(on_disk) - len(listed) <= unlisted_allowed
-    assert not [p.name for p in out.iterdir() if p.name.endswith(".tmp")]
+    assert len([p.name for p in out.iterdir() if p.name.endswith(".tmp")]) <= tmp_allowed
     return listed
 
 
@@ -105,7 +106,8 @@ def check_killed(proc, out, reference):
     proc.communicate(timeout=60)
     assert proc.returncode == -signal.SIGKILL
     assert not (out / "summary.json").exists()
-    check_collections(out, unlisted_allowed=1)
+    # the frame and the checkpoint in flight may be left as temporary files; resume removes them
+    check_collections(out, unlisted_allowed=1, tmp_allowed=2)
     res = sf.Result.load(out / "checkpoint.npz")
     n = len(res.t)
     assert n >= 2 and res.final_state is not None
