@@ -455,6 +455,8 @@ class SignalStop:
         self.signum, self.old = None, {}
         if enabled and threading.current_thread() is threading.main_thread():
             for sig in (signal.SIGINT, signal.SIGTERM):
+                if signal.getsignal(sig) is signal.SIG_IGN:     # e.g. SIGINT of a background job: keep ignoring
+                    continue
                 self.old[sig] = signal.signal(sig, self._handler)
 
     def _handler(self, signum, frame):
