@@ -35,7 +35,7 @@ def run_cli(capsys, argv):
     return rc, err
 
 
-@settings(max_examples=int(os.environ.get('SKFEM_FLEX_HYPOTHESIS_EXAMPLES', 40)), deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=int(os.environ.get('SKFEM_FLEX_HYPOTHESIS_EXAMPLES', 25)), deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(data=st.data())
 def test_cli_survives_any_set_value(tmp_path, capsys, data):
     """Random wrong-typed/signed/sized --set values for every catalogue scene: exit 0-3, never a traceback."""
