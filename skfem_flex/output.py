@@ -10,17 +10,18 @@ written so far with its time:
 * ``NAME.pvd``, the ParaView collection (``<DataSet timestep=.. file=../>``);
 * ``NAME.vtu.series``, the JSON series ParaView also opens directly.
 
-"Nothing lost": each ``.vtu`` is first written to a temporary name in the
-same directory and then renamed over its final name (``os.replace``, atomic on
-POSIX), and a step enters the collections only after its ``.vtu`` is in place.
-The collections are written whole the same way (temporary file, rename) when
-a series starts, resumes or closes; in between, each new step is *appended in
-place*: one ``pwrite`` at the offset of the closing tags writes the new entry
-followed by the closing tags again, so writing N steps costs O(N), not O(N²),
-and a run killed at any moment leaves collections that parse and list every
-step whose ``.vtu`` was complete. If an append fails (disk full), the closing
-tags are put back, the step's ``.vtu`` is removed and the ``OSError`` is
-raised: no temporary file is left and no file is unlisted.
+"Nothing lost": each ``.vtu`` and each collection file is first written to a
+temporary name in the same directory and then renamed over its final name
+(``os.replace``, atomic on POSIX), and a step enters the collections only
+after its ``.vtu`` is in place, so a reader or a killed run only ever sees
+collections that parse and name complete files. Writing N steps costs O(N)
+up to a logarithm: every step's entries are formatted once and kept, and the
+collections are rewritten (a join and one write) only when the steps not yet
+listed reach 1/64 of those listed, or a second has passed, and always at
+:meth:`VTKSeries.close`; a killed run therefore lists every step up to at
+most max(1, N/64) steps, or one second, before the kill. If a write fails
+(disk full), the steps not listed are removed, no temporary file is left and
+the ``OSError`` is raised.
 
 Arrays in every file (the same set at every step, so ParaView can colour by
 them throughout):
@@ -41,11 +42,11 @@ gets zeros there, never NaN.
 """
 from __future__ import annotations
 
-import errno
 import json
 import math
 import os
 import re
+import time
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
@@ -55,6 +56,10 @@ __all__ = ["VTKSeries", "merge_geometry", "read_pvd", "POINT_ARRAYS", "CELL_ARRA
 
 #: point arrays every written file carries (name -> number of components; 3 = vector)
 POINT_ARRAYS = {"displacement": 3, "velocity": 3, "angle": 1}
+#: the collections are rewritten once the steps not listed reach 1/LISTING_FRACTION of the listed ones ...
+LISTING_FRACTION = 64
+#: ... or this many seconds after the last rewrite (and always when the series closes)
+LISTING_SECONDS = 1.0
 #: cell arrays every written file carries (besides ``body_id``)
 CELL_ARRAYS = {"axial_force": 1, "shear_force": 1, "bending_moment": 1, "strain_energy_density": 1}
 
@@ -254,7 +259,9 @@ class VTKSeries:
         self._point_names = None
         self._cell_names = None
         self._failed = False
-        self._tails = {}
+        self._pvd_lines, self._series_lines = [], []
+        self._listed = 0
+        self._last_listing = 0.0
 
     # ----------------------------------------------------------------- paths
     @property
@@ -368,6 +375,8 @@ class VTKSeries:
                 break
             kept.append((t, p))
         self.written = kept
+        self._pvd_lines = [self._pvd_entry(t, p) for t, p in kept]
+        self._series_lines = [self._series_entry(t, p) for t, p in kept]
         keep = {p.name for _, p in kept}
         name = re.escape(self.name)
         pattern = re.compile(rf"^(\.?{name}_\d+\.vtu|\.{name}_\d+\.vtu\.\d+\.tmp|\.{name}\.(pvd|vtu\.series)\.\d+\.tmp)$")
@@ -407,16 +416,16 @@ class VTKSeries:
             meshio.write(tmp, mesh, file_format="vtu")
             os.replace(tmp, final)
         except BaseException:
-            self._failed = True
             tmp.unlink(missing_ok=True)
-            raise
-        try:
-            self._append_collections(float(t), final)
-        except BaseException:
-            self._failed = True
-            final.unlink(missing_ok=True)
+            self._drop_unlisted()
             raise
         self.written.append((float(t), final))
+        self._pvd_lines.append(self._pvd_entry(float(t), final))
+        self._series_lines.append(self._series_entry(float(t), final))
+        pending = len(self.written) - self._listed
+        if pending >= max(1, self._listed // LISTING_FRACTION) or \
+                time.monotonic() - self._last_listing >= LISTING_SECONDS:
+            self._write_collections()
 
     # ----------------------------------------------------------- collections
     _PVD_HEAD = ('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
@@ -433,37 +442,31 @@ class VTKSeries:
     def _series_entry(t, p):
         return f"    {json.dumps({'name': p.name, 'time': t if math.isfinite(t) else 0.0})}"
 
+    def _drop_unlisted(self):
+        """After a failed write: remove the steps the collections do not list yet; the sink is done."""
+        self._failed = True
+        for _, p in self.written[self._listed:]:
+            p.unlink(missing_ok=True)
+        del self.written[self._listed:], self._pvd_lines[self._listed:], self._series_lines[self._listed:]
+
     def _write_collections(self):
-        """Both collections written whole (temporary file and rename); remembers where their tails start."""
-        pvd = self._PVD_HEAD + "".join(self._pvd_entry(t, p) for t, p in self.written) + self._PVD_TAIL
-        series = (self._SERIES_HEAD + ",\n".join(self._series_entry(t, p) for t, p in self.written)
-                  + self._SERIES_TAIL)
-        _atomic_write_text(self.pvd_path, pvd)
-        _atomic_write_text(self.series_path, series)
-        self._tails = {self.pvd_path: len(pvd.encode()) - len(self._PVD_TAIL),
-                       self.series_path: len(series.encode()) - len(self._SERIES_TAIL)}
+        """Both collections written whole (temporary file and rename) from the cached entries.
 
-    def _append_collections(self, t, final):
-        """List one more step in both collections, in place: O(1) per step."""
-        first = not self.written
-        self._append(self.pvd_path, self._pvd_entry(t, final) + self._PVD_TAIL, self._PVD_TAIL)
-        self._append(self.series_path, ("" if first else ",\n") + self._series_entry(t, final) + self._SERIES_TAIL,
-                     self._SERIES_TAIL)
-
-    def _append(self, path, text, tail):
-        """Overwrite the closing ``tail`` of ``path`` with ``text`` (which ends with it) in one write."""
-        data = text.encode()
-        offset = self._tails[path]
-        fd = os.open(path, os.O_WRONLY)
+        On failure the steps not listed yet are removed (the collections on disk still list the
+        earlier ones) and the OSError is raised."""
+        pvd = self._PVD_HEAD + "".join(self._pvd_lines) + self._PVD_TAIL
+        series = self._SERIES_HEAD + ",\n".join(self._series_lines) + self._SERIES_TAIL
         try:
-            try:
-                if os.pwrite(fd, data, offset) != len(data):
-                    raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
-            except BaseException:
-                # put the old closing tags back (their blocks exist already), drop anything after them
-                os.pwrite(fd, tail.encode(), offset)
-                os.ftruncate(fd, offset + len(tail.encode()))
-                raise
-        finally:
-            os.close(fd)
-        self._tails[path] = offset + len(data) - len(tail.encode())
+            _atomic_write_text(self.pvd_path, pvd)
+            _atomic_write_text(self.series_path, series)
+        except BaseException:
+            failed_after_pvd = self.pvd_path.exists() and len(read_pvd(self.pvd_path)) > self._listed
+            self._drop_unlisted()
+            if failed_after_pvd:           # the .pvd already listed them: put it back to the listed steps
+                try:
+                    _atomic_write_text(self.pvd_path, self._PVD_HEAD + "".join(self._pvd_lines) + self._PVD_TAIL)
+                except OSError:
+                    pass
+            raise
+        self._listed = len(self.written)
+        self._last_listing = time.monotonic()

@@ -172,7 +172,7 @@ def test_energy_balance_warning(tmp_path, capsys):
 
 @pytest.mark.parametrize("failing", ["vtu", "collection"])
 def test_full_disk_is_one_line_without_tmp_or_unlisted_frames(tmp_path, capsys, monkeypatch, failing):
-    """ENOSPC while writing the 6th frame (its .vtu or its collection entry)."""
+    """ENOSPC while writing the 6th frame (its .vtu, or its listing after the .pvd was written)."""
     import meshio
     from skfem_flex import output
     calls = {"n": 0}
@@ -187,15 +187,15 @@ def test_full_disk_is_one_line_without_tmp_or_unlisted_frames(tmp_path, capsys, 
             return real(path, *a, **k)
         monkeypatch.setattr(meshio, "write", write)
     else:
-        real = os.pwrite
+        real = output._atomic_write_text
 
-        def pwrite(fd, data, offset):
-            calls["n"] += 1
-            if calls["n"] == 11:                         # the 6th frame's .pvd entry (2 appends per frame)
-                real(fd, data[:5], offset)
-                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
-            return real(fd, data, offset)
-        monkeypatch.setattr(output.os, "pwrite", pwrite)
+        def atomic_write_text(path, text):
+            if str(path).endswith(".vtu.series"):
+                calls["n"] += 1
+                if calls["n"] == 7:              # the empty series at the start, then the 6th frame's listing
+                    raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+            return real(path, text)
+        monkeypatch.setattr(output, "_atomic_write_text", atomic_write_text)
     out = tmp_path / "full"
     rc, err = run_cli(capsys, ["run", "pendulum", "--t-end", "0.2", "--every", "1", "--out", str(out), "--quiet"])
     assert rc == 1 and "Traceback" not in err and "No space left on device" in err, err
@@ -208,24 +208,32 @@ def test_full_disk_is_one_line_without_tmp_or_unlisted_frames(tmp_path, capsys, 
     assert not res.completed and len(res.t) == 5
 
 
-def test_series_appends_in_place(tmp_path):
-    """Each frame adds one entry to the collections in place (same file, constant growth): O(1) per frame."""
+def test_series_cost_is_linear_in_the_frames(tmp_path, monkeypatch):
+    """Writing N frames writes O(N log N) bytes of collections, not O(N²): the collections are
+    rewritten when the unlisted frames reach 1/64 of the listed ones (or after a second)."""
+    from skfem_flex import output
+    monkeypatch.setattr(output, "LISTING_SECONDS", 1e9)          # the count rule alone, deterministic
+    written = {"bytes": 0, "calls": 0}
+    real = output._atomic_write_text
+
+    def counting(path, text):
+        written["bytes"] += len(text)
+        written["calls"] += 1
+        return real(path, text)
+    monkeypatch.setattr(output, "_atomic_write_text", counting)
     scene = sf.scenes.pendulum()
-    sink = VTKSeries(tmp_path, "p")
     q, v = scene.initial_state()
-    sizes, inodes = [], set()
-    for k in range(40):
-        sink.write(scene, 10.5 + k, q, v)                    # times with a fixed-width repr
-        if k:
-            st_ = (tmp_path / "p.pvd").stat()
-            sizes.append(st_.st_size)
-            inodes.add(st_.st_ino)
-    assert len(inodes) == 1                                  # never rewritten through a new file
-    growth = np.diff(sizes[10:])
-    assert np.all(growth == growth[0])
+    n = 1500
+    sink = VTKSeries(tmp_path, "p")
+    for k in range(n):
+        sink.write(scene, 0.001 * k, q, v)
     sink.close()
-    assert len(read_pvd(tmp_path / "p.pvd")) == 40
-    assert len(json.loads((tmp_path / "p.vtu.series").read_text())["files"]) == 40
+    listed = read_pvd(tmp_path / "p.pvd")
+    assert len(listed) == n and len(json.loads((tmp_path / "p.vtu.series").read_text())["files"]) == n
+    per_entry = (tmp_path / "p.pvd").stat().st_size / n + (tmp_path / "p.vtu.series").stat().st_size / n
+    # rewriting after every frame would write n²/2 entries (750 n); the rule writes about 64 n ln n / ... ≪
+    assert written["bytes"] < 120 * n * per_entry, written
+    assert written["calls"] < 2 * (64 * np.log(n) + 70)
 
 
 def test_large_body_allocates_no_dense_n_by_n():
