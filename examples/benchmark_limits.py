@@ -6,7 +6,7 @@
   linearly with the mesh (no dense n × n anywhere);
 * **series**: writing N = 500, 1 000, 2 000 and 4 000 frames of the pendulum with
   :class:`skfem_flex.VTKSeries`; the cost per frame must not grow with N (the collections are
-  appended in place, not rewritten).
+  rewritten only when the unlisted frames reach 1/64 of the listed ones, or after a second).
 
 Run ``python examples/benchmark_limits.py [--sizes 1000 10000 100000] [--frames 500 1000 2000 4000]
 [--out DIR]``; also ``python examples/benchmark.py --limits``. Writes ``OUT/benchmark_limits.md``.
