@@ -42,7 +42,9 @@ Two more tables:
   5e-7 m at equal mesh). Without exudyn our side still runs.
 
 Run ``python examples/benchmark.py [--repeat 3] [--window 1.0] [--record-every 10] [--catalogue-steps 200]
-[--no-loop] [--no-catalogue] [--no-peer] [--out DIR]``.
+[--no-loop] [--no-catalogue] [--no-peer] [--flexible] [--limits] [--out DIR]``;
+``--flexible`` runs only the flexible-body rows (``flexible.md``); ``--limits`` runs
+``examples/benchmark_limits.py`` instead (memory against mesh size, VTK series cost against frame count).
 
 Parameter sweeps on a local Dask cluster (16 spin-up cases on 2 workers against
 16 serial runs, per-case overhead) are timed by ``examples/sweep_benchmark.py``.
@@ -307,7 +309,14 @@ if __name__ == "__main__":
     ap.add_argument("--no-peer", action="store_true", help="skip the side-by-side runs with exudyn")
     ap.add_argument("--out", default=str(Path(__file__).parent / "output"))
     ap.add_argument("--flexible", action="store_true", help="only the flexible-body cases (flexible.md)")
+    ap.add_argument("--limits", action="store_true",
+                    help="instead: peak memory at 10³–10⁵ elements and VTK series cost per frame "
+                         "(examples/benchmark_limits.py)")
     args = ap.parse_args()
+    if args.limits:
+        import benchmark_limits
+        benchmark_limits.main(["--out", args.out])
+        raise SystemExit(0)
     if args.flexible:
         warm = warm_up()
         rows, setup = flexible(args.repeat, args.record_every)

@@ -21,6 +21,8 @@ from .motion import MotionLaw, Prescribed, spin_up_law
 from .scene import Scene
 from .integrators import (ConvergenceError, EnergyMomentum, GeneralizedAlpha, NewtonSettings, SimulationError,
                           Trapezoidal)
+from .errors import DivergenceError, Interrupted, OutputError
+from .resources import InsufficientMemoryError
 from .result import Result
 from .simulate import simulate
 from .sweep import open_sweep, sweep

@@ -32,9 +32,10 @@ import skfem
 from skfem import Basis, ElementLineP1, ElementLineP2, asm, condense, solve
 
 from . import forms
+from .resources import BYTES_PER_ELEMENT, check_fits
 from .section import Section
 
-__all__ = ["TimoshenkoBeam", "ElementQuadrature", "gauss_line"]
+__all__ = ["TimoshenkoBeam", "ElementQuadrature", "gauss_line", "line_mesh"]
 
 # Fields of the composite element, in scikit-fem's node-major DOF order.
 FIELDS = ("u", "w", "theta")
@@ -150,6 +151,28 @@ def _check_mesh(mesh):
         )
 
 
+#: longest beam :func:`line_mesh` builds, m
+MAX_LENGTH = 1e12
+
+
+def line_mesh(length, n_elements, order=1):
+    """A uniform :class:`skfem.MeshLine` of ``n_elements`` on [0, length] (m).
+
+    Checks first that a beam of that many elements fits in the memory available
+    (:func:`skfem_flex.resources.check_fits`), so that a request of 10⁸ elements is
+    refused at once instead of allocating its mesh.
+    """
+    if isinstance(n_elements, bool) or int(n_elements) != n_elements or n_elements < 1:
+        raise ValueError(f"n_elements must be a positive integer, got {n_elements!r}")
+    n = int(n_elements)
+    length = float(length)
+    if not np.isfinite(length) or length <= 0 or length > MAX_LENGTH:
+        raise ValueError(f"length must be positive and at most {MAX_LENGTH:g} m (the inertia integrals ∫ρA x² dx "
+                         f"overflow far beyond), got {length!r}")
+    check_fits(BYTES_PER_ELEMENT * order * n, f"a beam of {n} elements (order {order})")
+    return skfem.MeshLine(np.linspace(0.0, float(length), n + 1))
+
+
 class TimoshenkoBeam:
     r"""Linear Timoshenko beam: scikit-fem bases, K, M, loads, statics, modes.
 
@@ -231,6 +254,8 @@ class TimoshenkoBeam:
             raise ValueError(f"order must be 1 or 2, got {order!r}")
         if not isinstance(shear, str) or shear not in ("reduced", "full"):
             raise ValueError(f"shear must be 'reduced' or 'full', got {shear!r}")
+        n_el = mesh.t.shape[1]
+        check_fits(BYTES_PER_ELEMENT * order * n_el, f"a beam of {n_el} elements (order {order})")
         self.mesh = mesh
         self.section = section
         self.order = int(order)

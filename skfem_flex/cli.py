@@ -27,10 +27,17 @@ with ``--format zarr``), ``summary.csv``,
 ``sweep.json`` (counts of computed and skipped cases) and
 ``extremes_PROBE.png``; exit status 1 when a case did not complete.
 
-Exit status: 0 on success, 2 on bad input (unknown scene or parameter, a
-value of the wrong type, dt ≤ 0, an unwritable output directory; one line on
-stderr, no traceback), 1 when the run stops early (Newton failure): the
-outputs written up to the last good step are kept and the summary says why.
+Exit status: 0 on success; 2 on bad input (unknown scene or parameter, a
+value of the wrong type, dt ≤ 0, an unwritable output directory, a run that
+cannot fit in memory; one line on stderr, no traceback); 1 when the run stops
+early (Newton failure) or an output cannot be written (disk full); 3 when the
+run diverged ("diverged at t = …"); 130 after Ctrl-C and 143 after SIGTERM,
+which finish the current step first. In every case the outputs up to the last
+good step are kept (``result.npz``, ``probes.csv``, ``summary.json`` with
+``"completed": false`` and ``"stopped"`` saying why). During the run the
+histories are checkpointed every few seconds into ``checkpoint.npz``
+(:meth:`skfem_flex.Result.load` reads it after a SIGKILL), and
+``skfem-flex run --resume DIR`` continues an interrupted or killed run.
 
 The parser is built from subcommands (:data:`SUBCOMMANDS`).
 """
@@ -38,9 +45,11 @@ from __future__ import annotations
 
 import argparse
 import inspect
+import re
 import json
 import math
 import os
+import signal
 import sys
 import time
 from pathlib import Path
@@ -74,6 +83,13 @@ def _positive_int(text):
     if n < 1:
         raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
     return n
+
+
+def _positive_number(text):
+    x = _number(text)
+    if not math.isfinite(x) or x <= 0:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return x
 
 
 def _number(text):
@@ -149,6 +165,8 @@ def _scene_settings(name, items):
             raise UsageError(f"--set expects key=value, got {item!r} (give the scene name before --set)")
         if key not in params:
             raise UsageError(f"scene {name!r} has no parameter {key!r}; it has: {', '.join(params) or 'none'}")
+        if key in out:
+            raise UsageError(f"--set {key} is given twice ({key}={out[key]!r} and {item!r}); give it once")
         default = params[key]
         out[key] = convert_setting(key, text, None if default is inspect.Parameter.empty else default)
     missing = [p for p, d in params.items() if d is inspect.Parameter.empty and p not in out]
@@ -194,23 +212,25 @@ def _prepare_out(out):
         raise UsageError(f"cannot write to --out {str(out)!r}: {exc.strerror or exc}") from None
 
 
-def _summary(name, scene, params, args, t_end, dt, result, error, files, wall):
+def _summary(name, scene, params, integrator, rho_inf, t_end, dt, result, error, files, wall):
     import numpy as np
 
     s = {"scene": name, "parameters": dict(scene.parameters) if scene.parameters else params,
-         "integrator": args.integrator, "t_end": t_end, "dt": dt,
+         "integrator": integrator, "rho_inf": rho_inf, "t_end": t_end, "dt": dt,
          "bodies": [getattr(b, "name", f"body{i}") for i, b in enumerate(scene.bodies)],
-         "completed": error is None, "error": error, "wall_time_s": wall}
+         "completed": error is None, "stopped": error or "", "error": error, "wall_time_s": wall}
     if result is not None and len(result.t):
         its = np.asarray(result.newton_iterations)
         steps = int(result.steps)
         bal = np.abs(result.energy_balance_error)
+        rel = result.relative_energy_error()
         s.update({
             "steps": steps, "t_reached": float(result.t[-1]), "simulation_time_s": float(result.wall_time),
+            "compile_time_s": float(result.compile_time),
             "energy": {"initial_J": float(result.total_energy[0]), "final_J": float(result.total_energy[-1]),
                        "external_work_J": float(result.external_work[-1]),
                        "max_balance_error_J": float(bal.max()),
-                       "relative_balance_error": result.relative_energy_error()},
+                       "relative_balance_error": rel},
             "max_constraint_residual": float(np.max(result.constraint_residual)),
             "max_velocity_constraint_residual": float(np.max(result.velocity_constraint_residual)),
             "newton": {"total_iterations": int(its.sum()),
@@ -218,83 +238,251 @@ def _summary(name, scene, params, args, t_end, dt, result, error, files, wall):
                        "max_iterations_per_recorded_step": int(its.max()) if its.size else 0,
                        "halved_steps": int(result.halvings)},
         })
+        warnings = _energy_warnings(integrator, rho_inf, rel)
+        if warnings:
+            s["warnings"] = warnings
     s["outputs"] = {k: (str(v) if not isinstance(v, (list, int)) else v) for k, v in files.items()}
     return _jsonable(s)
 
 
-# ----------------------------------------------------------------------- run
-def _cmd_run(args):
-    from . import scenes
-    from .integrators import SimulationError
-    from .output import VTKSeries, _atomic_write_text
-    from .simulate import simulate
+def _energy_warnings(integrator, rho_inf, relative_error):
+    """A warning when a scheme meant to keep the energy balance misses it by more than ENERGY_WARNING.
 
+    Generalized-α with ρ∞ < 1 dissipates high frequencies by design and gets none."""
+    dissipative = integrator == "generalized-alpha" and (rho_inf is None or rho_inf < 1.0)
+    if dissipative or not math.isfinite(relative_error) or relative_error <= ENERGY_WARNING:
+        return [] if math.isfinite(relative_error) else ["the energy balance error is not finite"]
+    return [f"energy balance error {100 * relative_error:.3g} % of the energy scale with {integrator} "
+            f"(above {100 * ENERGY_WARNING:g} %): a smaller --dt, or the energy-momentum scheme, keeps it"]
+
+
+# ----------------------------------------------------------------------- run
+#: exit status of ``run`` per way of stopping (besides 0 = completed and 2 = bad input)
+EXIT_STOPPED, EXIT_DIVERGED = 1, 3
+#: exit status after SIGINT and SIGTERM (128 + signal number, the shell's convention)
+EXIT_SIGNAL = {2: 130, 15: 143}
+#: a run's settings, written when it starts, so that ``run --resume DIR`` can continue it
+RUN_SETTINGS = "run.json"
+#: histories checkpointed during a run (Result.load reads it after a SIGKILL)
+CHECKPOINT = "checkpoint.npz"
+#: seconds of wall time between checkpoints
+CHECKPOINT_EVERY = 5.0
+#: relative energy balance error above which a run's summary carries a warning (conservative schemes)
+ENERGY_WARNING = 0.01
+#: files of an earlier run in the same directory, removed when a fresh run starts there
+_RUN_FILES = ("result.npz", CHECKPOINT, "summary.json", "probes.csv", RUN_SETTINGS)
+
+
+class _Terminated(BaseException):
+    """SIGTERM outside the time loop (the loop itself stops gracefully on it)."""
+
+
+def _raise_terminated(signum, frame):
+    raise _Terminated()
+
+
+def _run_settings(args):
+    """(name, params, t_end, dt, integrator, rho_inf, every, no_vtk, out) from the arguments, or with
+    ``--resume DIR`` from DIR's run.json (explicit --t-end may extend the run)."""
+    from . import scenes
+
+    if args.resume is not None:
+        if args.resume == "":
+            raise UsageError("--resume needs the output directory of the run to continue, got ''")
+        out = Path(args.resume)
+        try:
+            saved = json.loads((out / RUN_SETTINGS).read_text(encoding="utf-8"))
+        except (OSError, ValueError) as exc:
+            raise UsageError(f"--resume {str(out)!r}: no readable {RUN_SETTINGS} of an earlier run there "
+                             f"({getattr(exc, 'strerror', None) or _one_line(exc)})") from None
+        for opt, given in (("scene", args.scene), ("--set", args.set or None), ("--dt", args.dt),
+                           ("--integrator", args.integrator), ("--rho-inf", args.rho_inf), ("--every", args.every)):
+            if given is not None:
+                raise UsageError(f"--resume continues the run with its own settings; drop {opt} "
+                                 f"(only --t-end may change)")
+        if args.out is not None and Path(args.out) != out:
+            raise UsageError("--resume writes into the run's own directory; drop --out")
+        t_end = saved["t_end"] if args.t_end is None else args.t_end
+        return (saved["scene"], saved["parameters"], t_end, saved["dt"], saved["integrator"], saved["rho_inf"],
+                saved["every"], saved["no_vtk"], out)
     name = args.scene if args.scene is not None else DEFAULT_SCENE
     if name not in scenes.CATALOGUE:
         known = ", ".join(sorted(scenes.CATALOGUE))
         if args.scene is None:
             raise UsageError(f"the default scene {DEFAULT_SCENE!r} is not in this catalogue; name one of: {known}")
         raise UsageError(f"unknown scene {name!r}; known scenes: {known}")
-    factory = scenes.get(name)
     params = _scene_settings(name, args.set)
-    defaults = getattr(factory, "defaults", {}) or {}
+    defaults = getattr(scenes.get(name), "defaults", {}) or {}
     t_end = args.t_end if args.t_end is not None else defaults.get("t_end", FALLBACK_T_END)
     dt = args.dt if args.dt is not None else defaults.get("dt", FALLBACK_DT)
+    if args.out is not None and not args.out.strip():
+        raise UsageError("--out must name a directory, got ''")
+    out = Path(args.out) if args.out is not None else Path("results") / name
+    integrator = args.integrator or "energy-momentum"
+    return name, params, t_end, dt, integrator, args.rho_inf, args.every, args.no_vtk, out
+
+
+def _cmd_run(args):
+    import numpy as np
+
+    from . import scenes
+    from .errors import DivergenceError, Interrupted
+    from .integrators import SimulationError
+    from .output import VTKSeries, _atomic_write_text
+    from .simulate import SignalStop, simulate
+
+    name, params, t_end, dt, integrator, rho_inf, every, no_vtk, out = _run_settings(args)
     if not math.isfinite(dt) or dt <= 0:
         raise UsageError(f"--dt must be a positive number of seconds, got {dt!r}")
     if not math.isfinite(t_end) or t_end < 0:
         raise UsageError(f"--t-end must be a non-negative number of seconds, got {t_end!r}")
-    out = Path(args.out) if args.out is not None else Path("results") / name
+    n_steps = _step_count(t_end, dt)
+    factory = scenes.get(name)
     try:
-        scene = factory(**params)
-    except (ValueError, TypeError) as exc:
+        with np.errstate(all="ignore"):       # overflow is reported by the checks, in one line
+            scene = factory(**params)
+    except (ValueError, TypeError, OverflowError, ArithmeticError) as exc:
         raise UsageError(f"scene {name!r}: {_one_line(exc)}") from None
     _prepare_out(out)
+    resume = None
+    if args.resume is not None:
+        resume = _resume_file(out)
+    else:
+        for f in _RUN_FILES:
+            (out / f).unlink(missing_ok=True)
+    # temporary files of a killed earlier run (the VTK series removes its own)
+    stale = re.compile(r"^\.(" + "|".join(re.escape(f) for f in _RUN_FILES) + r")\.\d+\.tmp$")
+    for p in out.iterdir():
+        if stale.match(p.name):
+            p.unlink(missing_ok=True)
     effective = {p: d for p, d, _ in scenes.parameters(name)}
     effective.update(params)
 
-    n_steps = int(math.ceil(t_end / dt - 1e-9)) if t_end > 0 else 0
-    every = args.every if args.every is not None else max(1, math.ceil(n_steps / MAX_FRAMES))
-    sinks = [] if args.no_vtk else [VTKSeries(out, name, every=every)]
-    error, result = None, None
+    if every is None:
+        every = max(1, math.ceil(n_steps / MAX_FRAMES))
+    if resume is None:
+        _atomic_write_text(out / RUN_SETTINGS, json.dumps(_jsonable(
+            {"scene": name, "parameters": params, "t_end": t_end, "dt": dt, "integrator": integrator,
+             "rho_inf": rho_inf, "every": every, "no_vtk": no_vtk}), indent=2) + "\n")
+    sinks = [] if no_vtk else [VTKSeries(out, name, every=every)]
+    error, result, status = None, None, 0
     start = time.perf_counter()
     try:
-        result = simulate(scene, t_end, dt, integrator=args.integrator, rho_inf=args.rho_inf, output=sinks,
-                          progress=not args.quiet)
+        with np.errstate(all="ignore"):       # non-finite states are caught by simulate's divergence rule
+            result = simulate(scene, t_end, dt, integrator=integrator, rho_inf=rho_inf, output=sinks,
+                              progress=not args.quiet, checkpoint=out / CHECKPOINT,
+                              checkpoint_every=args.checkpoint_every, resume=resume)
     except SimulationError as exc:
         result, error = exc.result, _one_line(exc)
-    except ValueError as exc:
+        status = (EXIT_SIGNAL.get(getattr(exc, "signal", None), 130) if isinstance(exc, Interrupted)
+                  else EXIT_DIVERGED if isinstance(exc, DivergenceError) else EXIT_STOPPED)
+    except OSError as exc:
+        raise _OutputError(exc) from None
+    except (ValueError, TypeError) as exc:
         raise UsageError(_one_line(exc)) from None
     wall = time.perf_counter() - start
 
-    files = {}
-    if sinks and sinks[0].written:
-        files.update(pvd=sinks[0].pvd_path, series=sinks[0].series_path, vtu_files=len(sinks[0].written))
-    if result is not None and len(result.t):
-        files["result"] = result.save(out / "result.npz")
-        if result.probes:
-            files["probes_csv"] = result.probes_to_csv(out / "probes.csv")
-        from .plots import save_plots
-        for k, p in save_plots(scene, result, out).items():
-            files[f"plot_{k}"] = p
-    files["summary"] = out / "summary.json"
-    summary = _summary(name, scene, effective, args, t_end, dt, result, error, files, wall)
-    _atomic_write_text(out / "summary.json", json.dumps(summary, indent=2) + "\n")
-
+    held = SignalStop(True)                   # a signal now waits until the outputs are complete
+    try:
+        files = _write_run_outputs(scene, result, sinks, out)
+        summary = _summary(name, scene, effective, integrator, rho_inf, t_end, dt, result, error, files, wall)
+        try:
+            _atomic_write_text(out / "summary.json", json.dumps(summary, indent=2) + "\n")
+        except OSError as exc:
+            raise _OutputError(exc) from None
+        if status == 0 and result is not None:
+            (out / CHECKPOINT).unlink(missing_ok=True)        # result.npz holds all of it now
+    finally:
+        held.restore()
+    if held.signum is not None and status == 0:
+        print(f"skfem-flex: {signal.Signals(held.signum).name} while writing the outputs: the run is complete "
+              f"and so are its outputs in {out}", file=sys.stderr)
+        return EXIT_SIGNAL.get(held.signum, 130)
+    for warning in summary.get("warnings", []):
+        print(f"skfem-flex: warning: {warning}", file=sys.stderr)
     if error is not None:
-        print(f"skfem-flex: run stopped early: {error}; outputs up to the last good step are in {out}",
+        what = {EXIT_DIVERGED: "run diverged", EXIT_STOPPED: "run stopped early"}.get(status, "run interrupted")
+        resume_hint = f"; continue it with 'skfem-flex run --resume {out}'" if status in EXIT_SIGNAL.values() else ""
+        print(f"skfem-flex: {what}: {error}; outputs up to the last good step are in {out}{resume_hint}",
               file=sys.stderr)
-        return 1
+        return status
     if not args.quiet:
         _report(name, summary, files, out)
     return 0
+
+
+class _OutputError(Exception):
+    """Writing an output file failed (disk full, permissions): one line, exit status 1."""
+
+    def __init__(self, exc):
+        where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
+        super().__init__(f"cannot write the outputs: {exc.strerror or _one_line(exc)}{where}")
+
+
+def _step_count(t_end, dt):
+    """Steps of a run; UsageError if the request cannot fit in the memory available."""
+    from .resources import check_fits
+
+    ratio = t_end / dt
+    if not math.isfinite(ratio) or ratio > 1e15:
+        raise UsageError(f"--t-end {t_end:g} s with --dt {dt:g} s asks for {ratio:.3g} steps; that run cannot end")
+    n_steps = math.ceil(ratio - 1e-9) if t_end > 0 else 0
+    # every step is recorded: at least t, q, v and the energies per step (16 coordinates as a floor)
+    try:
+        check_fits((n_steps + 1) * 8 * 40, f"a run of {n_steps:.3g} steps (--t-end {t_end:g} s / --dt {dt:g} s)")
+    except ValueError as exc:
+        raise UsageError(_one_line(exc)) from None
+    return int(n_steps)
+
+
+def _resume_file(out):
+    """The saved state to continue in ``out``: result.npz or checkpoint.npz, whichever reaches further."""
+    from .result import Result
+
+    best = None
+    for f in ("result.npz", CHECKPOINT):
+        try:
+            res = Result.load(out / f)
+        except (OSError, ValueError):
+            continue
+        if res.final_state is not None and (best is None or float(res.t[-1]) > float(best.t[-1])):
+            best = res
+    if best is None:
+        raise UsageError(f"--resume {str(out)!r}: neither result.npz nor {CHECKPOINT} holds a saved state to continue")
+    return best
+
+
+def _write_run_outputs(scene, result, sinks, out):
+    """result.npz, probes.csv and plots (what the run reached); {key: path} of the files written."""
+    files = {}
+    if sinks and sinks[0].written:
+        files.update(pvd=sinks[0].pvd_path, series=sinks[0].series_path, vtu_files=len(sinks[0].written))
+    if result is None or not len(result.t):
+        files["summary"] = out / "summary.json"
+        return files
+    try:
+        files["result"] = result.save(out / "result.npz")
+        if result.probes:
+            files["probes_csv"] = result.probes_to_csv(out / "probes.csv")
+    except OSError as exc:
+        raise _OutputError(exc) from None
+    from .plots import save_plots
+    try:
+        for k, p in save_plots(scene, result, out).items():
+            files[f"plot_{k}"] = p
+    except (OSError, ValueError, OverflowError) as exc:           # a diverged run may not plot
+        print(f"skfem-flex: warning: plots not written: {_one_line(exc)}", file=sys.stderr)
+    files["summary"] = out / "summary.json"
+    return files
 
 
 def _report(name, summary, files, out):
     e = summary.get("energy", {})
     nw = summary.get("newton", {})
     print(f"{name}: {summary.get('steps', 0)} steps of {summary['dt']:.4g} s to t = {summary['t_end']:.4g} s "
-          f"with {summary['integrator']} in {summary['wall_time_s']:.2f} s")
+          f"with {summary['integrator']} in {summary['wall_time_s']:.2f} s"
+          + (f" (of which {summary['compile_time_s']:.1f} s compiling, once per machine)"
+             if summary.get("compile_time_s", 0.0) > 0 else ""))
     print(f"  energy balance error {e.get('max_balance_error_J', 0.0):.3g} J "
           f"(relative {e.get('relative_balance_error', 0.0):.3g}), "
           f"max |constraint| {summary.get('max_constraint_residual', 0.0):.3g}, "
@@ -327,7 +515,7 @@ def _add_run(sub):
                    help=f"end time, s (default: the scene's, else {FALLBACK_T_END:g})")
     p.add_argument("--dt", type=_number, default=None, metavar="DT",
                    help=f"time step, s (default: the scene's, else {FALLBACK_DT:g})")
-    p.add_argument("--integrator", choices=sorted(INTEGRATORS), default="energy-momentum",
+    p.add_argument("--integrator", choices=sorted(INTEGRATORS), default=None,
                    help="time integrator (default: energy-momentum)")
     p.add_argument("--rho-inf", type=_number, default=None, metavar="R",
                    help="spectral radius of generalized-alpha (default 0.9)")
@@ -336,6 +524,11 @@ def _add_run(sub):
                    help=f"write a VTK file every N steps (default: at most about {MAX_FRAMES} files)")
     p.add_argument("--no-vtk", action="store_true", help="skip the VTK series")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no report")
+    p.add_argument("--checkpoint-every", type=_positive_number, default=CHECKPOINT_EVERY, metavar="S",
+                   help=f"save the histories to {CHECKPOINT} every S seconds of wall time (default {CHECKPOINT_EVERY:g})")
+    p.add_argument("--resume", default=None, metavar="DIR",
+                   help=f"continue the interrupted or killed run in DIR from its last saved state (result.npz or "
+                        f"{CHECKPOINT}), with its own settings; --t-end may extend it")
     p.set_defaults(func=_cmd_run)
 
 
@@ -403,6 +596,7 @@ def _cmd_study(args):
 
 
 def _add_study(sub):
+    from . import studies
     from .integrators import INTEGRATORS
 
     p = sub.add_parser("study", help="work-precision or stability study: Markdown, CSV and PNG into --out",
@@ -410,12 +604,15 @@ def _add_study(sub):
                                    "and CSV plus a PNG plot into --out.")
     p.add_argument("kind", choices=["work-precision", "stability"], help="which study")
     p.add_argument("scene", nargs="?", default=None, metavar="SCENE",
-                   help="work-precision: one case (default: all cases)")
+                   help=f"work-precision: one case (default: all): {', '.join(studies.WORK_PRECISION_CASES)}")
     p.add_argument("--schemes", nargs="+", choices=sorted(INTEGRATORS), default=list(INTEGRATORS),
                    help="integrators to compare (default: all)")
-    p.add_argument("--cases", nargs="+", default=None, metavar="CASE", help="stability: case names (default: all)")
-    p.add_argument("--quick", action="store_true", help="short runs (a smoke test of the study)")
-    p.add_argument("--budget", type=_number, default=300.0, metavar="S",
+    p.add_argument("--cases", nargs="+", default=None, metavar="CASE",
+                   help=f"stability: case names (default: all): {', '.join(studies.STABILITY_CASES)}")
+    p.add_argument("--quick", action="store_true",
+                   help=f"short runs, a smoke test of the study (at most {studies.QUICK_STEPS} steps and "
+                        f"{studies.QUICK_BUDGET:g} s each)")
+    p.add_argument("--budget", type=_positive_number, default=300.0, metavar="S",
                    help="stability: wall-clock seconds per run before it is stopped and reported (default 300)")
     p.add_argument("--out", default=None, metavar="DIR", help="output directory (default: results/study-KIND)")
     p.add_argument("--quiet", action="store_true", help="no progress lines and no table on stdout")
@@ -724,6 +921,11 @@ def build_parser():
 
 def main(argv=None):
     """Entry point of the ``skfem-flex`` console script; returns the exit status."""
+    import threading
+
+    old_term = None
+    if threading.current_thread() is threading.main_thread():
+        old_term = signal.signal(signal.SIGTERM, _raise_terminated)
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
@@ -734,9 +936,34 @@ def main(argv=None):
     except UsageError as exc:
         print(f"skfem-flex: error: {exc}", file=sys.stderr)
         return 2
+    except _OutputError as exc:
+        print(f"skfem-flex: error: {exc}", file=sys.stderr)
+        return EXIT_STOPPED
+    except BrokenPipeError:
+        # the reader of stdout went away (``skfem-flex list | head``): not an error of ours
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+        return 0
     except KeyboardInterrupt:
         print("skfem-flex: interrupted; outputs written so far are kept", file=sys.stderr)
-        return 130
+        return EXIT_SIGNAL[2]
+    except _Terminated:
+        print("skfem-flex: terminated; outputs written so far are kept", file=sys.stderr)
+        return EXIT_SIGNAL[15]
+    except (ArithmeticError, MemoryError, RecursionError) as exc:
+        # numbers beyond double precision deep inside a computation: one line, not a traceback
+        print(f"skfem-flex: error: {type(exc).__name__}: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_STOPPED
+    except Exception as exc:
+        if os.environ.get("SKFEM_FLEX_DEBUG"):
+            raise
+        print(f"skfem-flex: internal error: {type(exc).__name__}: {_one_line(exc)} (please report it; "
+              f"SKFEM_FLEX_DEBUG=1 shows the traceback)", file=sys.stderr)
+        return EXIT_STOPPED
+    finally:
+        if old_term is not None:
+            signal.signal(signal.SIGTERM, old_term)
 
 
 if __name__ == "__main__":

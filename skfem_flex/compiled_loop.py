@@ -42,7 +42,12 @@ from . import integrators
 from .integrators import EnergyMomentum
 from .scene import Scene
 
-__all__ = ["eligible", "run_chunk", "chunk_steps", "OK", "NONFINITE", "NOT_CONVERGED", "SINGULAR"]
+__all__ = ["eligible", "run_chunk", "chunk_steps", "jit_cache_cold", "COMPILE_NOTICE", "OK", "NONFINITE",
+           "NOT_CONVERGED", "SINGULAR"]
+
+#: the line ``simulate(..., progress=True)`` prints on stderr before a first run compiles the kernels
+COMPILE_NOTICE = ("skfem-flex: compiling the floating-frame beam kernels (Numba); this happens once per "
+                  "machine and takes about 30-60 s, later runs load them from the cache")
 
 _EPS = np.finfo(float).eps
 _TINY = 1e-300
@@ -71,6 +76,27 @@ def eligible(scene, scheme):
     if scene.n_constraints or scene.forces or len(getattr(scene, "cayley_index", ())):
         return False
     return hasattr(scene.bodies[0], "_kd") and _plan(scene) is not None
+
+
+def jit_cache_cold(scene):
+    """True if running ``scene`` will compile Numba kernels first (no usable on-disk cache yet).
+
+    The kernels are compiled with ``cache=True`` into ``__pycache__`` next to their source: a
+    kernel is cold when this process has not compiled it and its cache index is missing or
+    stale (the index records the stamp of `jit_cache.source_stamp`). Only scenes with a
+    :class:`~skfem_flex.bodies.FloatingBeam` run these kernels.
+    """
+    if not any(isinstance(b, FloatingBeam) for b in getattr(scene, "bodies", ())):
+        return False
+    for kernel in (_run, energy_momentum_terms, momentum, potential_energy):
+        if kernel.signatures:
+            continue
+        try:
+            if not kernel._cache._cache_file._load_index():      # numba's own index reader
+                return True
+        except Exception:                                        # an unreadable index compiles too
+            return True
+    return False
 
 
 _PLANS = weakref.WeakKeyDictionary()

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .bodies.base import BodyPoint, check_finite_vector, to_dense
+from .bodies.base import BodyPoint, check_finite_vector, place_block, to_dense, zero_matrix
 from .bodies.rigid import E_MATRIX, dsinc, rotation, sinc
 from .motion import MotionLaw
 
@@ -113,7 +113,7 @@ class _Term:
         return 0.5 * (self.value(q0) + self.value(q1))
 
     def _zero(self):
-        return np.zeros((self.n, self.n))
+        return zero_matrix(self.n)
 
 
 class _Constant(_Term):
@@ -156,9 +156,7 @@ class _Position(_Term):
         return out
 
     def hessian(self, q, f):
-        out = self._zero()
-        out[self.sl, self.sl] = to_dense(self.point.position_hessian_product(q[self.sl], f))
-        return out
+        return place_block(self.n, self.sl, self.point.position_hessian_product(q[self.sl], f))
 
     def dgrad(self, q0, q1):
         out = np.zeros((2, self.n))
@@ -166,9 +164,8 @@ class _Position(_Term):
         return out
 
     def dgrad_jacobian(self, q0, q1, f):
-        out = self._zero()
-        out[self.sl, self.sl] = to_dense(self.point.position_discrete_gradient_jacobian(q0[self.sl], q1[self.sl], f))
-        return out
+        return place_block(self.n, self.sl,
+                           self.point.position_discrete_gradient_jacobian(q0[self.sl], q1[self.sl], f))
 
 
 class _Difference(_Term):
@@ -195,10 +192,9 @@ class _Difference(_Term):
         return out
 
     def hessian(self, q, f):
-        out = self._zero()
-        out[self.sa, self.sa] = to_dense(self.pa.position_hessian_product(q[self.sa], f))
+        out = place_block(self.n, self.sa, self.pa.position_hessian_product(q[self.sa], f))
         if self.pb is not None:
-            out[self.sb, self.sb] -= to_dense(self.pb.position_hessian_product(q[self.sb], f))
+            out = place_block(self.n, self.sb, self.pb.position_hessian_product(q[self.sb], f), -1.0, out)
         return out
 
     def dgrad(self, q0, q1):
@@ -209,10 +205,10 @@ class _Difference(_Term):
         return out
 
     def dgrad_jacobian(self, q0, q1, f):
-        out = self._zero()
-        out[self.sa, self.sa] = to_dense(self.pa.position_discrete_gradient_jacobian(q0[self.sa], q1[self.sa], f))
+        out = place_block(self.n, self.sa, self.pa.position_discrete_gradient_jacobian(q0[self.sa], q1[self.sa], f))
         if self.pb is not None:
-            out[self.sb, self.sb] -= to_dense(self.pb.position_discrete_gradient_jacobian(q0[self.sb], q1[self.sb], f))
+            out = place_block(self.n, self.sb, self.pb.position_discrete_gradient_jacobian(q0[self.sb], q1[self.sb], f),
+                              -1.0, out)
         return out
 
 
@@ -444,10 +440,10 @@ class _TermConstraint(Constraint):
 
     def hessian_product(self, q, mu, t):
         mu = np.asarray(mu, dtype=float)
-        out = np.zeros((self.layout.n, self.layout.n))
+        out = zero_matrix(self.layout.n)
         for term, r in zip(self._terms, self._rows):
             if not term.linear:
-                out += term.hessian(q, mu[r])
+                out = out + term.hessian(q, mu[r])
         return out
 
     def discrete_gradient(self, q0, q1, t):
@@ -457,10 +453,10 @@ class _TermConstraint(Constraint):
 
     def discrete_gradient_jacobian(self, q0, q1, mu, t):
         mu = np.asarray(mu, dtype=float)
-        out = np.zeros((self.layout.n, self.layout.n))
+        out = zero_matrix(self.layout.n)
         for term, r in zip(self._terms, self._rows):
             if not term.linear:
-                out += term.dgrad_jacobian(q0, q1, mu[r])
+                out = out + term.dgrad_jacobian(q0, q1, mu[r])
         return out
 
 

@@ -143,6 +143,10 @@ class Gravity(ForceElement):
                                for b, blk in zip(self.bodies, blocks)], format="csr")
 
 
+#: largest exponent n of a NonlinearSpring (V = ½ k u^(2n))
+MAX_SPRING_EXPONENT = 100
+
+
 class NonlinearSpring(ForceElement):
     """Spring on one coordinate with strain ε = u^n and energy V = ½ k ε².
 
@@ -178,6 +182,9 @@ class NonlinearSpring(ForceElement):
         two_n = 2.0 * n
         if not np.isfinite(n) or n <= 0 or abs(two_n - round(two_n)) > 1e-12:
             raise ValueError(f"exponent must be positive with 2*exponent an integer (1, 1.5, 2, ...), got {exponent!r}")
+        if two_n > 2 * MAX_SPRING_EXPONENT:
+            # u^(2n) of any u ≠ ±1 leaves double precision long before; the discrete gradient sums 2n terms
+            raise ValueError(f"exponent must be at most {MAX_SPRING_EXPONENT}, got {exponent!r}")
         self.k, self.exponent, self.power = k, n, int(round(two_n))
         self.bodies = (body,)
         self.index = body.coordinate_index(coordinate)

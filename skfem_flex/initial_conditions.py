@@ -84,12 +84,18 @@ def find_redundant(scene, q, t=0.0, rtol=1e-9):
     if m == 0:
         return 0, []
     cq = to_dense(scene.constraint_jacobian(q, t))[:, scene.free_index]
-    norms = np.linalg.norm(cq, axis=1)
+    with np.errstate(over="ignore", invalid="ignore"):
+        norms = np.linalg.norm(cq, axis=1)
+    if not np.all(np.isfinite(norms)):
+        big = float(np.max(np.abs(cq))) if np.all(np.isfinite(cq)) else np.inf
+        raise ValueError(f"the constraint Jacobian at t = {t:g} s overflows double precision (entries up to "
+                         f"{big:.3g}): give the scene's lengths and positions in SI units of a physical size")
     empty = norms == 0.0
     scaled = cq / np.where(empty, 1.0, norms)[:, None]
     if cq.shape[1] == 0:
         return 0, _names_of_rows(scene, np.ones(m, dtype=bool))
-    u, sv, _ = np.linalg.svd(scaled, full_matrices=True)
+    # the left null space needs all m columns of U, never the n × n V (n may be 10⁵ coordinates)
+    u, sv, _ = np.linalg.svd(scaled, full_matrices=m > cq.shape[1])
     smax = sv[0] if sv.size else 0.0
     rank = int(np.sum(sv > rtol * max(smax, 1e-300)))
     if rank == m:

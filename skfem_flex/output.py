@@ -4,17 +4,24 @@
 step (``simulate(scene, ..., output=[VTKSeries(out_dir, name, every=10)])``).
 It merges every body's :class:`~skfem_flex.bodies.base.BodyGeometry` into one
 unstructured grid per output step (points in 3-D with z = 0), writes it as a
-``.vtu`` with meshio, and rewrites two collection files that list every step
+``.vtu`` with meshio, and keeps two collection files that list every step
 written so far with its time:
 
 * ``NAME.pvd``, the ParaView collection (``<DataSet timestep=.. file=../>``);
 * ``NAME.vtu.series``, the JSON series ParaView also opens directly.
 
-"Nothing lost" (DESIGN.md §6): each ``.vtu`` and each collection file is first
-written to a temporary name in the same directory and then renamed over its
-final name (``os.replace``, atomic on POSIX), and a step enters the collection
-only after its ``.vtu`` is in place. A run killed at any moment therefore
-leaves collection files that parse and name only complete ``.vtu`` files.
+"Nothing lost": each ``.vtu`` and each collection file is first written to a
+temporary name in the same directory and then renamed over its final name
+(``os.replace``, atomic on POSIX), and a step enters the collections only
+after its ``.vtu`` is in place, so a reader or a killed run only ever sees
+collections that parse and name complete files. Writing N steps costs O(N)
+up to a logarithm: every step's entries are formatted once and kept, and the
+collections are rewritten (a join and one write) only when the steps not yet
+listed reach 1/64 of those listed, or a second has passed, and always at
+:meth:`VTKSeries.close`; a killed run therefore lists every step up to at
+most max(1, N/64) steps, or one second, before the kill. If a write fails
+(disk full), the steps not listed are removed, no temporary file is left and
+the ``OSError`` is raised.
 
 Arrays in every file (the same set at every step, so ParaView can colour by
 them throughout):
@@ -39,6 +46,7 @@ import json
 import math
 import os
 import re
+import time
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
@@ -48,6 +56,10 @@ __all__ = ["VTKSeries", "merge_geometry", "read_pvd", "POINT_ARRAYS", "CELL_ARRA
 
 #: point arrays every written file carries (name -> number of components; 3 = vector)
 POINT_ARRAYS = {"displacement": 3, "velocity": 3, "angle": 1}
+#: the collections are rewritten once the steps not listed reach 1/LISTING_FRACTION of the listed ones ...
+LISTING_FRACTION = 64
+#: ... or this many seconds after the last rewrite (and always when the series closes)
+LISTING_SECONDS = 1.0
 #: cell arrays every written file carries (besides ``body_id``)
 CELL_ARRAYS = {"axial_force": 1, "shear_force": 1, "bending_moment": 1, "strain_energy_density": 1}
 
@@ -163,9 +175,13 @@ def _atomic_write_text(path, text):
     """Write ``text`` to ``path`` through a temporary file and a rename."""
     path = Path(path)
     tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    with open(tmp, "w", encoding="utf-8") as fh:
-        fh.write(text)
-    os.replace(tmp, path)
+    try:
+        with open(tmp, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)          # a full disk leaves no temporary file behind
+        raise
 
 
 def read_pvd(path):
@@ -242,6 +258,10 @@ class VTKSeries:
         self._reference = None
         self._point_names = None
         self._cell_names = None
+        self._failed = False
+        self._pvd_lines, self._series_lines = [], []
+        self._listed = 0
+        self._last_listing = 0.0
 
     # ----------------------------------------------------------------- paths
     @property
@@ -260,9 +280,9 @@ class VTKSeries:
         if self.name is None:
             self.name = re.sub(r"[^\w.+-]", "_", str(scene.name)) or "scene"
         self.directory.mkdir(parents=True, exist_ok=True)
+        # an empty collection first, so that no collection ever names a removed file
+        self._write_collections()
         if self.clean:
-            # an empty collection first, so that no collection ever names a removed file
-            self._write_collections()
             name = re.escape(self.name)
             pattern = re.compile(rf"^(\.?{name}_\d+\.vtu|\.{name}_\d+\.vtu\.\d+\.tmp"
                                  rf"|\.{name}\.(pvd|vtu\.series)\.\d+\.tmp)$")
@@ -306,13 +326,69 @@ class VTKSeries:
             self._pending = (scene, float(t), np.array(q, dtype=float), np.array(v, dtype=float))
 
     def close(self):
-        """Write the last state if it was skipped, and finish. Safe to call twice."""
+        """Write the last state if it was skipped, rewrite the collections whole, and finish.
+
+        Safe to call twice; after a failed write (disk full) it only finishes."""
         if self._closed:
+            return
+        self._closed = True
+        if self._failed or not self._started:
             return
         if self._pending is not None and self.every is not None:
             self._write_step(*self._pending)
             self._pending = None
-        self._closed = True
+        self._write_collections()
+
+    def resume(self, scene, prior):
+        """Continue the series of an earlier run that this one resumes (``simulate(..., resume=...)``).
+
+        Keeps the steps the existing ``NAME.vtu.series`` (else ``NAME.pvd``) lists up to the
+        earlier run's last time and removes this series' other ``.vtu`` files (steps written
+        after the last checkpoint of a killed run); displacements keep the earlier run's
+        initial state as reference, and ``every`` continues counting from its recorded steps.
+
+        Parameters
+        ----------
+        scene : Scene
+        prior : Result
+            The earlier run's result (its ``t``, ``q`` and ``v`` histories).
+        """
+        if self._started:
+            raise RuntimeError("resume() must come before the first write")
+        if self.name is None:
+            self.name = re.sub(r"[^\w.+-]", "_", str(scene.name)) or "scene"
+        self.directory.mkdir(parents=True, exist_ok=True)
+        t_last = float(prior.t[-1])
+        listed = []
+        try:
+            listed = [(float(e["time"]), self.directory / e["name"])
+                      for e in json.loads(self.series_path.read_text(encoding="utf-8"))["files"]]
+        except (OSError, ValueError, KeyError, TypeError):
+            try:
+                listed = read_pvd(self.pvd_path)
+            except (OSError, ValueError, SyntaxError):
+                listed = []
+        tol = 1e-9 * max(1.0, abs(t_last))
+        kept = []
+        for t, p in listed:
+            if t > t_last + tol or not p.exists() or p.name != f"{self.name}_{len(kept):06d}.vtu":
+                break
+            kept.append((t, p))
+        self.written = kept
+        self._pvd_lines = [self._pvd_entry(t, p) for t, p in kept]
+        self._series_lines = [self._series_entry(t, p) for t, p in kept]
+        keep = {p.name for _, p in kept}
+        name = re.escape(self.name)
+        pattern = re.compile(rf"^(\.?{name}_\d+\.vtu|\.{name}_\d+\.vtu\.\d+\.tmp|\.{name}\.(pvd|vtu\.series)\.\d+\.tmp)$")
+        for p in self.directory.iterdir():
+            if pattern.match(p.name) and p.name not in keep:
+                p.unlink()
+        self._started = True
+        self._calls = len(prior.t)
+        if self.times is not None:
+            self._next_time = int(np.searchsorted(self.times, t_last + tol, side="right"))
+        self._init_arrays(scene, np.asarray(prior.q[0], dtype=float), np.asarray(prior.v[0], dtype=float))
+        self._write_collections()
 
     def mesh(self, scene, q, v):
         """The merged meshio mesh of the scene at (q, v), as it would be written."""
@@ -336,20 +412,61 @@ class VTKSeries:
         index = len(self.written)
         final = self.directory / f"{self.name}_{index:06d}.vtu"
         tmp = self.directory / f".{final.name}.{os.getpid()}.tmp"
-        meshio.write(tmp, mesh, file_format="vtu")
-        os.replace(tmp, final)
+        try:
+            meshio.write(tmp, mesh, file_format="vtu")
+            os.replace(tmp, final)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            self._drop_unlisted()
+            raise
         self.written.append((float(t), final))
-        self._write_collections()
+        self._pvd_lines.append(self._pvd_entry(float(t), final))
+        self._series_lines.append(self._series_entry(float(t), final))
+        pending = len(self.written) - self._listed
+        if pending >= max(1, self._listed // LISTING_FRACTION) or \
+                time.monotonic() - self._last_listing >= LISTING_SECONDS:
+            self._write_collections()
+
+    # ----------------------------------------------------------- collections
+    _PVD_HEAD = ('<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">\n'
+                 "  <Collection>\n")
+    _PVD_TAIL = "  </Collection>\n</VTKFile>\n"
+    _SERIES_HEAD = '{\n  "file-series-version": "1.0",\n  "files": [\n'
+    _SERIES_TAIL = "\n  ]\n}\n"
+
+    @staticmethod
+    def _pvd_entry(t, p):
+        return f'    <DataSet timestep="{t!r}" group="" part="0" file={quoteattr(p.name)}/>\n'
+
+    @staticmethod
+    def _series_entry(t, p):
+        return f"    {json.dumps({'name': p.name, 'time': t if math.isfinite(t) else 0.0})}"
+
+    def _drop_unlisted(self):
+        """After a failed write: remove the steps the collections do not list yet; the sink is done."""
+        self._failed = True
+        for _, p in self.written[self._listed:]:
+            p.unlink(missing_ok=True)
+        del self.written[self._listed:], self._pvd_lines[self._listed:], self._series_lines[self._listed:]
 
     def _write_collections(self):
-        lines = ['<?xml version="1.0"?>',
-                 '<VTKFile type="Collection" version="0.1" byte_order="LittleEndian">',
-                 "  <Collection>"]
-        for t, p in self.written:
-            lines.append(f'    <DataSet timestep="{t!r}" group="" part="0" file={quoteattr(p.name)}/>')
-        lines += ["  </Collection>", "</VTKFile>", ""]
-        _atomic_write_text(self.pvd_path, "\n".join(lines))
-        entries = ",\n".join(f"    {json.dumps({'name': p.name, 'time': t if math.isfinite(t) else 0.0})}"
-                              for t, p in self.written)
-        _atomic_write_text(self.series_path,
-                           '{\n  "file-series-version": "1.0",\n  "files": [\n' + entries + "\n  ]\n}\n")
+        """Both collections written whole (temporary file and rename) from the cached entries.
+
+        On failure the steps not listed yet are removed (the collections on disk still list the
+        earlier ones) and the OSError is raised."""
+        pvd = self._PVD_HEAD + "".join(self._pvd_lines) + self._PVD_TAIL
+        series = self._SERIES_HEAD + ",\n".join(self._series_lines) + self._SERIES_TAIL
+        try:
+            _atomic_write_text(self.pvd_path, pvd)
+            _atomic_write_text(self.series_path, series)
+        except BaseException:
+            failed_after_pvd = self.pvd_path.exists() and len(read_pvd(self.pvd_path)) > self._listed
+            self._drop_unlisted()
+            if failed_after_pvd:           # the .pvd already listed them: put it back to the listed steps
+                try:
+                    _atomic_write_text(self.pvd_path, self._PVD_HEAD + "".join(self._pvd_lines) + self._PVD_TAIL)
+                except OSError:
+                    pass
+            raise
+        self._listed = len(self.written)
+        self._last_listing = time.monotonic()

@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import json
 import os
+import zipfile
+import zlib
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 
@@ -59,6 +61,17 @@ class Result:
         Steps that had to be split to converge.
     completed : bool
         False when the run stopped early (the exception carries this result).
+    stopped : str
+        Why a run that is not completed stopped ("interrupted at t = … s", "diverged at t = … s",
+        a Newton failure); "" for a completed run.
+    compile_time : float
+        Seconds spent compiling the Numba kernels on a first run (a cold cache); not part of
+        ``wall_time``.
+    final_state : dict or None
+        What the integrator carries from one step to the next at the last step done: ``t``,
+        ``q``, ``v``, ``acc``, ``pseudo`` (generalized-α), ``lam``, ``prescribed_force``, the
+        accumulated ``work``, the ``step`` number and ``halvings``. ``simulate(..., resume=result)``
+        continues from it.
     """
 
     t: np.ndarray
@@ -83,6 +96,9 @@ class Result:
     steps: int = 0
     halvings: int = 0
     completed: bool = True
+    stopped: str = ""
+    compile_time: float = 0.0
+    final_state: dict = None
 
     @property
     def energy_balance_error(self):
@@ -131,39 +147,65 @@ class Result:
         spec = {"format": _RESULT_FORMAT,
                 "fields": {f.name: _encode(getattr(self, f.name), arrays, f.name) for f in fields(self)}}
         tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-        with open(tmp, "wb") as fh:
-            np.savez(fh, __result__=np.array(json.dumps(spec)), **arrays)
-        os.replace(tmp, path)
+        try:
+            with open(tmp, "wb") as fh:
+                np.savez(fh, __result__=np.array(json.dumps(spec)), **arrays)
+            os.replace(tmp, path)
+        except BaseException:
+            tmp.unlink(missing_ok=True)          # a full disk leaves no temporary file behind
+            raise
         return path
 
     @classmethod
     def load(cls, path):
-        """Read a :class:`Result` written by :meth:`save`.
+        """Read a :class:`Result` written by :meth:`save` (also a run's ``checkpoint.npz``).
 
         Fields missing from the file take their defaults; fields the file has
-        but this class does not know are ignored.
+        but this class does not know are ignored. Nothing is ever unpickled.
 
         Raises
         ------
+        FileNotFoundError
+            If there is no such file.
         ValueError
-            If the file is not a saved Result or lacks a required field.
+            Naming the file and what is wrong when it is not a complete saved
+            Result: not an ``.npz`` archive, truncated or damaged, no Result
+            header, a required field missing, or histories of unequal length.
         """
-        with np.load(path, allow_pickle=False) as z:
-            if "__result__" not in z.files:
-                raise ValueError(f"{path!s} is not a saved skfem_flex Result (no __result__ header)")
-            spec = json.loads(str(z["__result__"]))
-            stored = spec.get("fields", {})
-            kwargs = {}
-            for f in fields(cls):
-                if f.name in stored:
-                    kwargs[f.name] = _decode(stored[f.name], z)
-            try:
-                return cls(**kwargs)
-            except TypeError as exc:
-                raise ValueError(f"{path!s} does not hold a complete Result: {exc}") from None
+        path = Path(path)
+        if not path.exists():
+            raise FileNotFoundError(f"no result file {str(path)!r}")
+        what = f"{str(path)!r} is not a saved (complete) skfem_flex Result file"
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                if not hasattr(z, "files"):
+                    raise ValueError("it holds a single array, not an .npz archive")
+                if "__result__" not in z.files:
+                    raise ValueError("no __result__ header")
+                spec = json.loads(str(z["__result__"]))
+                if not isinstance(spec, dict) or spec.get("format") != _RESULT_FORMAT:
+                    raise ValueError(f"unknown format {spec.get('format') if isinstance(spec, dict) else spec!r}")
+                stored = spec.get("fields", {})
+                kwargs = {f.name: _decode(stored[f.name], z) for f in fields(cls) if f.name in stored}
+        except FileNotFoundError:
+            raise
+        except (ValueError, KeyError, TypeError, EOFError, OSError, zipfile.BadZipFile, zlib.error) as exc:
+            reason = "not a NumPy .npz archive" if "pickle" in str(exc) else _one_line(exc) or type(exc).__name__
+            raise ValueError(f"{what}: {reason}") from None
+        try:
+            res = cls(**kwargs)
+        except TypeError as exc:
+            raise ValueError(f"{what}: {_one_line(exc)}") from None
+        n = np.shape(res.t)[0] if np.ndim(res.t) else -1
+        for name in ("q", "v", "kinetic", "potential", "total_energy", "external_work", "newton_iterations"):
+            a = getattr(res, name)
+            if not isinstance(a, np.ndarray) or a.ndim == 0 or a.shape[0] != n:
+                raise ValueError(f"{what}: history {name!r} does not have one entry per time ({n})")
+        return res
 
     def probes_to_csv(self, path):
-        """Write the probe histories as CSV: a column ``t`` (s), then one per probe component.
+        """Write the probe histories as CSV (temporary file, then rename): a column ``t`` (s), then one
+        per probe component.
 
         A scalar probe gives a column named after it, a vector probe columns
         ``name[0]``, ``name[1]``, ... (higher dimensions flattened in C order).
@@ -182,11 +224,21 @@ class Result:
             else:
                 names.extend(f"{k}[{i}]" for i in range(a.shape[1]))
             cols.append(a)
-        np.savetxt(path, np.hstack(cols), delimiter=",", header=",".join(names), comments="", fmt="%.17g")
+        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+        try:
+            np.savetxt(tmp, np.hstack(cols), delimiter=",", header=",".join(names), comments="", fmt="%.17g")
+            os.replace(tmp, path)
+        except BaseException:
+            tmp.unlink(missing_ok=True)
+            raise
         return path
 
 
 _RESULT_FORMAT = "skfem_flex.Result/1"
+
+
+def _one_line(exc):
+    return " ".join(str(exc).split())
 
 
 def _encode(value, arrays, where):

@@ -18,8 +18,9 @@ from .motion import Prescribed
 __all__ = ["Scene", "DENSE_LIMIT", "add_matrices"]
 
 #: scenes with at most this many coordinates use dense matrices (measured crossover of the time loop:
-#: dense LAPACK wins below ~100 coordinates, banded/sparse LU above ~150; examples/benchmark.py)
-DENSE_LIMIT = 150
+#: dense LAPACK wins below ~100 coordinates, banded/sparse LU above ~150; examples/benchmark.py);
+#: the same small-system threshold the bodies' and constraints' zero blocks follow
+from .bodies.base import DENSE_LIMIT, Body  # noqa: E402
 
 
 def add_matrices(a, b):
@@ -113,7 +114,13 @@ class Scene:
 
     def __init__(self, bodies, constraints=(), forces=(), prescribed=(), probes=None, name="scene",
                  parameters=None):
+        if isinstance(bodies, (str, bytes)) or not hasattr(bodies, "__iter__"):
+            raise TypeError(f"bodies must be a sequence of skfem_flex bodies, got {type(bodies).__name__}")
         self.bodies = tuple(bodies)
+        for b in self.bodies:
+            if not isinstance(b, Body):
+                raise TypeError(f"bodies must be skfem_flex bodies (FloatingBeam, ExactBeam, RigidBody, PointMass, "
+                                f"...), got {type(b).__name__} {b!r:.40}")
         if not self.bodies:
             raise ValueError("a scene needs at least one body")
         ids = [id(b) for b in self.bodies]

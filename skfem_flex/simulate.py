@@ -3,17 +3,23 @@ from __future__ import annotations
 
 import math
 import os
+import signal
 import sys
+import threading
 import time
+from pathlib import Path
 
 import numpy as np
 
 from . import compiled_loop
+from .errors import DivergenceError, Interrupted, OutputError
 from .initial_conditions import consistent_initial_state
 from .integrators import ConvergenceError, SimulationError, State, make_integrator
+from .resources import check_fits
 from .result import Result
+from .scene import Scene
 
-__all__ = ["simulate"]
+__all__ = ["simulate", "SignalStop"]
 
 
 class _Recorder:
@@ -29,6 +35,21 @@ class _Recorder:
         self.with_momentum = None
         self.reactions = _reaction_maps(scene)
         self.reaction_rows = {k: [] for k, _ in self.reactions}
+
+    def prefill(self, prior):
+        """Start from the histories of an earlier run (``simulate(..., resume=...)``)."""
+        for k in self.rows:
+            val = getattr(prior, k, None)
+            if val is not None:
+                self.rows[k] = list(val)
+        self.with_momentum = prior.linear_momentum is not None
+        for k in self.probes:
+            if k not in prior.probes:
+                raise ValueError(f"cannot resume: the earlier run has no probe {k!r}")
+            self.probes[k] = list(prior.probes[k])
+        for k in self.reaction_rows:
+            if k in prior.reactions:
+                self.reaction_rows[k] = list(prior.reactions[k])
 
     def record(self, state, work, iterations, vres, derived=None):
         """Append one state. ``derived`` = (T, V, p_x, p_y, L), when the caller computed them already
@@ -88,7 +109,8 @@ def _reaction_maps(scene):
 
 
 def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newton=None, record_every=1,
-             output=(), progress=False, max_halvings=8, project=True, compiled=None, start="initial"):
+             output=(), progress=False, max_halvings=8, project=True, compiled=None, start="initial", checkpoint=None,
+             checkpoint_every=5.0, resume=None, handle_signals=True):
     """Integrate a scene in time.
 
     Parameters
@@ -105,14 +127,15 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
     newton : NewtonSettings, optional
     record_every : int
         Record every n-th step (the first and last are always recorded).
-    output : sequence
-        Sinks with ``write(scene, t, q, v)`` and ``close()``, called at the
+    output : sink or sequence of sinks
+        Objects with ``write(scene, t, q, v)`` and ``close()``, called at the
         recorded steps (e.g. :class:`skfem_flex.output.VTKSeries`).
     progress : bool
-        Show a tqdm progress bar on stderr.
+        Show a tqdm progress bar on stderr, and say so on stderr before a
+        first run compiles the Numba kernels (once per machine).
     max_halvings : int
         A step whose Newton iteration fails is split in two, recursively,
-        at most this deep, before the run is given up.
+        at most this deep (≥ 0), before the run is given up.
     project : bool
         True (default): project the initial state onto the constraints
         (minimum-norm Gauss–Newton for q0, minimum-norm correction for v0,
@@ -135,6 +158,23 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
         with the scene's initial velocities. A pair (q, v) or an object with ``q`` and ``v``
         (e.g. an :class:`~skfem_flex.analysis.EquilibriumState`, whose velocities are those
         of the equilibrium, zero at rest): that state.
+    checkpoint : str or Path, optional
+        File to which the histories so far and the integrator state are
+        saved (:meth:`Result.save`, atomically) every ``checkpoint_every``
+        seconds of wall time, so that a run killed outright (SIGKILL, power)
+        can be read back with :meth:`Result.load` and continued with ``resume``.
+    checkpoint_every : float
+        Wall-clock seconds between checkpoints (> 0; default 5).
+    resume : Result or str or Path, optional
+        Continue an earlier run (a Result, or the path of its saved result or
+        checkpoint) from its last saved state: same scene, scheme and dt; the
+        histories continue the earlier ones and output sinks with a ``resume``
+        method (VTKSeries) append to their series. The result equals that of
+        an uninterrupted run to round-off.
+    handle_signals : bool
+        While the loop runs (in the main thread), Ctrl-C (SIGINT) and SIGTERM
+        finish the current step (or compiled chunk) and stop the run with
+        :class:`~skfem_flex.errors.Interrupted`; a second signal stops at once.
 
     Returns
     -------
@@ -142,99 +182,342 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
 
     Raises
     ------
+    TypeError
+        If ``scene`` is not a Scene or an output sink lacks ``write``/``close``.
     ValueError
         On bad arguments, redundant constraints
         (:class:`~skfem_flex.initial_conditions.RedundantConstraintsError`) or
         initial conditions that cannot be made consistent
         (:class:`~skfem_flex.initial_conditions.InconsistentInitialConditionsError`).
     ConvergenceError
-        When a step fails even after halving; ``exc.result`` holds the
-        history up to the last good step, and output sinks keep what they
-        wrote.
+        When a step fails even after halving.
+    DivergenceError
+        When the state becomes non-finite, a coordinate exceeds 10⁶ times the
+        scene's size (:func:`_divergence_bounds`), or the energy exceeds 10⁶
+        times its initial scale plus the work done.
+    Interrupted
+        On SIGINT/SIGTERM (``exc.signal``).
+
+    Each of these SimulationErrors carries ``exc.result``, the history up to
+    the last good step (``completed`` False, ``stopped`` saying why), and
+    output sinks keep what they wrote.
     """
-    t_end, dt = float(t_end), float(dt)
-    if not math.isfinite(dt) or dt <= 0:
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene must be a skfem_flex.Scene, got {type(scene).__name__} {scene!r:.60}"
+                        + (" (build a catalogue scene with skfem_flex.scenes.get(name)())"
+                           if isinstance(scene, str) else ""))
+    t_end, dt = _finite_number("t_end", t_end), _finite_number("dt", dt)
+    if dt <= 0:
         raise ValueError(f"dt must be finite and positive, got {dt!r}")
-    if not math.isfinite(t_end) or t_end < 0:
+    if t_end < 0:
         raise ValueError(f"t_end must be finite and >= 0, got {t_end!r}")
-    if isinstance(record_every, bool) or int(record_every) != record_every or int(record_every) < 1:
-        raise ValueError(f"record_every must be a positive integer, got {record_every!r}")
-    record_every = int(record_every)
+    record_every = _count("record_every", record_every, 1)
+    max_halvings = _count("max_halvings", max_halvings, 0)
+    checkpoint_every = _finite_number("checkpoint_every", checkpoint_every)
+    if checkpoint_every <= 0:
+        raise ValueError(f"checkpoint_every must be a positive number of seconds, got {checkpoint_every!r}")
+    sinks = _sinks(output)
     scheme = make_integrator(integrator, rho_inf=rho_inf, newton=newton)
-    q, v = _start_state(scene, start)
-    q, v = consistent_initial_state(scene, q, v, 0.0, project=bool(project))
-    state = scheme.start(scene, State(0.0, q, v))
-    n_steps = int(math.ceil(t_end / dt - 1e-9)) if t_end > 0 else 0
-    rec = _Recorder(scene)
-    sinks = list(output)
-    rec.record(state, 0.0, 0, 0.0)
-    for s in sinks:
-        s.write(scene, state.t, state.q, state.v)
-    work, halvings = 0.0, 0
-    bar, bar_its = None, 0
-    if progress:
-        from tqdm import tqdm
-        # shown only for runs longer than a second (delay); steps/s is tqdm's rate
-        bar = tqdm(total=n_steps, unit="step", desc=f"{scene.name} [{scheme.name}]", leave=False,
-                   file=sys.stderr, delay=1.0, mininterval=0.25, dynamic_ncols=True)
     if compiled is None:
         compiled = os.environ.get("SKFEM_FLEX_COMPILED", "1").strip() != "0"
     elif not isinstance(compiled, (bool, np.bool_)):
         raise ValueError(f"compiled must be True, False or None, got {compiled!r}")
     use_compiled = bool(compiled) and compiled_loop.eligible(scene, scheme)
+    cold = compiled_loop.jit_cache_cold(scene)
+    if cold and progress:
+        print(compiled_loop.COMPILE_NOTICE, file=sys.stderr, flush=True)
+    compile_start = time.perf_counter()
+    n_steps = _step_count(scene, t_end, dt, record_every)
+    rec = _Recorder(scene)
+    prior = _resume_source(resume, scene, scheme, dt)
+    if prior is None:
+        q, v = _start_state(scene, start)
+        q, v = consistent_initial_state(scene, q, v, 0.0, project=bool(project))
+        state = scheme.start(scene, State(0.0, q, v))
+        step, work, halvings = 0, 0.0, 0
+        rec.record(state, 0.0, 0, 0.0)
+        _write_sinks(sinks, scene, state)
+    else:
+        fs = prior.final_state
+        # acc and pseudo are saved empty for the schemes that carry none
+        state = State(float(fs["t"]), *(np.array(fs[k], dtype=float) if np.size(fs.get(k, ())) or k in ("lam", "prescribed_force")
+                                         else None for k in ("q", "v", "acc", "pseudo", "lam", "prescribed_force")))
+        step, work, halvings = int(fs["step"]), float(fs["work"]), int(fs["halvings"])
+        rec.prefill(prior)
+        for s in sinks:
+            if hasattr(s, "resume"):
+                s.resume(scene, prior)
+    guard = _DivergenceGuard(scene, rec)
+    bar, bar_its = None, 0
+    if progress:
+        from tqdm import tqdm
+        # shown only for runs longer than a second (delay); steps/s is tqdm's rate
+        bar = tqdm(total=n_steps, initial=min(step, n_steps), unit="step", desc=f"{scene.name} [{scheme.name}]",
+                   leave=False, file=sys.stderr, delay=1.0, mininterval=0.25, dynamic_ncols=True)
     start = time.perf_counter()
+    compile_time = 0.0
     meta = dict(scheme=scheme.name, dt=dt)
-    step = 0
+    last_checkpoint = start
 
     def recorded(state, work, its, vres, derived=None):
+        # the sinks first: a step whose output failed is not in the histories either, so that
+        # the histories and the final state of the result stay those of one step
+        _write_sinks(sinks, scene, state)
         rec.record(state, work, its, vres, derived)
-        for s in sinks:
-            s.write(scene, state.t, state.q, state.v)
+        guard.check_energy(state.t)
 
     def advanced(n, its):
         nonlocal bar_its
         if bar is not None:
             bar_its += its
-            bar.set_postfix_str(f"t={state.t:.4g}/{t_end:.4g} s, Newton {bar_its / step:.1f}/step", refresh=False)
+            bar.set_postfix_str(f"t={state.t:.4g}/{t_end:.4g} s, Newton {bar_its / max(step, 1):.1f}/step",
+                                refresh=False)
             bar.update(n)
+
+    def result(**extra):
+        fs = {k: np.zeros(0) if getattr(state, k) is None else np.array(getattr(state, k), dtype=float)
+              for k in ("q", "v", "acc", "pseudo", "lam", "prescribed_force")}
+        fs.update(t=np.float64(state.t), work=np.float64(work), step=np.int64(step), halvings=np.int64(halvings))
+        if not resumable:
+            fs = None
+        # start was reset after a compiling first step: wall_time is the loop's own time
+        return rec.result(wall_time=time.perf_counter() - start, steps=step, halvings=halvings,
+                          compile_time=compile_time, final_state=fs, **meta, **extra)
+
+    resumable = True
+    stop = SignalStop(handle_signals)
     try:
+        first = True
         while step < n_steps:
             if use_compiled:
-                chunk = min(compiled_loop.chunk_steps(scene), n_steps - step)
+                chunk = min(1 if first and cold else compiled_loop.chunk_steps(scene), n_steps - step)
                 out = compiled_loop.run_chunk(scene, scheme, state, dt, t_end, step + 1, chunk, n_steps, record_every,
                                               work)
-                for t_r, q_r, v_r, w_r, its_r, reac_r, derived in out["records"]:
-                    recorded(State(t_r, q_r, v_r, lam=np.zeros(0), prescribed_force=reac_r), w_r, its_r, 0.0,
-                             derived)
+                for i, (t_r, q_r, v_r, w_r, its_r, reac_r, derived) in enumerate(out["records"]):
+                    s_r = State(t_r, q_r, v_r, lam=np.zeros(0), prescribed_force=reac_r)
+                    try:
+                        recorded(s_r, w_r, its_r, 0.0, derived)
+                    except OutputError:
+                        if record_every == 1 and i:   # the result ends at the last step recorded
+                            state, work, step = prev, out["records"][i - 1][3], step + i
+                        elif record_every != 1:
+                            resumable = False
+                        raise
+                    prev = s_r
                 if out["done"]:
                     state = State(out["t"], out["q"], out["v"], lam=np.zeros(0), prescribed_force=out["reaction"])
                     work = out["work"]
                     step += out["done"]
                     advanced(out["done"], out["iterations"])
-                if out["status"] == compiled_loop.OK:
-                    continue
-            # the Python path: every step of ineligible runs, and a step the compiled loop could not finish
-            step += 1
-            h = min(dt, t_end - state.t) if step == n_steps else dt
-            state, w, its, vres, nh = _advance(scheme, scene, state, h, max_halvings)
-            work += w
-            halvings += nh
-            if step % record_every == 0 or step == n_steps:
-                recorded(state, work, its, vres)
-            advanced(1, its)
+                if out["status"] != compiled_loop.OK:
+                    # the Python path: a step the compiled loop could not finish
+                    state, work, halvings, its = _python_step(scheme, scene, state, dt, t_end, step + 1, n_steps,
+                                                              max_halvings, work, halvings, record_every, recorded)
+                    step += 1
+                    advanced(1, its)
+            else:
+                state, work, halvings, its = _python_step(scheme, scene, state, dt, t_end, step + 1, n_steps,
+                                                          max_halvings, work, halvings, record_every, recorded)
+                step += 1
+                advanced(1, its)
+            if first:
+                first = False
+                if cold:                     # the first call compiled the kernels: report it on its own
+                    compile_time = time.perf_counter() - compile_start
+                    start = last_checkpoint = time.perf_counter()
+                    if bar is not None:
+                        bar.reset(total=n_steps)
+                        bar.update(min(step, n_steps))
+            guard.check_state(state)
+            if stop.signum is not None:
+                raise Interrupted(f"interrupted at t = {state.t:.6g} s by {signal.Signals(stop.signum).name}",
+                                  signal=stop.signum)
+            if checkpoint is not None and time.perf_counter() - last_checkpoint >= checkpoint_every:
+                try:
+                    result(completed=False, stopped=f"checkpoint at t = {state.t:.6g} s").save(checkpoint)
+                except OSError as exc:
+                    raise _output_error(exc, state.t) from None
+                last_checkpoint = time.perf_counter()
     except SimulationError as exc:
-        exc.args = (f"{exc.args[0]} [step {step} of {n_steps}]",) + exc.args[1:]
+        if not isinstance(exc, (Interrupted, DivergenceError, OutputError)):
+            exc.args = (f"{exc.args[0]} [step {step + 1} of {n_steps}]",) + exc.args[1:]
         exc.info.update(step=step, time=state.t)
-        res = rec.result(wall_time=time.perf_counter() - start, steps=step - 1, halvings=halvings,
-                         completed=False, **meta)
-        exc.result = res
+        exc.signal = exc.info.get("signal")
+        exc.result = result(completed=False, stopped=str(exc.args[0]))
         raise
     finally:
+        stop.restore()
         if bar is not None:
             bar.close()
         for s in sinks:
             s.close()
-    return rec.result(wall_time=time.perf_counter() - start, steps=n_steps, halvings=halvings, **meta)
+    return result()
+
+
+def _step_count(scene, t_end, dt, record_every):
+    """Steps of the run; InsufficientMemoryError if its histories cannot fit in the memory available."""
+    ratio = t_end / dt
+    if not math.isfinite(ratio) or ratio > 1e15:
+        raise ValueError(f"t_end / dt = {t_end!r} / {dt!r} asks for {ratio:.3g} steps; that run cannot end")
+    n_steps = int(math.ceil(ratio - 1e-9)) if t_end > 0 else 0
+    n_records = n_steps // record_every + 2
+    # q and v per record (Python lists of arrays: ~100 bytes of overhead each) plus ~16 scalars
+    check_fits(n_records * (16 * scene.n + 400), f"recording {n_records:.3g} states of {scene.n} coordinates "
+                                                 f"(t_end = {t_end:g} s, dt = {dt:g} s, record_every = {record_every})")
+    return n_steps
+
+
+def _write_sinks(sinks, scene, state):
+    for s in sinks:
+        try:
+            s.write(scene, state.t, state.q, state.v)
+        except OSError as exc:
+            raise _output_error(exc, state.t) from None
+
+
+def _output_error(exc, t):
+    where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
+    return OutputError(f"could not write the output at t = {t:.6g} s: {exc.strerror or exc}{where}")
+
+
+def _finite_number(name, x):
+    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, float, np.integer, np.floating)):
+        raise TypeError(f"{name} must be a number, got {type(x).__name__} {x!r:.40}")
+    x = float(x)
+    if not math.isfinite(x):
+        raise ValueError(f"{name} must be finite, got {x!r}")
+    return x
+
+
+def _count(name, x, minimum):
+    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, np.integer, float)) or int(x) != x \
+            or int(x) < minimum:
+        raise ValueError(f"{name} must be an integer >= {minimum}, got {x!r}")
+    return int(x)
+
+
+def _sinks(output):
+    """The output sinks as a list; a single sink is accepted as well as a sequence of them."""
+    if output is None:
+        return []
+    if hasattr(output, "write") and hasattr(output, "close"):
+        return [output]
+    try:
+        sinks = list(output)
+    except TypeError:
+        raise TypeError(f"output must be a sink with write() and close() or a sequence of them, "
+                        f"got {type(output).__name__}") from None
+    for s in sinks:
+        if not (callable(getattr(s, "write", None)) and callable(getattr(s, "close", None))):
+            raise TypeError(f"output sinks need write(scene, t, q, v) and close() methods, got {type(s).__name__}")
+    return sinks
+
+
+def _python_step(scheme, scene, state, dt, t_end, step, n_steps, max_halvings, work, halvings, record_every,
+                 recorded):
+    """Step number ``step`` on the Python path (halving on failure); records it when due.
+
+    Returns (state, work, halvings, Newton iterations of the step)."""
+    h = min(dt, t_end - state.t) if step == n_steps else dt
+    state, w, its, vres, nh = _advance(scheme, scene, state, h, max_halvings)
+    work += w
+    halvings += nh
+    if step % record_every == 0 or step == n_steps:
+        recorded(state, work, its, vres)
+    return state, work, halvings, its
+
+
+def _resume_source(resume, scene, scheme, dt):
+    """The earlier Result to continue (None for a fresh run), checked against this run's settings."""
+    if resume is None:
+        return None
+    prior = resume if isinstance(resume, Result) else Result.load(Path(resume))
+    fs = prior.final_state
+    if not isinstance(fs, dict) or not {"t", "q", "v", "step", "work", "halvings"} <= set(fs):
+        raise ValueError("cannot resume: the earlier result holds no final integrator state "
+                         "(saved by a version without resume support?)")
+    if np.shape(fs["q"]) != (scene.n,):
+        raise ValueError(f"cannot resume: the earlier run has {np.size(fs['q'])} coordinates, this scene {scene.n}")
+    if prior.scheme != scheme.name:
+        raise ValueError(f"cannot resume: the earlier run used {prior.scheme!r}, this one {scheme.name!r}")
+    if not math.isclose(float(prior.dt), dt, rel_tol=1e-12):
+        raise ValueError(f"cannot resume: the earlier run used dt = {prior.dt!r} s, this one {dt!r} s")
+    return prior
+
+
+class SignalStop:
+    """While alive (main thread only), SIGINT/SIGTERM set ``signum`` instead of stopping the program;
+    a second signal raises KeyboardInterrupt at once. ``restore()`` puts the earlier handlers back.
+
+    The time loop polls ``signum`` between steps; the CLI also holds signals this way while it
+    writes a run's outputs, so that they are complete."""
+
+    def __init__(self, enabled):
+        self.signum, self.old = None, {}
+        if enabled and threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                if signal.getsignal(sig) is signal.SIG_IGN:     # e.g. SIGINT of a background job: keep ignoring
+                    continue
+                self.old[sig] = signal.signal(sig, self._handler)
+
+    def _handler(self, signum, frame):
+        if self.signum is not None:
+            self.restore()
+            raise KeyboardInterrupt(f"second {signal.Signals(signum).name}")
+        self.signum = signum
+
+    def restore(self):
+        for sig, handler in self.old.items():
+            signal.signal(sig, handler if handler is not None else signal.SIG_DFL)
+        self.old = {}
+
+
+#: a run is diverged when a coordinate exceeds this many times the scene's size, or the energy this
+#: many times its initial scale plus the work done
+DIVERGENCE_FACTOR = 1e6
+#: recorded states over which the energy scale of the divergence rule is taken
+_SCALE_RECORDS = 10
+
+
+class _DivergenceGuard:
+    """Stops runs whose solution left every sane bound (DivergenceError, "diverged at t = …").
+
+    * a coordinate or velocity is not finite;
+    * a coordinate exceeds 10⁶ × max(scene size, largest initial coordinate, 1) — lengths in m,
+      angles in rad (a body spinning at 10 rad/s needs 10⁵ s to reach it);
+    * |T + V| exceeds 10⁶ × (E_s + max |W|), W the work done so far and E_s the largest |T| + |V|
+      of the first :data:`_SCALE_RECORDS` recorded states (the scale a run released from rest
+      establishes in its first steps; energy-conserving schemes keep T + V = E₀ + W, so this
+      catches the others).
+    """
+
+    def __init__(self, scene, rec):
+        self.rec = rec
+        q0 = np.asarray(rec.rows["q"][0], dtype=float)
+        size = max(float(scene.length_scale), float(np.max(np.abs(q0), initial=0.0)), 1.0)
+        self.q_bound = DIVERGENCE_FACTOR * size
+        r = rec.rows
+        self.e_scale = max(abs(k) + abs(p) for k, p in zip(r["kinetic"][:_SCALE_RECORDS], r["potential"]))
+        self.w_max = max((abs(w) for w in r["external_work"]), default=0.0)
+
+    def check_state(self, state):
+        if not (np.all(np.isfinite(state.q)) and np.all(np.isfinite(state.v))):
+            raise DivergenceError(f"diverged at t = {state.t:.6g} s: the state is not finite")
+        big = float(np.max(np.abs(state.q), initial=0.0))
+        if big > self.q_bound:
+            raise DivergenceError(f"diverged at t = {state.t:.6g} s: a coordinate reached {big:.3g}, more than "
+                                  f"{DIVERGENCE_FACTOR:.0e} times the scene's size ({self.q_bound / DIVERGENCE_FACTOR:.3g})")
+
+    def check_energy(self, t):
+        r = self.rec.rows
+        self.w_max = max(self.w_max, abs(r["external_work"][-1]))
+        energy = r["kinetic"][-1] + r["potential"][-1]
+        if len(r["kinetic"]) <= _SCALE_RECORDS:
+            self.e_scale = max(self.e_scale, abs(r["kinetic"][-1]) + abs(r["potential"][-1]))
+        scale = self.e_scale + self.w_max
+        if not math.isfinite(energy) or (scale > 0 and abs(energy) > DIVERGENCE_FACTOR * scale):
+            raise DivergenceError(f"diverged at t = {t:.6g} s: energy {energy:.3g} J against an initial energy "
+                                  f"scale plus work done of {scale:.3g} J")
 
 
 def _start_state(scene, start):

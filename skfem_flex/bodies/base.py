@@ -49,6 +49,37 @@ def check_finite_vector(name, value, size=None):
     return arr
 
 
+#: systems with at most this many coordinates use dense matrices; larger ones use
+#: ``scipy.sparse`` so that no n × n array is ever allocated for them (memory linear in the mesh)
+DENSE_LIMIT = 150
+
+
+def zero_matrix(n, m=None):
+    """An all-zero (n, m) matrix: dense ndarray for small systems (≤ :data:`DENSE_LIMIT`
+    coordinates), an empty CSR matrix otherwise."""
+    m = n if m is None else m
+    if max(n, m) <= DENSE_LIMIT:
+        return np.zeros((n, m))
+    import scipy.sparse as sps
+    return sps.csr_matrix((n, m))
+
+
+def place_block(n, index, block, sign=1.0, out=None):
+    """``out`` (default a :func:`zero_matrix` (n, n)) plus ``sign · block`` at rows and columns ``index``.
+
+    Dense for small systems; for large ones the block goes in as sparse entries,
+    so the cost is that of the block, never n²."""
+    if out is None:
+        out = zero_matrix(n)
+    if isinstance(out, np.ndarray):
+        out[index, index] += sign * to_dense(block)
+        return out
+    import scipy.sparse as sps
+    idx = np.arange(n)[index]
+    c = sps.coo_matrix(block)
+    return out + sps.csr_matrix((sign * c.data, (idx[c.row], idx[c.col])), shape=(n, n))
+
+
 def to_dense(a):
     """``a`` as a dense ndarray (bodies may return scipy.sparse blocks)."""
     return a.toarray() if hasattr(a, "toarray") else np.asarray(a)
@@ -217,11 +248,11 @@ class Body:
 
     def potential_hessian(self, q):
         """∇²V(q)."""
-        return np.zeros((self.n_dofs, self.n_dofs))
+        return zero_matrix(self.n_dofs)
 
     def potential_discrete_gradient(self, q0, q1):
         """(g, ∂g/∂q1) with g · (q1 − q0) = V(q1) − V(q0) exactly."""
-        return np.zeros(self.n_dofs), np.zeros((self.n_dofs, self.n_dofs))
+        return np.zeros(self.n_dofs), zero_matrix(self.n_dofs)
 
     # --------------------------------------------------------------- gravity
     def mass_moment(self):
@@ -239,7 +270,7 @@ class Body:
         gam, c = self.mass_moment()
         g = np.asarray(g, dtype=float)
         grad = -(g @ gam)
-        return float(grad @ q - g @ c), grad, np.zeros((self.n_dofs, self.n_dofs))
+        return float(grad @ q - g @ c), grad, zero_matrix(self.n_dofs)
 
     def gravity_discrete_gradient(self, q0, q1, g):
         """Discrete gradient of the gravity potential: (g, ∂g/∂q1)."""

@@ -97,7 +97,7 @@ import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 from skfem import Basis, ElementLineP1, ElementLineP2, MeshLine
 
-from ..beam import ElementQuadrature, TimoshenkoBeam, gauss_line
+from ..beam import ElementQuadrature, TimoshenkoBeam, gauss_line, line_mesh
 from ..forces import ForceElement
 from ..errors import ConvergenceError
 from ..rotations import MAX_INCREMENT as _MAX_INCREMENT, cayley_divided_difference, cayley_ratio
@@ -305,7 +305,7 @@ class ExactBeam(Body):
             raise ValueError(f"start and end must differ, got {start!r} and {end!r}")
         if isinstance(n_elements, bool) or int(n_elements) != n_elements or int(n_elements) < 1:
             raise ValueError(f"n_elements must be a positive integer, got {n_elements!r}")
-        mesh = MeshLine(np.linspace(0.0, length, int(n_elements) + 1))
+        mesh = line_mesh(length, n_elements, order if order in (1, 2) else 1)
         beam = TimoshenkoBeam(mesh, section, order=order)
         return cls(beam, a, float(np.arctan2(*(b - a)[::-1])), name=name, **kwargs)
 

@@ -194,10 +194,12 @@ class FloatingBeam(FloatingFrame):
         self._I00 = float(np.sum(sec.rhoA * qd.x ** 2 * qd.dx))
         self._Jr = float(np.sum(sec.rhoI * qd.dx))
         dense = (lambda m: m) if self.sparse else (lambda m: m.toarray())   # noqa: E731
-        self._set_invariants(mass=float(np.sum(sec.rhoA * qd.dx)),
-                             S0=np.array([float(np.sum(sec.rhoA * qd.x * qd.dx)), 0.0]),
-                             I0=self._I00 + self._Jr, Sbar=np.vstack([Nu, Nw]), c=lin(bu=sec.rhoA),
-                             k0n=k0 + nphi, MA=dense(MA), H=dense(H), Mff=dense((MA + MI).tocsr()))
+        mass, s0x, c = float(np.sum(sec.rhoA * qd.dx)), float(np.sum(sec.rhoA * qd.x * qd.dx)), lin(bu=sec.rhoA)
+        if not all(np.isfinite([mass, s0x, self._I00 + self._Jr])) or not np.all(np.isfinite(c)):
+            raise ValueError(f"the beam's mass and inertia overflow double precision (length {beam.length:g} m, "
+                             f"rhoA = {sec.rhoA:g} kg/m, rhoI = {sec.rhoI:g} kg m): give SI values of a physical size")
+        self._set_invariants(mass=mass, S0=np.array([s0x, 0.0]), I0=self._I00 + self._Jr, Sbar=np.vstack([Nu, Nw]),
+                             c=c, k0n=k0 + nphi, MA=dense(MA), H=dense(H), Mff=dense((MA + MI).tocsr()))
         self._pcache = (None, None)                       # ((q, v) bytes, M(q) v) of the last momentum
         self._v0cache = (None, None)
 
@@ -298,7 +300,7 @@ class FloatingBeam(FloatingFrame):
         rig[nd[:, 1], 1] = 1.0
         rig[nd[:, 1], 2] = beam.x_nodes
         rig[nd[:, 2], 2] = 1.0
-        rank = np.linalg.matrix_rank(rig[fixed], tol=1e-9 * max(1.0, beam.length))
+        rank = np.linalg.matrix_rank(rig[fixed])
         if rank < 3:
             raise ValueError(f"reference condition {reference!r} leaves {3 - rank} rigid-body mode(s) in the "
                              f"elastic coordinates (singular elastic stiffness); fix u, w, theta at the root "
@@ -312,9 +314,16 @@ class FloatingBeam(FloatingFrame):
         """The linear elastic stiffness on q_f must be regular (no rigid modes left)."""
         if K.shape[0] <= 600:
             ev = np.linalg.eigvalsh(K.toarray())
-            if ev[0] <= 1e-13 * ev[-1]:
-                raise ValueError(f"the elastic stiffness with reference {self.reference!r} is singular: "
-                                 f"rigid-body modes remain in q_f")
+            if not np.all(np.isfinite(ev)) or ev[0] <= 1e-13 * ev[-1]:
+                # the reference condition removed the rigid modes (checked above), so a singular K
+                # means stiffnesses too far apart (or zero) for double precision
+                sec, h = self.beam.section, self.beam.length / max(self.beam.mesh.t.shape[1], 1)
+                raise ValueError(
+                    f"the elastic stiffness is singular to double precision (smallest/largest eigenvalue "
+                    f"{ev[0] / ev[-1] if ev[-1] else 0.0:.2g}): the section's stiffnesses per element, "
+                    f"EA/h = {sec.EA / h:.3g} N/m, kGA/h = {sec.kGA / h:.3g} N/m and EI/h³ = {sec.EI / h ** 3:.3g} N/m "
+                    f"(h = {h:.3g} m), must lie within about 10¹³ of each other and be positive; "
+                    f"change EA, kGA, EI or the number of elements")
 
     @property
     def coordinate_names(self):
@@ -392,12 +401,14 @@ class FloatingBeam(FloatingFrame):
             X.sort_indices()
             xc = X.tocoo()
             self._ffs_data[key] = X.data.copy()
-            ff_keys[key] = (xc.row + 3) * n + xc.col + 3
-            rows.append(xc.row + 3), cols.append(xc.col + 3)
+            # flat keys row·n + col exceed int32 (scipy's index type) beyond 46 340 coordinates
+            xr, xcol = xc.row.astype(np.int64), xc.col.astype(np.int64)
+            ff_keys[key] = (xr + 3) * n + xcol + 3
+            rows.append(xr + 3), cols.append(xcol + 3)
         lr = np.broadcast_to(self._loc[:, :, None], (self._loc.shape[0],) + (self._loc.shape[1],) * 2)
         lc = np.broadcast_to(self._loc[:, None, :], lr.shape)
         self._loc_mask = (lr >= 0) & (lc >= 0)
-        loc_keys = (lr[self._loc_mask] + 3) * n + lc[self._loc_mask] + 3
+        loc_keys = (lr[self._loc_mask].astype(np.int64) + 3) * n + lc[self._loc_mask] + 3
         keys = np.unique(np.concatenate([np.asarray(r) * n + np.asarray(c) for r, c in zip(rows, cols)]
                                         + [loc_keys]))
         prow, pcol = np.divmod(keys, n)
@@ -421,7 +432,7 @@ class FloatingBeam(FloatingFrame):
             ptr, idx = self._pat_indptr, self._pat_indices
         else:
             ptr, idx = np.arange(0, n * n + 1, n), np.tile(np.arange(n), n)
-        keys = np.repeat(np.arange(n), np.diff(ptr)) * n + idx       # row-major keys of the pattern
+        keys = np.repeat(np.arange(n, dtype=np.int64), np.diff(ptr)) * n + idx   # row-major keys of the pattern
 
         def at(flat):
             pos = np.searchsorted(keys, flat)
@@ -434,14 +445,14 @@ class FloatingBeam(FloatingFrame):
         maps["left"] = at((r + 3) * n + c)
         for key, mat in blocks.items():
             ptr_b, idx_b, _ = _kernel._csr_parts(mat)
-            rows_b = np.repeat(np.arange(nf), np.diff(ptr_b))
+            rows_b = np.repeat(np.arange(nf, dtype=np.int64), np.diff(ptr_b))
             maps[key] = at((rows_b + 3) * n + idx_b + 3)
         loc = self._loc
         lr = np.broadcast_to(loc[:, :, None], (loc.shape[0],) + (loc.shape[1],) * 2)
         lc = np.broadcast_to(loc[:, None, :], lr.shape)
         keep = (lr >= 0) & (lc >= 0)
         map_loc = -np.ones(lr.shape, dtype=np.int64)
-        map_loc[keep] = at((lr[keep] + 3) * n + lc[keep] + 3)
+        map_loc[keep] = at((lr[keep].astype(np.int64) + 3) * n + lc[keep] + 3)
         return _kernel.pack(n, nf, self.strain == "green-lagrange", self.mass_total, self._S0, self._I0,
                             self._Sbar, self._c, self._k0n, blocks, (ptr, idx), maps, self._dNt, loc,
                             self._wq, map_loc)

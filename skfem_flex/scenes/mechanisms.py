@@ -15,9 +15,8 @@ r"""Multibody scenes with joints: pendulums, the flexible slider–crank, a free
 from __future__ import annotations
 
 import numpy as np
-import skfem
 
-from ..beam import TimoshenkoBeam
+from ..beam import TimoshenkoBeam, line_mesh
 from ..bodies.floating import FloatingBeam
 from ..bodies.particle import PointMass
 from ..bodies.rigid import RigidBody
@@ -39,7 +38,7 @@ _SECTION_UNITS = dict(EA="N", EI="N m^2", kGA="N", rhoA="kg/m", rhoI="kg m", n_e
 def _beam(length, section, n_elements, reference="clamped", name="beam", strain="green-lagrange", **kwargs):
     length = _positive("length", length)
     n = _count("n_elements", n_elements)
-    tb = TimoshenkoBeam(skfem.MeshLine(np.linspace(0.0, length, n + 1)), section)
+    tb = TimoshenkoBeam(line_mesh(length, n), section)
     return FloatingBeam(tb, reference=reference, strain=strain, name=name, **kwargs)
 
 

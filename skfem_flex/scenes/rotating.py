@@ -12,9 +12,8 @@
 from __future__ import annotations
 
 import numpy as np
-import skfem
 
-from ..beam import TimoshenkoBeam
+from ..beam import TimoshenkoBeam, line_mesh
 from ..bodies.floating import FloatingBeam
 from ..motion import MotionLaw, Prescribed, spin_up_law
 from ..scene import Scene
@@ -44,7 +43,7 @@ def hub_beam(length=10.0, EA=2.8e7, EI=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4, n_el
     if isinstance(n_elements, bool) or int(n_elements) != n_elements or n_elements < 1:
         raise ValueError(f"n_elements must be a positive integer, got {n_elements!r}")
     sec = Section(EA=EA, EI=EI, kGA=kGA, rhoA=rhoA, rhoI=rhoI)
-    beam = TimoshenkoBeam(skfem.MeshLine(np.linspace(0.0, length, int(n_elements) + 1)), sec, order=order)
+    beam = TimoshenkoBeam(line_mesh(length, n_elements, order), sec, order=order)
     return FloatingBeam(beam, reference="clamped", strain=strain, name=name)
 
 

@@ -1,0 +1,284 @@
+"""Bad and extreme input, divergence, full disks, damaged files, large meshes, long series.
+
+Every case here was a traceback, a silent success or a misleading message before; each now
+gets one line naming the value and an exit status that says what happened (0 done, 1 stopped
+early, 2 bad input, 3 diverged).
+"""
+import errno
+import json
+import os
+import subprocess
+import sys
+import tracemalloc
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import skfem_flex as sf
+from skfem_flex import cli, compiled_loop, scenes
+from skfem_flex.output import VTKSeries, read_pvd
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: --set values of the wrong type, sign and size (sizes kept where a run is rejected or short)
+BAD_VALUES = ["", "abc", "nan", "inf", "-inf", "-1", "0", "-0.0", "1.5", "-2.5", "1e308", "-1e308", "1e-308",
+              "1e-300", "1e9", "1e30", "-1e30", "true", "[1, 2]", "0x10", "1_000", " 3 ", "é"]
+CATALOGUE = sorted(scenes.CATALOGUE)
+
+
+def run_cli(capsys, argv):
+    rc = cli.main(argv)
+    err = capsys.readouterr().err
+    return rc, err
+
+
+@settings(max_examples=int(os.environ.get('SKFEM_FLEX_HYPOTHESIS_EXAMPLES', 25)), deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(data=st.data())
+def test_cli_survives_any_set_value(tmp_path, capsys, data):
+    """Random wrong-typed/signed/sized --set values for every catalogue scene: exit 0-3, never a traceback."""
+    name = data.draw(st.sampled_from(CATALOGUE), label="scene")
+    params = [p for p, _, _ in scenes.parameters(name)]
+    key = data.draw(st.sampled_from(params), label="key")
+    # integers small or far too large (a mid-sized mesh is a legitimate long run, not bad input)
+    value = data.draw(st.sampled_from(BAD_VALUES) | st.floats(allow_nan=True).map(repr)
+                      | st.integers(-10, 10).map(str) | st.integers(10**12, 10**30).map(str), label="value")
+    defaults = getattr(scenes.get(name), "defaults", {}) or {}
+    dt = defaults.get("dt", 0.01)
+    rc, err = run_cli(capsys, ["run", name, "--set", f"{key}={value}", "--t-end", repr(2 * dt), "--out",
+                               str(tmp_path / name), "--no-vtk", "--quiet"])
+    assert rc in (0, 1, 2, 3), err
+    assert "Traceback" not in err and "internal error" not in err, err
+    if rc == 2:
+        assert err.startswith("skfem-flex: error:") and len(err.strip().splitlines()) == 1, err
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["run", "pendulum", "--dt", "1e-300"], "steps"),
+    (["run", "pendulum", "--t-end", "1e12"], "memory"),
+    (["run", "pendulum", "--out", ""], "--out"),
+    (["run", "pendulum", "--set", "length=1", "--set", "length=2"], "twice"),
+    (["run", "spin_up_beam", "--set", "n_elements=100000000"], "memory"),
+    (["run", "flexible_pendulum", "--set", "EA=1e13"], "EA"),
+    (["run", "flexible_pendulum", "--set", "EI=1e-5"], "EI"),
+    (["run", "flexible_pendulum", "--set", "length=1e300"], "length"),
+    (["study", "stability", "--budget", "0"], "--budget"),
+    (["study", "stability", "--budget", "-5"], "--budget"),
+    (["run", "--resume", "/nonexistent/skfem-flex-run"], "--resume"),
+])
+def test_bad_cli_input_is_one_line_naming_it(tmp_path, capsys, argv, needle):
+    if "--out" not in argv and argv[0] == "run" and "--resume" not in argv:
+        argv = argv + ["--out", str(tmp_path / "o")]
+    rc, err = run_cli(capsys, argv + ["--quiet"] if argv[0] == "run" else argv)
+    assert rc == 2, err
+    assert len(err.strip().splitlines()) == 1 and needle in err and "Traceback" not in err, err
+
+
+def test_list_into_a_closed_pipe_is_quiet():
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.run(f"{sys.executable} -m skfem_flex list | head -1", shell=True, env=env,
+                          capture_output=True, text=True, timeout=120)
+    assert proc.stdout.strip() and "Traceback" not in proc.stderr and "BrokenPipe" not in proc.stderr
+
+
+def test_python_api_bad_input():
+    with pytest.raises(TypeError, match="bodies"):
+        sf.Scene(["beam"])
+    with pytest.raises(TypeError, match="Scene"):
+        sf.simulate("pendulum", 1.0, 0.1)
+    with pytest.raises(ValueError, match="max_halvings"):
+        sf.simulate(sf.scenes.pendulum(), 0.1, 0.01, max_halvings=-1)
+    with pytest.raises(TypeError, match="output"):
+        sf.simulate(sf.scenes.pendulum(), 0.1, 0.01, output=42)
+    with pytest.raises(ValueError, match="steps"):
+        sf.simulate(sf.scenes.pendulum(), 1e9, 1e-300)
+
+
+def test_single_sink_without_a_list(tmp_path):
+    res = sf.simulate(sf.scenes.pendulum(), 0.05, 0.01, output=VTKSeries(tmp_path, "p"))
+    assert [t for t, _ in read_pvd(tmp_path / "p.pvd")] == pytest.approx(res.t)
+
+
+def test_damaged_result_files_raise_value_error_naming_them(tmp_path):
+    good = sf.simulate(sf.scenes.pendulum(), 0.05, 0.01).save(tmp_path / "good.npz")
+    data = good.read_bytes()
+    cases = {"empty.npz": b"", "text.npz": b"hello, not a result", "truncated.npz": data[: len(data) // 2],
+             "flipped.npz": data[:200] + bytes(b ^ 0xFF for b in data[200:400]) + data[400:]}
+    np.save(tmp_path / "array.npy", np.arange(3.0))
+    np.savez(tmp_path / "other.npz", x=np.arange(3.0))
+    paths = [tmp_path / "array.npy", tmp_path / "other.npz"]
+    for fname, content in cases.items():
+        (tmp_path / fname).write_bytes(content)
+        paths.append(tmp_path / fname)
+    for p in paths:
+        with pytest.raises(ValueError) as info:
+            sf.Result.load(p)
+        msg = str(info.value)
+        assert str(p) in msg and "pickle" not in msg, msg
+    with pytest.raises(FileNotFoundError):
+        sf.Result.load(tmp_path / "missing.npz")
+
+
+def test_divergence_exits_3_and_keeps_outputs(tmp_path, capsys):
+    """Linear-strain spin-up at ω = 10 rad/s (beyond its buckling speed): the coordinates explode."""
+    out = tmp_path / "dv"
+    rc, err = run_cli(capsys, ["run", "spin_up_beam", "--set", "omega=10", "strain=linear", "--out", str(out),
+                               "--no-vtk", "--quiet"])
+    assert rc == 3 and "diverged at t = " in err, err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["completed"] is False and summary["stopped"].startswith("diverged at t = ")
+    res = sf.Result.load(out / "result.npz")
+    assert np.all(np.isfinite(res.q)) and res.t[-1] < 30.0
+
+
+def test_divergence_guard_energy_rule():
+    """A non-conservative scheme whose energy grows 10⁶ times beyond the scale of its first steps
+    plus the work done is stopped; a run released from rest (T₀ + V₀ = 0) is not."""
+    from skfem_flex.simulate import _SCALE_RECORDS, DIVERGENCE_FACTOR, _DivergenceGuard
+    scene = sf.scenes.pendulum()
+
+    class Rec:
+        rows = {"q": [np.array([0.5, 0.0])], "kinetic": [0.0], "potential": [0.0], "external_work": [0.0]}
+    guard = _DivergenceGuard(scene, Rec)
+
+    def record(t, kinetic, potential):
+        Rec.rows["kinetic"].append(kinetic)
+        Rec.rows["potential"].append(potential)
+        Rec.rows["external_work"].append(0.0)
+        guard.check_energy(t)
+    record(0.01, 1e-5, -1e-5 + 1e-17)                          # round-off from rest: no scale yet, no error
+    for k in range(_SCALE_RECORDS):
+        record(0.02 + 0.01 * k, 2.0, -1.0)                     # the first steps set E_s = 3 J
+    record(1.0, 0.9 * DIVERGENCE_FACTOR * 3.0, 0.0)             # below the bound
+    with pytest.raises(sf.SimulationError, match="diverged at t = 2"):
+        record(2.0, 1.1 * DIVERGENCE_FACTOR * 3.0, 0.0)
+
+
+def test_energy_balance_warning(tmp_path, capsys):
+    """Trapezoidal rule on the quartic oscillator at Δt ≈ T/2: ~70 % energy error, warned, still exit 0."""
+    out = tmp_path / "tr"
+    rc, err = run_cli(capsys, ["run", "spring_mass", "--integrator", "trapezoidal", "--dt", "3.7", "--t-end", "37",
+                               "--out", str(out), "--no-vtk", "--quiet"])
+    assert rc == 0 and "warning: energy balance error" in err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["completed"] and "energy balance error" in summary["warnings"][0]
+    assert summary["rho_inf"] is None and "compile_time_s" in summary
+    rc, err = run_cli(capsys, ["run", "spring_mass", "--dt", "3.7", "--t-end", "37", "--out", str(out),
+                               "--no-vtk", "--quiet"])
+    assert rc == 0 and "warning" not in err          # energy-momentum keeps the balance
+
+
+@pytest.mark.parametrize("failing", ["vtu", "collection"])
+def test_full_disk_is_one_line_without_tmp_or_unlisted_frames(tmp_path, capsys, monkeypatch, failing):
+    """ENOSPC while writing the 6th frame (its .vtu, or its listing after the .pvd was written)."""
+    import meshio
+    from skfem_flex import output
+    calls = {"n": 0}
+    if failing == "vtu":
+        real = meshio.write
+
+        def write(path, *a, **k):
+            calls["n"] += 1
+            if calls["n"] == 6:
+                Path(path).write_bytes(b"partial")
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+            return real(path, *a, **k)
+        monkeypatch.setattr(meshio, "write", write)
+    else:
+        real = output._atomic_write_text
+
+        def atomic_write_text(path, text):
+            if str(path).endswith(".vtu.series"):
+                calls["n"] += 1
+                if calls["n"] == 7:              # the empty series at the start, then the 6th frame's listing
+                    raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
+            return real(path, text)
+        monkeypatch.setattr(output, "_atomic_write_text", atomic_write_text)
+    out = tmp_path / "full"
+    rc, err = run_cli(capsys, ["run", "pendulum", "--t-end", "0.2", "--every", "1", "--out", str(out), "--quiet"])
+    assert rc == 1 and "Traceback" not in err and "No space left on device" in err, err
+    listed = read_pvd(out / "pendulum.pvd")
+    series = json.loads((out / "pendulum.vtu.series").read_text())["files"]
+    assert len(listed) == len(series) == 5
+    assert sorted(p.name for p in out.glob("pendulum_*.vtu")) == [p.name for _, p in listed]
+    assert not list(out.glob(".*tmp"))
+    res = sf.Result.load(out / "result.npz")                 # histories up to the failure are kept
+    assert not res.completed and len(res.t) == 5
+
+
+def test_series_cost_is_linear_in_the_frames(tmp_path, monkeypatch):
+    """Writing N frames writes O(N log N) bytes of collections, not O(N²): the collections are
+    rewritten when the unlisted frames reach 1/64 of the listed ones (or after a second)."""
+    from skfem_flex import output
+    monkeypatch.setattr(output, "LISTING_SECONDS", 1e9)          # the count rule alone, deterministic
+    written = {"bytes": 0, "calls": 0}
+    real = output._atomic_write_text
+
+    def counting(path, text):
+        written["bytes"] += len(text)
+        written["calls"] += 1
+        return real(path, text)
+    monkeypatch.setattr(output, "_atomic_write_text", counting)
+    scene = sf.scenes.pendulum()
+    q, v = scene.initial_state()
+    n = 1500
+    sink = VTKSeries(tmp_path, "p")
+    for k in range(n):
+        sink.write(scene, 0.001 * k, q, v)
+    sink.close()
+    listed = read_pvd(tmp_path / "p.pvd")
+    assert len(listed) == n and len(json.loads((tmp_path / "p.vtu.series").read_text())["files"]) == n
+    per_entry = (tmp_path / "p.pvd").stat().st_size / n + (tmp_path / "p.vtu.series").stat().st_size / n
+    # rewriting after every frame would write n²/2 entries (750 n); the rule writes about 64 n ln n / ... ≪
+    assert written["bytes"] < 120 * n * per_entry, written
+    assert written["calls"] < 2 * (64 * np.log(n) + 70)
+
+
+def test_large_body_allocates_no_dense_n_by_n():
+    """A pinned flexible pendulum above the small-system threshold (both integrator families): one
+    step's peak Python memory stays far below one dense n × n matrix, and doubling the mesh about
+    doubles it (it grew with n² before: 2.5 GB for 4 000 elements)."""
+    small = sf.scenes.get("flexible_pendulum")(n_elements=20)
+    for integrator in ("generalized-alpha", "energy-momentum"):      # compile and import outside the count
+        sf.simulate(small, 0.002, 0.001, integrator=integrator)
+    peaks = []
+    for n_el in (300, 600):
+        scene = sf.scenes.get("flexible_pendulum")(n_elements=n_el)
+        for integrator in ("generalized-alpha", "energy-momentum"):
+            tracemalloc.start()
+            sf.simulate(scene, 0.001, 0.001, integrator=integrator)
+            peak = tracemalloc.get_traced_memory()[1]
+            tracemalloc.stop()
+            assert peak < 0.25 * 8 * scene.n ** 2, (n_el, integrator, peak)
+            peaks.append(peak)
+    assert peaks[2] < 2.5 * peaks[0] and peaks[3] < 2.5 * peaks[1]
+
+
+def test_memory_estimate_before_allocating(monkeypatch):
+    from skfem_flex import resources
+    monkeypatch.setattr(resources, "available_memory", lambda: 50e6)
+    with pytest.raises(MemoryError, match="elements"):
+        sf.scenes.get("spin_up_beam")(n_elements=100_000)
+
+
+def test_first_run_says_it_compiles(capsys, monkeypatch):
+    """A cold kernel cache: one line on stderr before compiling, compile time kept out of wall_time."""
+    monkeypatch.setattr(compiled_loop, "jit_cache_cold", lambda scene: True)
+    res = sf.simulate(sf.scenes.get("spin_up_beam")(), 0.2, 0.02, progress=True)
+    err = capsys.readouterr().err
+    assert err.count(compiled_loop.COMPILE_NOTICE) == 1
+    assert res.compile_time > 0 and 0 < res.wall_time
+
+
+def test_cold_cache_detection(tmp_path):
+    """With an empty Numba cache directory the kernels are cold; after a run in this process they are not."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT), NUMBA_CACHE_DIR=str(tmp_path))
+    code = ("import skfem_flex as sf; from skfem_flex import compiled_loop as c; "
+            "print(c.jit_cache_cold(sf.scenes.get('spin_up_beam')()), c.jit_cache_cold(sf.scenes.pendulum()))")
+    proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
+    assert proc.stdout.split() == ["True", "False"], proc.stderr
+    scene = sf.scenes.get("spin_up_beam")()
+    sf.simulate(scene, 0.04, 0.02)
+    assert compiled_loop.jit_cache_cold(scene) is False
