@@ -375,7 +375,8 @@ class Constraint:
         Row i is vᵀ ∂²Φ_i/∂q² (the Hessian of a scalar is symmetric), taken
         from :meth:`hessian_product` with μ = e_i.
         """
-        rows = [v @ to_dense(self.hessian_product(q, e, t)) for e in np.eye(self.n_equations)]
+        # H v, not vᵀ H: the same row for a symmetric H, and a sparse H stays sparse
+        rows = [np.asarray(self.hessian_product(q, e, t) @ v, dtype=float).ravel() for e in np.eye(self.n_equations)]
         return np.asarray(rows, dtype=float).reshape(self.n_equations, len(q))
 
     def acceleration_rhs(self, q, v, t):
