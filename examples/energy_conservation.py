@@ -1,4 +1,4 @@
-"""Energy conservation: the figures of the second seed paper (Lee & Yun), reproduced.
+"""Energy conservation: the figures of Lee & Yun (docs/scenes.md, references), reproduced.
 
 * Spring–mass systems with strain ε = u^n, V = ½ k ε² (m = k = 1, u0 = 1, v0 = 0):
   n = 1 (linear), n = 2 (m ü + 2u³ = 0) and n = 1.5 (V = ½ u³, unbounded below),

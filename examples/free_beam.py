@@ -2,7 +2,7 @@
 
 Scene ``skfem_flex.scenes.free_beam`` (L = 10 m, EA = 2.8e7 N, EI = 1.4e4 N m², ρA = 1.2 kg/m,
 8 elements, no joints, no gravity): a half-sine pulse of 100 N peak and 0.05 s acts at the tip along
-global +y. After the pulse, energy, linear and angular momentum must stay constant (DESIGN.md §5).
+global +y. After the pulse, energy, linear and angular momentum must stay constant (docs/scenes.md).
 Energy-momentum and generalized-α, Δt = 5e-3 s, 4 s.
 
 Run ``python examples/free_beam.py [OUT_DIR]`` (default ``examples/output/``).

@@ -1,6 +1,6 @@
 r"""Statics and linearized modes of any scene; Campbell diagrams.
 
-Beside the time loop, on the same scene assembly (DESIGN.md §1.9):
+Beside the time loop, on the same scene assembly (docs/linearization.md):
 
 :func:`static_equilibrium`
     The nonlinear equilibrium of a scene,

@@ -6,7 +6,7 @@ stiffness and consistent mass matrices, load vectors, static solutions and
 natural modes. Fields: axial displacement u, transverse deflection w and
 cross-section rotation θ, shear strain γ = w' − θ.
 
-Stiffness follows eq. (42) of the seed paper, not eq. (41). Eq. (40) writes
+Stiffness follows eq. (42) of Liu & Yun, not eq. (41). Eq. (40) writes
 the strain energy as ½ EA ∫ u'² dx + …, = ½ q_fᵀ K q_f, so every block of K is
 the energy density's coefficient integrated without a further ½; eq. (41)
 keeps a stray ½ on its axial block (halving the axial stiffness) while its
@@ -176,7 +176,7 @@ def line_mesh(length, n_elements, order=1):
 class TimoshenkoBeam:
     r"""Linear Timoshenko beam: scikit-fem bases, K, M, loads, statics, modes.
 
-    Weak form (eq. 40 of the seed paper; γ = w' − θ):
+    Weak form (eq. 40 of Liu & Yun; γ = w' − θ):
 
     .. math::
 

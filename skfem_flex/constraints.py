@@ -8,8 +8,8 @@ so the generalized force a constraint exerts is −Φ_qᵀ λ. A constraint name
 the ``bodies`` it reads; the scene hands it the concatenated coordinates of
 those bodies. Besides Φ, Φ_q and Φ_t each constraint provides a *discrete
 gradient* D(q0, q1) with D (q1 − q0) = Φ(q1) − Φ(q0) exactly, which the
-energy-conserving scheme uses so that constraint forces do no work (second
-seed paper, §3.1: the constraint is enforced at the end of each step,
+energy-conserving scheme uses so that constraint forces do no work (Lee & Yun,
+§3.1: the constraint is enforced at the end of each step,
 Φ(q_{n+1}) = 0, and the discrete constraint work (Φ_f − Φ_i) λ_m vanishes).
 
 Joints (:class:`Pin`, :class:`Revolute`, :class:`Slider`,
@@ -760,7 +760,7 @@ class Driver(_TermConstraint):
 class Distance(Constraint):
     """Keeps a planar point mass at a fixed distance from a ground anchor.
 
-    Φ = (|x − a|² − l²)/2 = 0 (second seed paper, §4: the simple pendulum).
+    Φ = (|x − a|² − l²)/2 = 0 (Lee & Yun, §4: the simple pendulum).
 
     Parameters
     ----------

@@ -1,7 +1,7 @@
 """Exceptions shared by bodies, integrators and the simulation driver.
 
 They live in their own module so that bodies can raise them without
-importing the integrators (imports point one way: DESIGN.md §2).
+importing the integrators (imports point one way: docs/ARCHITECTURE.md).
 """
 
 __all__ = ["SimulationError", "ConvergenceError", "Interrupted", "DivergenceError", "OutputError"]

@@ -159,13 +159,13 @@ class NonlinearSpring(ForceElement):
     exponent : float
         n with 2n a positive integer, so that V = ½ k u^(2n) is a polynomial
         defined for all u: n = 1 linear, n = 2 gives m ü + 2 k u³ = 0, n = 1.5
-        gives V = ½ k u³ (unbounded below; seed paper on energy schemes, §4).
+        gives V = ½ k u³ (unbounded below; Lee & Yun, §4).
     coordinate : int or str
         Which coordinate of the body is u (default 0).
 
     Notes
     -----
-    Discrete gradient (second seed paper, eq. 25a generalised): the exact
+    Discrete gradient (Lee & Yun, eq. 25a generalised): the exact
     divided difference (V(u1) − V(u0))/(u1 − u0) = ½ k Σ_j u1^j u0^(2n−1−j),
     free of cancellation; for n = 2 it equals k (u0² + u1²)/2 · (u0 + u1),
     the stress at the mean strain times the strain difference.

@@ -19,7 +19,7 @@ a scalar, or an array of shape (n_elements, n_quadrature_points) for values
 that vary along the beam. ``prm.x[0]`` holds the global coordinates of the
 quadrature points in m.
 
-The energies are those of eq. (40) of the seed paper (Timoshenko beam, shear
+The energies are those of eq. (40) of Liu & Yun (Timoshenko beam, shear
 strain γ = w' − θ):
 
 .. math::

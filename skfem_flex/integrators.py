@@ -6,10 +6,10 @@ Systems::
 
 Schemes (all solve for the increment Δq = q_{n+1} − q_n, never for q_{n+1}
 itself, so that v_{n+1} keeps its digits as q grows; see
-``shared/notes/ENERGY_SCHEME.md``, pitfall 5):
+``docs/energy_scheme.md``, trap 5):
 
 ``energy-momentum``
-    Discrete-gradient midpoint scheme (second seed paper, eqs. 3, 22, 25–26)
+    Discrete-gradient midpoint scheme (Lee & Yun, eqs. 3, 22, 25–26)
     in Lagrangian form::
 
         q1 = q0 + Δq,  v1 = 2Δq/Δt − v0

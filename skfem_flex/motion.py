@@ -75,7 +75,7 @@ def spin_up_law(omega=4.0, period=15.0):
     """Hub angle of the spin-up manoeuvre of Simo & Vu-Quoc (1986).
 
     θ(t) = (ω_s/T_s)(t²/2 + (T_s/2π)²(cos(2πt/T_s) − 1)) for t < T_s and
-    θ(t) = ω_s (t − T_s/2) after (DESIGN.md §5). The rate rises smoothly
+    θ(t) = ω_s (t − T_s/2) after (docs/scenes.md). The rate rises smoothly
     from 0 to ω_s (rad/s) within T_s (s).
     """
     w, ts = float(omega), float(period)

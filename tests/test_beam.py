@@ -88,7 +88,7 @@ def test_single_supports_leave_rigid_motion_free():
 
 
 def eq42(l, EA, EI, kGA):
-    """Element stiffness of eq. (42) of the seed paper, written out as printed."""
+    """Element stiffness of eq. (42) of Liu & Yun, written out as printed."""
     A_I = EA / EI  # the paper's A/I with the common factor EI/l = E·I/l
     c = kGA / EI
     return EI / l * np.array([

@@ -240,7 +240,7 @@ def test_free_body_conserves_energy_and_momentum():
 
     Angular momentum is only approximately conserved: the frozen-velocity discrete gradient of
     G(q) = ½ v0ᵀ M(q) v1 is not invariant under rotations of the whole system
-    (ENERGY_SCHEME.md, pitfall 6). Measured here (4 elements, Δt = 1e-3 s): 5.5e-7 relative at
+    (docs/energy_scheme.md, trap 6). Measured here (4 elements, Δt = 1e-3 s): 5.5e-7 relative at
     most, an oscillation that does not drift away, O(Δt²) (8 elements, chord frame: 8e-8 at
     Δt = 1e-3 s, 1.4e-5 at Δt = 1e-2 s).
     """
@@ -271,7 +271,7 @@ def test_gravity_accelerates_the_centre_of_mass():
 # --------------------------------------------------------------------------- spin-up
 def test_spin_up_minimum_tip_deflection():
     """Simo & Vu-Quoc spin-up, ω = 4 rad/s: minimum transverse tip deflection ≈ −0.400 m near t = 6.95 s
-    (ENERGY_SCHEME.md: −0.39991 m at 6.95 s for 8 elements, −0.4005..−0.4007 m on finer meshes)."""
+    (docs/energy_scheme.md: −0.39991 m at 6.95 s for 8 elements, −0.4005..−0.4007 m on finer meshes)."""
     res = sf.simulate(sf.scenes.spin_up_beam(omega=4.0, n_elements=8), t_end=8.0, dt=1e-2)
     tip = res.probes["tip"]
     i = np.argmin(tip[:, 1])

@@ -2,7 +2,7 @@
 
 A body owns a block of generalized coordinates q (length ``n_dofs``) with
 velocities v. The scene concatenates the blocks; integrators only ever talk
-to the scene, so a body knows nothing of integrators (DESIGN.md §2b).
+to the scene, so a body knows nothing of integrators (docs/ARCHITECTURE.md, the body contract).
 
 A body supplies
 

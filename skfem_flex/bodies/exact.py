@@ -3,7 +3,7 @@ r"""Geometrically exact planar beam (Simo–Reissner) in absolute coordinates.
 :class:`ExactBeam` carries, at every node of the scikit-fem mesh of a
 :class:`~skfem_flex.beam.TimoshenkoBeam`, the position r = (x, y) of the
 beam axis in the global (inertial) frame and the angle φ of the
-cross-section (Simo & Vu-Quoc 1986; second seed paper, eq. 6); there is no
+cross-section (Simo & Vu-Quoc 1986; Lee & Yun, eq. 6); there is no
 floating frame. They are stored as the global displacement u = r − X(s) from
 the straight reference placement X(s) and the section rotation ψ = φ − α
 from the reference angle α, so that round-off scales with the motion, not
@@ -33,7 +33,7 @@ locking; for P1 the curvature is constant per element and exact.
 
 Energy-conserving discrete gradient
 -----------------------------------
-Second seed paper, eqs. (3b), (17)–(22): the section forces are taken at the
+Lee & Yun, eqs. (3b), (17)–(22): the section forces are taken at the
 mean strain, f_m = C (e_0 + e_1)/2, and the strain increment is written
 exactly through the incremental rotation. In the plane the incremental
 rotation is one angle Δφ with Rodrigues/Cayley parameter w = W(Δφ) =
@@ -88,7 +88,8 @@ J. C. Simo, L. Vu-Quoc, "On the dynamics of flexible beams under large
 overall motions — the plane case", J. Appl. Mech. 53 (1986) 849–863.
 J. C. Simo, N. Tarnow, M. Doblaré, "Non-linear dynamics of three-dimensional
 rods: exact energy and momentum conserving algorithms", IJNME 38 (1995).
-Lee & Yun, second seed paper (``shared/seeds/001_ed5c960ddb529220.txt``).
+Lee & Yun, "The dynamics analysis for nonlinear flexible mechanisms using finite
+elements and algebraic quaternions" (mean velocity, stress at the mean strain).
 """
 from __future__ import annotations
 

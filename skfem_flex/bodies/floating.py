@@ -2,7 +2,7 @@ r"""Floating frame of reference (FFR): a Timoshenko beam in large overall motion
 
 A :class:`FloatingBeam` carries the coordinates of a body frame, q_r = (R_x, R_y, θ),
 and elastic coordinates q_f of a :class:`~skfem_flex.beam.TimoshenkoBeam` measured in that
-frame. A material point of the axis at x is at (seed paper, eqs. 10–11, 31–33)
+frame. A material point of the axis at x is at (Liu & Yun, eqs. 10–11, 31–33)
 
 .. math::
 
@@ -43,7 +43,7 @@ Strain energy: bending EI κ², κ = φ', and shear kGA γ², γ = w' − φ, as
 which misses the centrifugal stiffening). The nonlinear axial kernel is vectorised over
 elements on the beam's precomputed quadrature arrays; nothing is assembled in the time loop.
 
-Discrete gradients for the energy-conserving scheme (``shared/notes/ENERGY_SCHEME.md``) are
+Discrete gradients for the energy-conserving scheme (``docs/energy_scheme.md``) are
 exact closed forms: stress at the mean strain for V, and for G(q) = ½ v₀ᵀ M(q) v₁ the identities
 A(θ₁) − A(θ₀) = sinc(Δθ/2) A(θ_m) E Δθ and (A(θ₀) + A(θ₁))/2 = cos(Δθ/2) A(θ_m). Energy and
 linear momentum are then conserved to round-off; angular momentum only to O(Δt²) (bounded, about

@@ -125,7 +125,7 @@ def _sinc_half(d):
 
 @numba.njit(cache=True)
 def momentum(kd, q, v):
-    """p = M(q) v (eq. 16 of the seed paper; see FloatingBeam.momentum), kg m/s and kg m²/s."""
+    """p = M(q) v (eq. 16 of Liu & Yun; see FloatingBeam.momentum), kg m/s and kg m²/s."""
     nf = kd.nf
     sbar = kd.sbar
     C, S = math.cos(q[2]), math.sin(q[2])

@@ -11,7 +11,7 @@ about the centre of mass, so the energy-conserving scheme needs no kinetic
 discrete gradient; gravity is linear in q (∫ r dm = m R).
 
 The exact discrete gradient of a point's position between q0 and q1 uses
-the two identities of the rotation matrix (``shared/notes/ENERGY_SCHEME.md``)
+the two identities of the rotation matrix (``docs/energy_scheme.md``)
 
 .. math::  A(θ_1) − A(θ_0) = \operatorname{sinc}(Δθ/2)\, Δθ\, A(θ_m) E,
            \qquad (A_0 + A_1)/2 = \cos(Δθ/2) A(θ_m),

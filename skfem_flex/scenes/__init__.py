@@ -1,4 +1,4 @@
-"""The catalogue of benchmark scenes (DESIGN.md §5).
+"""The catalogue of benchmark scenes (docs/scenes.md).
 
 Each scene is a function returning a :class:`~skfem_flex.scene.Scene`;
 ``CATALOGUE`` maps its name to the function, and :func:`parameters` lists

@@ -80,7 +80,7 @@ def flexible_pendulum(length=1.0, EA=1e6, EI=1e2, kGA=3.205e5, rhoA=1.0, rhoI=1e
     FloatingBeam along [0, L] (clamped reference: the body frame is tangent to the root),
     root pinned to the origin by a :class:`~skfem_flex.constraints.Pin`, gravity (0, −g).
     The mass centre falls by at most L/2, so m g L/2 (m = ρA L) is the natural energy scale.
-    DESIGN.md §5 (also run with EI = 1e4, the stiffer case).
+    docs/scenes.md (also run with EI = 1e4, the stiffer case).
 
     ``body`` chooses the link (:mod:`skfem_flex.scenes.links`): ``"beam"`` (above),
     ``"beam-modal"`` (Craig–Bampton, ``n_modes`` fixed-interface modes), ``"plane-stress"``
@@ -297,7 +297,7 @@ def free_beam(length=10.0, EA=2.8e7, EI=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4, n_e
     F(t) = force · sin(π t/τ), 0 ≤ t ≤ τ = ``duration``, acts at the tip along global +y
     (:class:`~skfem_flex.forces.PointForce` with :func:`~skfem_flex.forces.half_sine_pulse`);
     its impulse is 2 τ force/π. Afterwards energy, linear and angular momentum are constant
-    (DESIGN.md §5), and ``Result.external_work`` holds the work of the pulse.
+    (docs/scenes.md), and ``Result.external_work`` holds the work of the pulse.
 
     Probes: ``"tip"`` = tip position (m), ``"tip_deflection"`` = elastic tip displacement
     (u, w) in the body frame (m).

@@ -1,4 +1,4 @@
-"""Point-mass scenes of the second seed paper: spring–mass systems and the simple pendulum."""
+"""Point-mass scenes of the Lee & Yun: spring–mass systems and the simple pendulum."""
 from __future__ import annotations
 
 from ..bodies.particle import PointMass
@@ -14,7 +14,7 @@ __all__ = ["spring_mass", "pendulum"]
 def spring_mass(exponent=2.0, m=1.0, k=1.0, u0=1.0, v0=0.0):
     """One-dof spring–mass system with strain ε = u^n and V = ½ k ε².
 
-    Lee & Yun (second seed paper), §4: n = 1 is the linear oscillator, n = 2
+    Lee & Yun, §4: n = 1 is the linear oscillator, n = 2
     gives m ü + 2 k u³ = 0 (quartic potential), n = 1.5 gives V = ½ k u³,
     unbounded below, whose motion escapes to −∞.
 
@@ -31,7 +31,7 @@ def spring_mass(exponent=2.0, m=1.0, k=1.0, u0=1.0, v0=0.0):
 def pendulum(length=0.5, mass=1.0, v0=1.695, g=9.81):
     """Simple pendulum in Cartesian coordinates with the constraint C = (x·x − l²)/2 = 0.
 
-    Lee & Yun (second seed paper), §4 and eqs. (26a–c): pivot at the origin,
+    Lee & Yun, §4 and eqs. (26a–c): pivot at the origin,
     y up, gravity along −y; the mass starts at the bottom (0, −l) with
     horizontal speed v0 along +x (l = 0.5 m, v0 = 1.695 m/s in the paper).
 

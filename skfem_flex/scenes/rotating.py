@@ -2,7 +2,7 @@
 
 ``spin_up_beam``
     Simo & Vu-Quoc (1986): a beam clamped to a hub whose angle follows
-    :func:`~skfem_flex.motion.spin_up_law` (DESIGN.md §5). The hub frame is the body
+    :func:`~skfem_flex.motion.spin_up_law` (docs/scenes.md). The hub frame is the body
     frame (clamped reference condition), R is held at the origin by constant laws.
 ``rotating_beam``
     A cantilever turning at constant ω, started in its stretched steady state.
@@ -68,7 +68,7 @@ def spin_up_beam(omega=4.0, T=15.0, length=10.0, EA=2.8e7, EI=1.4e4, kGA=1e7, rh
     stretching and chord shortening that the stiffening needs.
 
     Probes: ``"tip"`` = tip displacement in the hub frame (axial, transverse), m.
-    Reference (ENERGY_SCHEME.md): minimum transverse tip displacement ≈ −0.40 m near t = 6.95 s
+    Reference (docs/energy_scheme.md): minimum transverse tip displacement ≈ −0.40 m near t = 6.95 s
     for ω_s = 4 rad/s.
     """
     if body == "exact":
