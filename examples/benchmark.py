@@ -217,16 +217,6 @@ def _reference(out, key, compute):
     return _spline(data[key + "_t"], data[key + "_p"])
 
 
-def _pendulum_exact(length=0.5, v0=1.695, g=9.81):
-    from scipy.special import ellipj
-
-    def position(t):
-        k = v0 / (2.0 * np.sqrt(g * length))
-        theta = 2.0 * np.arcsin(k * ellipj(np.sqrt(g / length) * t, k * k)[0])
-        return length * np.stack([np.sin(theta), -np.cos(theta)], axis=-1)
-    return position
-
-
 def peer_problems(out):
     """[(label, our scene factory, our scheme, dt, t_end, probe, peer run, peer scheme, reference factory)]."""
     import peer_exudyn as peer
@@ -245,7 +235,8 @@ def peer_problems(out):
         return _reference(out, "flexible_pendulum", flex_ref)
 
     def exact():
-        return _pendulum_exact()
+        from skfem_flex.studies import pendulum_position
+        return pendulum_position
     rows = [("spin-up ω = 4, 8 elements", lambda: sf.scenes.spin_up_beam(omega=4.0, n_elements=8),
              "energy-momentum", 1e-3, 30.0, "tip", peer.spin_up(8, 1e-3, 30.0), "generalized-alpha 0.9", spin)]
     for dt in (1e-4, 1e-3):

@@ -328,7 +328,8 @@ def _cmd_run(args):
     from . import scenes
     from .errors import DivergenceError, Interrupted
     from .integrators import SimulationError
-    from .output import VTKSeries, _atomic_write_text
+    from .files import write_text_atomically
+    from .output import VTKSeries
     from .simulate import SignalStop, simulate
 
     name, params, t_end, dt, integrator, rho_inf, every, no_vtk, out = _run_settings(args)
@@ -361,7 +362,7 @@ def _cmd_run(args):
     if every is None:
         every = max(1, math.ceil(n_steps / MAX_FRAMES))
     if resume is None:
-        _atomic_write_text(out / RUN_SETTINGS, json.dumps(_jsonable(
+        write_text_atomically(out / RUN_SETTINGS, json.dumps(_jsonable(
             {"scene": name, "parameters": params, "t_end": t_end, "dt": dt, "integrator": integrator,
              "rho_inf": rho_inf, "every": every, "no_vtk": no_vtk}), indent=2) + "\n")
     sinks = [] if no_vtk else [VTKSeries(out, name, every=every)]
@@ -387,7 +388,7 @@ def _cmd_run(args):
         files = _write_run_outputs(scene, result, sinks, out)
         summary = _summary(name, scene, effective, integrator, rho_inf, t_end, dt, result, error, files, wall)
         try:
-            _atomic_write_text(out / "summary.json", json.dumps(summary, indent=2) + "\n")
+            write_text_atomically(out / "summary.json", json.dumps(summary, indent=2) + "\n")
         except OSError as exc:
             raise _OutputError(exc) from None
         if status == 0 and result is not None:
@@ -644,7 +645,7 @@ def _analysis(name, compute):
 
 def _cmd_modes(args):
     from .analysis import modes, write_mode_series
-    from .output import _atomic_write_text
+    from .files import write_text_atomically
 
     factory = _catalogue_scene(args.scene)
     params = _scene_settings(args.scene, args.set)
@@ -659,11 +660,11 @@ def _cmd_modes(args):
     lines = ["mode,omega_rad_s,frequency_hz,damping_ratio,growth_rate_1_s"]
     lines += [f"{r['mode']},{r['omega_rad_s']!r},{r['frequency_hz']!r},{r['damping_ratio']!r},"
               f"{r['growth_rate_1_s']!r}" for r in rows]
-    _atomic_write_text(out / "modes.csv", "\n".join(lines) + "\n")
+    write_text_atomically(out / "modes.csv", "\n".join(lines) + "\n")
     pvds = [] if args.no_vtk else write_mode_series(scene, result, out, frames=args.frames)
     summary = {"scene": args.scene, "parameters": dict(scene.parameters) or params, "about": result.about,
                "modes": rows, "stable": result.stable, "vtk": [str(p) for p in pvds]}
-    _atomic_write_text(out / "summary.json", json.dumps(_jsonable(summary), indent=2) + "\n")
+    write_text_atomically(out / "summary.json", json.dumps(_jsonable(summary), indent=2) + "\n")
     if not args.quiet:
         print(f"{args.scene}: {len(rows)} modes about the {result.about} state"
               f"{'' if result.stable else ' (UNSTABLE: a mode grows)'}")
@@ -791,7 +792,7 @@ def _sweep_grid(name, items):
 def _cmd_sweep(args):
     from . import scenes
     from .plots import plot_sweep_extremes
-    from .output import _atomic_write_text
+    from .files import write_text_atomically
     from .sweep import plan, probe_extremes, run_cases
 
     if args.scene not in scenes.CATALOGUE:
@@ -845,7 +846,7 @@ def _cmd_sweep(args):
               "skipped": int(ds.attrs["skipped"]), "wall_time_s": wall,
               "status": {k: int((status == k).sum()) for k in dict.fromkeys(status.tolist())},
               "outputs": {k: str(v) for k, v in files.items()}}
-    _atomic_write_text(out / "sweep.json", json.dumps(_jsonable(report), indent=2) + "\n")
+    write_text_atomically(out / "sweep.json", json.dumps(_jsonable(report), indent=2) + "\n")
     if not args.quiet:
         import pandas as pd
         with pd.option_context("display.width", 200, "display.max_columns", 30, "display.max_colwidth", 60):

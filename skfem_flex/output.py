@@ -44,13 +44,14 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import re
 import time
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
+
+from .files import write_atomically, write_text_atomically
 
 __all__ = ["VTKSeries", "merge_geometry", "read_pvd", "POINT_ARRAYS", "CELL_ARRAYS"]
 
@@ -169,19 +170,6 @@ def merge_geometry(geometries, point_names=None, cell_names=None):
     return meshio.Mesh(np.concatenate(points) if points else np.zeros((0, 3)), cells,
                        point_data={k: np.concatenate(v) for k, v in point_data.items()},
                        cell_data=cell_data)
-
-
-def _atomic_write_text(path, text):
-    """Write ``text`` to ``path`` through a temporary file and a rename."""
-    path = Path(path)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        with open(tmp, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)          # a full disk leaves no temporary file behind
-        raise
 
 
 def read_pvd(path):
@@ -411,12 +399,9 @@ class VTKSeries:
         mesh = self.mesh(scene, np.asarray(q, dtype=float), np.asarray(v, dtype=float))
         index = len(self.written)
         final = self.directory / f"{self.name}_{index:06d}.vtu"
-        tmp = self.directory / f".{final.name}.{os.getpid()}.tmp"
         try:
-            meshio.write(tmp, mesh, file_format="vtu")
-            os.replace(tmp, final)
+            write_atomically(final, lambda tmp: meshio.write(tmp, mesh, file_format="vtu"))
         except BaseException:
-            tmp.unlink(missing_ok=True)
             self._drop_unlisted()
             raise
         self.written.append((float(t), final))
@@ -457,14 +442,14 @@ class VTKSeries:
         pvd = self._PVD_HEAD + "".join(self._pvd_lines) + self._PVD_TAIL
         series = self._SERIES_HEAD + ",\n".join(self._series_lines) + self._SERIES_TAIL
         try:
-            _atomic_write_text(self.pvd_path, pvd)
-            _atomic_write_text(self.series_path, series)
+            write_text_atomically(self.pvd_path, pvd)
+            write_text_atomically(self.series_path, series)
         except BaseException:
             failed_after_pvd = self.pvd_path.exists() and len(read_pvd(self.pvd_path)) > self._listed
             self._drop_unlisted()
             if failed_after_pvd:           # the .pvd already listed them: put it back to the listed steps
                 try:
-                    _atomic_write_text(self.pvd_path, self._PVD_HEAD + "".join(self._pvd_lines) + self._PVD_TAIL)
+                    write_text_atomically(self.pvd_path, self._PVD_HEAD + "".join(self._pvd_lines) + self._PVD_TAIL)
                 except OSError:
                     pass
             raise

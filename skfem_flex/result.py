@@ -2,13 +2,14 @@
 from __future__ import annotations
 
 import json
-import os
 import zipfile
 import zlib
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
+
+from .files import write_atomically
 
 __all__ = ["Result"]
 
@@ -146,15 +147,10 @@ class Result:
         arrays = {}
         spec = {"format": _RESULT_FORMAT,
                 "fields": {f.name: _encode(getattr(self, f.name), arrays, f.name) for f in fields(self)}}
-        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-        try:
+        def write(tmp):
             with open(tmp, "wb") as fh:
                 np.savez(fh, __result__=np.array(json.dumps(spec)), **arrays)
-            os.replace(tmp, path)
-        except BaseException:
-            tmp.unlink(missing_ok=True)          # a full disk leaves no temporary file behind
-            raise
-        return path
+        return write_atomically(path, write)
 
     @classmethod
     def load(cls, path):
@@ -224,14 +220,8 @@ class Result:
             else:
                 names.extend(f"{k}[{i}]" for i in range(a.shape[1]))
             cols.append(a)
-        tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-        try:
-            np.savetxt(tmp, np.hstack(cols), delimiter=",", header=",".join(names), comments="", fmt="%.17g")
-            os.replace(tmp, path)
-        except BaseException:
-            tmp.unlink(missing_ok=True)
-            raise
-        return path
+        return write_atomically(path, lambda tmp: np.savetxt(tmp, np.hstack(cols), delimiter=",",
+                                                              header=",".join(names), comments="", fmt="%.17g"))
 
 
 _RESULT_FORMAT = "skfem_flex.Result/1"

@@ -289,6 +289,7 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
     try:
         first = True
         while step < n_steps:
+            python_step = not use_compiled
             if use_compiled:
                 chunk = min(1 if first and cold else compiled_loop.chunk_steps(scene), n_steps - step)
                 out = compiled_loop.run_chunk(scene, scheme, state, dt, t_end, step + 1, chunk, n_steps, record_every,
@@ -309,13 +310,9 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
                     work = out["work"]
                     step += out["done"]
                     advanced(out["done"], out["iterations"])
-                if out["status"] != compiled_loop.OK:
-                    # the Python path: a step the compiled loop could not finish
-                    state, work, halvings, its = _python_step(scheme, scene, state, dt, t_end, step + 1, n_steps,
-                                                              max_halvings, work, halvings, record_every, recorded)
-                    step += 1
-                    advanced(1, its)
-            else:
+                # a step the compiled loop could not finish goes the Python way (which halves or raises)
+                python_step = out["status"] != compiled_loop.OK
+            if python_step:
                 state, work, halvings, its = _python_step(scheme, scene, state, dt, t_end, step + 1, n_steps,
                                                           max_halvings, work, halvings, record_every, recorded)
                 step += 1

@@ -17,7 +17,7 @@ from typing import Callable
 
 import numpy as np
 from scipy.interpolate import CubicSpline
-from scipy.special import ellipk, gamma
+from scipy.special import ellipj, ellipk, gamma
 
 from .simulate import simulate
 
@@ -48,6 +48,19 @@ def pendulum_period(length=0.5, v0=1.695, g=9.81):
     if k2 >= 1.0:
         raise ValueError(f"v0 = {v0} makes the pendulum go over the top: no period")
     return 4.0 * math.sqrt(length / g) * ellipk(k2)
+
+
+def pendulum_position(t, length=0.5, v0=1.695, g=9.81):
+    """Exact motion of the pendulum started at the bottom with horizontal speed v0, m.
+
+    sin(θ/2) = k sn(√(g/l) t | k²) with k = v0 / (2√(g l)) (k < 1: it swings, never over the top);
+    position l (sin θ, −cos θ), shape (len(t), 2).
+    """
+    k = v0 / (2.0 * math.sqrt(g * length))
+    if k >= 1.0:
+        raise ValueError(f"v0 = {v0} makes the pendulum go over the top: no swinging motion")
+    theta = 2.0 * np.arcsin(k * ellipj(math.sqrt(g / length) * np.asarray(t, dtype=float), k * k)[0])
+    return length * np.stack([np.sin(theta), -np.cos(theta)], axis=-1)
 
 
 def upward_crossings(t, x, xdot):

@@ -187,7 +187,7 @@ def test_full_disk_is_one_line_without_tmp_or_unlisted_frames(tmp_path, capsys, 
             return real(path, *a, **k)
         monkeypatch.setattr(meshio, "write", write)
     else:
-        real = output._atomic_write_text
+        real = output.write_text_atomically
 
         def atomic_write_text(path, text):
             if str(path).endswith(".vtu.series"):
@@ -195,7 +195,7 @@ def test_full_disk_is_one_line_without_tmp_or_unlisted_frames(tmp_path, capsys, 
                 if calls["n"] == 7:              # the empty series at the start, then the 6th frame's listing
                     raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(path))
             return real(path, text)
-        monkeypatch.setattr(output, "_atomic_write_text", atomic_write_text)
+        monkeypatch.setattr(output, "write_text_atomically", atomic_write_text)
     out = tmp_path / "full"
     rc, err = run_cli(capsys, ["run", "pendulum", "--t-end", "0.2", "--every", "1", "--out", str(out), "--quiet"])
     assert rc == 1 and "Traceback" not in err and "No space left on device" in err, err
@@ -214,13 +214,13 @@ def test_series_cost_is_linear_in_the_frames(tmp_path, monkeypatch):
     from skfem_flex import output
     monkeypatch.setattr(output, "LISTING_SECONDS", 1e9)          # the count rule alone, deterministic
     written = {"bytes": 0, "calls": 0}
-    real = output._atomic_write_text
+    real = output.write_text_atomically
 
     def counting(path, text):
         written["bytes"] += len(text)
         written["calls"] += 1
         return real(path, text)
-    monkeypatch.setattr(output, "_atomic_write_text", counting)
+    monkeypatch.setattr(output, "write_text_atomically", counting)
     scene = sf.scenes.pendulum()
     q, v = scene.initial_state()
     n = 1500

@@ -96,7 +96,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sps
 import scipy.sparse.linalg as spla
-from skfem import Basis, ElementLineP1, ElementLineP2, MeshLine
+from skfem import Basis, ElementLineP1, ElementLineP2
 
 from ..beam import ElementQuadrature, TimoshenkoBeam, gauss_line, line_mesh
 from ..forces import ForceElement
