@@ -228,6 +228,10 @@ class _Statics:
         return max(e_r, e_c)
 
 
+class _SingularStart(ValueError):
+    """The load path cannot start at the given state: no stiffness meets the loads there."""
+
+
 def _initial_multipliers(scene, q, v, a, t):
     """Least-squares λ: minimizes |F_free + Φ_q,freeᵀ λ| at the start state."""
     m = scene.n_constraints
@@ -307,10 +311,8 @@ def static_equilibrium(scene, t=0.0, q=None, steady=False, newton=None, max_step
         When the load path cannot be followed to the full load: the message names the
         load factor reached; ``exc.state`` holds the last equilibrium on the path.
     ValueError
-        On bad arguments, redundant constraints or a start that is a singular point of the
-        load path (a mechanism without stiffness at the load-free start, e.g. a pendulum at
-        rest in a position where the loads would turn it: give a start ``q`` near the rest
-        state).
+        On bad arguments, redundant constraints, or a scene without a rest state (settling
+        from a singular start does not come to rest, e.g. a body falling freely).
 
     Notes
     -----
@@ -320,6 +322,12 @@ def static_equilibrium(scene, t=0.0, q=None, steady=False, newton=None, max_step
     scaled norm |Δq|²/σ² + Δs² (σ = |∂q/∂s| at the start, the linear response to the
     full load), so a linear problem is solved in one step and stiff or large-rotation
     problems take as many steps as their curvature needs.
+
+    A start where no stiffness meets the loads (a mechanism at rest in a position where the
+    loads would turn it, e.g. a pendulum held horizontal) is a singular point of that path:
+    the scene is then first settled under its full loads by pseudo-transient continuation
+    (see ``_settle``), which descends to a stable rest state, and the path is finished from
+    there.
     """
     settings = NewtonSettings(max_iterations=15) if newton is None else newton
     if not isinstance(settings, NewtonSettings):
@@ -341,6 +349,14 @@ def static_equilibrium(scene, t=0.0, q=None, steady=False, newton=None, max_step
     a = np.zeros(scene.n)
     if steady:
         a[scene.prescribed_index] = scene.prescribed_state(t)[2]
+    if not steady:
+        try:
+            return _continuation(scene, q0, v, a, t, settings, int(max_steps), float(min_step), steady)
+        except _SingularStart as exc:
+            # no stiffness meets the loads at the start (a pendulum held horizontal): let the scene
+            # settle to rest under its loads first, then finish from there
+            q0 = _settle(scene, q0, t, settings, exc)
+            return _continuation(scene, q0, v, a, t, settings, int(max_steps), float(min_step), steady)
     for _ in range(4):                     # steady: the constraint velocities follow the solution
         state = _continuation(scene, q0, v, a, t, settings, int(max_steps), float(min_step), steady)
         if not steady or not scene.n_constraints:
@@ -352,6 +368,62 @@ def static_equilibrium(scene, t=0.0, q=None, steady=False, newton=None, max_step
     if steady:
         _check_steady(scene, state)
     return state
+
+
+def _settle(scene, q0, t, settings, why, max_steps=400):
+    r"""Bring a scene from a singular start towards rest under its full loads (pseudo-transient continuation).
+
+    Each step is one Newton step of the heavily damped motion
+    (M_ff/τ²) Δq + R(q + Δq) + Φ_qᵀ λ = 0, Φ = 0, with the pseudo-time step τ grown as the
+    residual falls (switched evolution relaxation, τ² ∝ 1/‖R‖), so that the iteration follows
+    the loads downhill while the residual is large and turns into Newton's method near rest
+    (Kelley & Keyes 1998). Descending, it finds a stable rest state, not an unstable one (the
+    inverted pendulum). Returns the coordinates reached once the scaled residual is small
+    enough for the load-path continuation to finish; raises ``ValueError`` (the original
+    refusal ``why``) if it does not get there.
+    """
+    v = a = np.zeros(scene.n)
+    sys_ = _Statics(scene, q0, v, a, t, settings)
+    nf, free = sys_.nf, scene.free_index
+    x = np.concatenate([q0[free], _initial_multipliers(scene, q0, v, a, t)])
+    res, jac, sc = sys_.evaluate(x)
+    mass = _sub(scene.mass_matrix(q0), free, free)
+    m_diag = np.abs(mass.diagonal() if sps.issparse(mass) else np.diag(mass))
+    # the first pseudo-step moves the most accelerated coordinate by a tenth of the scene's size
+    acc = _inf(res[:nf] / np.maximum(m_diag, _TINY))
+    tau2 = 0.1 * max(scene.length_scale, 1.0) / max(acc, _TINY)
+    norm = float(np.linalg.norm(res))
+    for _ in range(max_steps):
+        err = sys_.error(res, sc)
+        if err <= 1e3:                              # near rest: the continuation finishes in a step or two
+            return sys_.full_q(x)
+        damped = add_matrices(jac, _pad(mass / tau2, sys_.m))
+        try:
+            dx = -linear_solve(damped, res)
+        except np.linalg.LinAlgError:
+            break
+        if not np.all(np.isfinite(dx)):
+            break
+        x = x + dx
+        res, jac, sc = sys_.evaluate(x)
+        new_norm = float(np.linalg.norm(res))
+        if not math.isfinite(new_norm):
+            break
+        tau2 *= min(max(norm / max(new_norm, _TINY), 0.1), 100.0)
+        norm = new_norm
+    raise ValueError(f"{why}; settling under the loads from there did not come to rest within {max_steps} "
+                     f"pseudo-time steps") from None
+
+
+def _pad(mat, m):
+    """``mat`` bordered with m zero rows and columns (the multipliers carry no inertia)."""
+    if m == 0:
+        return mat
+    if sps.issparse(mat):
+        return sps.block_diag([mat, sps.csr_matrix((m, m))], format="csr")
+    out = np.zeros((mat.shape[0] + m, mat.shape[1] + m))
+    out[:mat.shape[0], :mat.shape[1]] = mat
+    return out
 
 
 def _check_steady(scene, state):
@@ -390,7 +462,7 @@ def _continuation(scene, q0, v, a, t, settings, max_steps, min_step, steady):
     try:
         dxds = -linear_solve(jac0, r0)
     except np.linalg.LinAlgError:
-        raise ValueError(f"{name}: the start state of {scene.name!r} is a singular point of the load path (a "
+        raise _SingularStart(f"{name}: the start state of {scene.name!r} is a singular point of the load path (a "
                          f"coordinate without stiffness or a redundant constraint at the load-free start); "
                          f"start nearer the rest state (q=...)") from None
     if not np.all(np.isfinite(dxds)):
@@ -399,7 +471,7 @@ def _continuation(scene, q0, v, a, t, settings, max_steps, min_step, steady):
     # the scene (or turns) means no stiffness meets the load at the start
     reach = 100.0 * max(scene.length_scale, 2.0 * np.pi)
     if _inf(dxds[:nf]) > reach:
-        raise ValueError(f"{name}: the start state of {scene.name!r} is (nearly) a singular point of the load "
+        raise _SingularStart(f"{name}: the start state of {scene.name!r} is (nearly) a singular point of the load "
                          f"path: the linear response to the loads moves a coordinate by {_inf(dxds[:nf]):.3g} "
                          f"(no stiffness meets the load there, e.g. a pendulum held horizontal); start nearer "
                          f"the rest state (q=...)")
@@ -783,7 +855,11 @@ def _solve_symmetric(sysm, n_modes, zero_tol):
         lam, vec = spla.eigsh(sps.csc_matrix(k), k=min(n_modes + 2, n - 1), M=sps.csc_matrix(m), sigma=shift,
                               which="LM")
     else:
-        lam, vec = sla.eigh(_dense(k), _dense(m), subset_by_index=[0, min(n_modes + 1, n - 1)])
+        try:
+            lam, vec = sla.eigh(_dense(k), _dense(m), subset_by_index=[0, min(n_modes + 1, n - 1)])
+        except np.linalg.LinAlgError:
+            raise ValueError("the mass matrix of the independent coordinates is not positive definite: a "
+                             "coordinate has no inertia (zero density or rotary inertia rhoI = 0?)") from None
     lam = np.where(np.abs(lam) <= zero_tol, 0.0, lam)
     s, shapes = [], []
     for li, phi in zip(lam, vec.T):
