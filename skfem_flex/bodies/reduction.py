@@ -12,9 +12,11 @@ Two bases, both computed once with scipy (shift-invert ``eigsh``, sparse LU):
 
 Green–Lagrange stiffening needs the axial (membrane) response that bending couples to; a basis
 of bending modes alone cannot shorten its chord and locks. :func:`reduce` therefore adds, for
-Green–Lagrange bodies, the static **modal derivatives** of the lowest modes
-θ_ij = −K_oo⁻¹ ∂²f/∂η_i∂η_j (the second-order static response, interfaces held), and on request
-the static response to a centrifugal load ρX.
+Green–Lagrange bodies, static **modal derivatives** θ_ij = −K_oo⁻¹ ∂²f/∂η_i∂η_j (the second-order
+static response, interfaces held) of every pair of a derivative set: the constraint modes of the
+interfaces other than the one carrying the frame (they hold the large bending of a link jointed
+at both ends), or, for a body held at its reference interface only, the lowest fixed-interface
+modes; and on request the static response to a centrifugal load ρX.
 
 The reduced body (:class:`~skfem_flex.bodies.modal.ModalBody`) needs a reference condition that
 takes the rigid motion out of the basis:
@@ -87,6 +89,16 @@ class CraigBampton:
     frequencies: np.ndarray
     interior: object
     solve_interior: object
+
+    def boundary_columns(self, model, name):
+        """(first column, count) of the constraint modes of interface ``name`` in :attr:`basis`."""
+        start = 0
+        for nm in self.interfaces:
+            size = model.interface(nm).P.shape[0]
+            if nm == name:
+                return start, size
+            start += size
+        raise ValueError(f"interface {name!r} is not among the Craig–Bampton interfaces {self.interfaces}")
 
     def reduced_matrices(self, model):
         """(ΦᵀKΦ, ΦᵀMΦ) of the whole basis (M with rotary inertia)."""
@@ -195,46 +207,97 @@ def free_modes(model, n_modes):
     return np.sqrt(np.clip(lam[3:], 0.0, None)), vec[:, 3:]
 
 
-def modal_derivatives(model, cb, n_modes):
-    """Static modal derivatives θ_ij = −K_oo⁻¹ ∂²f/∂η_i∂η_j (i ≤ j < n_modes) of the lowest fixed-interface modes.
+def modal_derivatives(model, cb, n_modes, interfaces=()):
+    """Static modal derivatives θ_ij = −K_oo⁻¹ ∂²f/∂η_i∂η_j of a set of Craig–Bampton basis vectors.
 
-    ∂²f is the second derivative of the Green–Lagrange internal force at d = 0
+    The set is the ``n_modes`` lowest fixed-interface modes followed by the constraint modes of the
+    named ``interfaces`` (all of each interface's DOFs); every pair i ≤ j of the set gives one
+    derivative. ∂²f is the second derivative of the Green–Lagrange internal force at d = 0
     (:meth:`~skfem_flex.bodies.stiffening.GreenLagrange.second_derivative`); the interfaces are held.
-    Returns (n_dofs, n(n+1)/2)."""
+    A constraint mode is a meaningful strain field only if the frame sits at an interface that it
+    holds (:func:`reduce` passes the interfaces other than the reference one).
+    Returns (n_dofs, ≤ k(k+1)/2) for a set of k vectors: a derivative whose displacement gradients
+    stay below 1e-8 of the product of its pair's is round-off of a vanishing second-order force (a
+    beam's axial constraint mode with itself) and is left out, since the basis scaling would blow
+    it up to a spurious field."""
     if model.strain is None:
         raise ValueError(f"model {model.name!r} has no Green–Lagrange strain data for modal derivatives")
-    phi = cb.basis[:, cb.n_boundary:cb.n_boundary + n_modes]
+    cols = list(range(cb.n_boundary, cb.n_boundary + n_modes))
+    for name in interfaces:
+        if name not in cb.interfaces:
+            raise ValueError(f"interface {name!r} is not among the Craig–Bampton interfaces {cb.interfaces}")
+        start, count = cb.boundary_columns(model, name)
+        cols.extend(range(start, start + count))
+    phi = cb.basis[:, cols]
+    G = model.strain.gradients
+
+    def size(d):                                      # largest displacement gradient of the field d
+        return max(np.abs(Gk @ d).max() for Gk in G)
+    sizes = [size(phi[:, i]) for i in range(phi.shape[1])]
     out = []
     for i in range(phi.shape[1]):
         for j in range(i, phi.shape[1]):
             f = model.strain.second_derivative(phi[:, i], phi[:, j])
-            out.append(cb.interior @ (-cb.solve_interior(cb.interior.T @ f)))
+            theta = cb.interior @ (-cb.solve_interior(cb.interior.T @ f))
+            if size(theta) > 1e-8 * sizes[i] * sizes[j]:
+                out.append(theta)
     return np.column_stack(out) if out else np.zeros((model.n_dofs, 0))
 
 
-def _reference(model, B, reference, interfaces):
-    """Remove the rigid motion from the columns of B; returns (projected B, reference name)."""
-    R = model.rigid_modes()
+def _reference_interface(model, reference, interfaces):
+    """The interface that carries the frame (None for mean axes) for a ``reference`` argument of :func:`reduce`."""
     if reference is None:
         reference = "interface" if any(model.interface(n).has_rotation for n in interfaces) else "mean-axes"
     if reference == "mean-axes":
-        MR = model.total_mass() @ R
-        return B - R @ np.linalg.solve(R.T @ MR, MR.T @ B), "mean-axes"
-    name = None
+        return None
     if reference == "interface":
         name = next((n for n in interfaces if model.interface(n).has_rotation), None)
         if name is None:
             raise ValueError(f"reference='interface' needs an interface with a rotation; body {model.name!r} has "
                              f"{list(interfaces)}")
-    elif isinstance(reference, str) and reference in model.interfaces:
-        name = reference
-        if not model.interface(name).has_rotation:
-            raise ValueError(f"interface {name!r} has no rotation and cannot carry the body frame")
-    else:
-        raise ValueError(f"reference must be 'interface', 'mean-axes' or an interface name of body {model.name!r} "
-                         f"{sorted(model.interfaces)}, got {reference!r}")
+        return name
+    if isinstance(reference, str) and reference in model.interfaces:
+        if not model.interface(reference).has_rotation:
+            raise ValueError(f"interface {reference!r} has no rotation and cannot carry the body frame")
+        return reference
+    raise ValueError(f"reference must be 'interface', 'mean-axes' or an interface name of body {model.name!r} "
+                     f"{sorted(model.interfaces)}, got {reference!r}")
+
+
+def _reference(model, B, reference, interfaces):
+    """Remove the rigid motion from the columns of B; returns (projected B, reference name)."""
+    R = model.rigid_modes()
+    name = _reference_interface(model, reference, interfaces)
+    if name is None:
+        MR = model.total_mass() @ R
+        return B - R @ np.linalg.solve(R.T @ MR, MR.T @ B), "mean-axes"
     P = model.interface(name).P
     return B - R @ np.linalg.solve(np.asarray(P @ R), np.asarray(P @ B)), f"interface {name}"
+
+
+def _derivative_interfaces(selection, strain, frame, names):
+    """Interfaces whose constraint modes join the modal-derivative set (see :func:`reduce`)."""
+    others = [n for n in names if n != frame]
+    if selection is None:
+        return others if strain == "green-lagrange" and frame in names else []
+    if selection is False:
+        return []
+    if frame not in names:
+        raise ValueError("interface_derivatives needs the body frame attached to one of the reduction's interfaces "
+                         f"(reference='interface' or the name of one of {names}); the frame is "
+                         f"{'mean axes' if frame is None else repr(frame)}")
+    if selection is True:
+        return others
+    if isinstance(selection, str):
+        selection = [selection]
+    chosen = list(selection)
+    for nm in chosen:
+        if nm not in others:
+            raise ValueError(f"interface_derivatives must name interfaces of the reduction other than the reference "
+                             f"{frame!r}: one of {others}, got {nm!r}")
+    if len(set(chosen)) != len(chosen):
+        raise ValueError(f"interface_derivatives names an interface twice: {chosen}")
+    return chosen
 
 
 def _modal_form(model, B, expected=None):
@@ -254,7 +317,7 @@ def _modal_form(model, B, expected=None):
 
 
 def reduce(model, n_modes, interfaces=None, method=None, reference=None, strain="green-lagrange",
-           n_derivatives=None, centrifugal=False, **body_kwargs):
+           n_derivatives=None, centrifugal=False, interface_derivatives=None, **body_kwargs):
     """A reduced :class:`~skfem_flex.bodies.modal.ModalBody` of ``model``.
 
     Parameters
@@ -269,9 +332,18 @@ def reduce(model, n_modes, interfaces=None, method=None, reference=None, strain=
     reference : {"interface", "mean-axes"} or interface name, optional
         Reference condition (module docstring); default "interface" if an interface has a rotation.
     strain : {"green-lagrange", "linear"}
+    interface_derivatives : bool or sequence of str, optional
+        Interfaces whose constraint modes join the modal-derivative set (Craig–Bampton with the frame
+        at one of the ``interfaces`` only). Default: for Green–Lagrange bodies every interface other
+        than the reference one, for linear ones none; ``True``/``False``: all of those / none.
     n_derivatives : int, optional
-        Number of lowest modes whose static modal derivatives join the basis (Craig–Bampton only;
-        default: all n_modes for Green–Lagrange bodies, 0 for linear ones).
+        Number of lowest fixed-interface modes in the modal-derivative set (Craig–Bampton only).
+        Default: for Green–Lagrange bodies all n_modes if the set has no constraint modes (a body held
+        at its reference interface only, e.g. a clamped blade), else 0; 0 for linear bodies.
+        The derivatives of every pair of the set join the basis, k(k + 1)/2 for a set of k: a link
+        with joints at both ends (3 modes, frame at one end) gets the 6 of the other end's three
+        constraint modes, 12 coordinates in all; ``interface_derivatives=False`` gives the 6 of the
+        3 modes instead; ``n_derivatives=3`` with the defaults all 21 (docs/flexible_bodies.md §4).
     centrifugal : bool
         Add the static response to the centrifugal load ρX (interfaces held; Craig–Bampton only).
     **body_kwargs
@@ -281,7 +353,8 @@ def reduce(model, n_modes, interfaces=None, method=None, reference=None, strain=
     ------
     ValueError
         n_modes larger than the available DOFs, unknown interfaces or method, a basis that cannot
-        hold the body (see :func:`craig_bampton`).
+        hold the body (see :func:`craig_bampton`), interface derivatives without the frame at an
+        interface or naming the reference interface.
     """
     if not isinstance(model, ElasticModel):
         raise ValueError(f"reduce needs an ElasticModel, got {model!r}")
@@ -292,16 +365,19 @@ def reduce(model, n_modes, interfaces=None, method=None, reference=None, strain=
     if method == "craig-bampton":
         cb = craig_bampton(model, names, n_modes)
         parts = [cb.basis]
-        nd = (n_modes if strain == "green-lagrange" else 0) if n_derivatives is None else n_derivatives
-        nd = _count("n_derivatives", nd, 0, n_modes)
-        if nd:
-            parts.append(modal_derivatives(model, cb, nd))
+        frame = _reference_interface(model, reference, names)
+        itf = _derivative_interfaces(interface_derivatives, strain, frame, names)
+        if n_derivatives is None:
+            n_derivatives = n_modes if strain == "green-lagrange" and not itf else 0
+        nd = _count("n_derivatives", n_derivatives, 0, n_modes)
+        if nd or itf:
+            parts.append(modal_derivatives(model, cb, nd, itf))
         if centrifugal:
             f = model.mass @ model.position
             parts.append((cb.interior @ cb.solve_interior(cb.interior.T @ f))[:, None])
         B = np.hstack(parts)
     elif method == "free":
-        if n_derivatives or centrifugal:
+        if n_derivatives or interface_derivatives or centrifugal:
             raise ValueError("modal derivatives and centrifugal static modes need method='craig-bampton'")
         _, B = free_modes(model, n_modes)
     else:

@@ -10,9 +10,11 @@
 ``"plane-stress-modal"``
     The strip reduced like the modal beam.
 
-Reduced Green–Lagrange links carry n_modes fixed-interface modes, their static modal derivatives
-and the tip interface's three constraint modes: 3 + n_modes + n_modes(n_modes + 1)/2 coordinates
-(12 for n_modes = 3); linear ones 3 + n_modes.
+Reduced Green–Lagrange links carry the tip interface's three constraint modes, n_modes
+fixed-interface modes and the six static modal derivatives of those constraint modes (the frame
+sits at the root; docs/flexible_bodies.md §4): 3 + n_modes + 6 coordinates, 12 for n_modes = 3
+(the beam drops the vanishing derivative of its axial constraint mode with itself, and dependent
+ones); linear ones 3 + n_modes.
 """
 from __future__ import annotations
 
