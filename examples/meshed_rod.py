@@ -3,8 +3,8 @@
 The rod is ``examples/meshes/conrod.msh`` (made by ``examples/meshes/make_conrod.py``: a planar
 rod with a big-end and a small-end hole, 8 mm thick steel), read by meshio; the node sets around
 the holes (physical groups ``big_end``, ``small_end``) are the interfaces where the crank pin and
-the wrist pin attach. The rod is reduced to 3 fixed-interface modes, their modal derivatives and
-the small end's constraint modes, and runs in Simeon's slider–crank (crank 0.15 m at 150 rad/s).
+the wrist pin attach. The rod is reduced to 3 fixed-interface modes, the small end's constraint
+modes and the modal derivatives of those constraint modes (12 coordinates), and runs in Simeon's slider–crank (crank 0.15 m at 150 rad/s).
 The run writes a ParaView series (``meshed_rod.pvd``) whose cells carry σxx, σyy, σxy and von Mises
 (Pa) in the rod, prints the peak von Mises stress and the energy balance, and draws the rod's von
 Mises field at the instant of peak stress (``meshed_rod.png``: the mechanism in the global frame,
