@@ -1,6 +1,7 @@
-r"""Compiled (Numba) energy-momentum time loop for a single floating-frame beam.
+r"""Compiled (Numba) energy-momentum time loop for a single floating-frame body.
 
-For the scenes the benchmark is about — one :class:`~skfem_flex.bodies.FloatingBeam` whose
+For the scenes the benchmark is about — one floating-frame body (a
+:class:`~skfem_flex.bodies.FloatingBeam` or a reduced :class:`~skfem_flex.bodies.ModalBody`) whose
 reference coordinates follow prescribed motion laws (the spin-up, the rotating beam) — the
 Python per-step overhead of :class:`~skfem_flex.integrators.EnergyMomentum` (Newton loop,
 scale computations, small dense solves) costs far more than the arithmetic. This module runs
@@ -9,7 +10,8 @@ many steps of the *same* scheme inside one compiled function:
 * unknowns Δq of the free coordinates, q1 = q0 + Δq, v1 = 2Δq/Δt − v0, prescribed Δq from
   the laws' positions at t1 (evaluated in Python for the chunk's step times);
 * residual r = p(q1, v1) − p(q0, v0) − Δt g_kin + Δt g_pot (the fused body kernel
-  :func:`skfem_flex.bodies.floating_kernel.energy_momentum_terms`);
+  :func:`skfem_flex.bodies.floating_kernel.energy_momentum_terms` on the arrays the body hands
+  out through its ``compiled_kernel_data()``);
 * convergence err = max(‖r_F‖∞ / (rtol · scale), |v̄_F · r_F| / (etol · E_scale)) ≤ 1, with the
   round-off-floor acceptance, the update-below-round-off and stagnation exits and the line
   search of :meth:`Integrator._newton`, initial guess Δq = Δt v0;
@@ -46,7 +48,7 @@ __all__ = ["eligible", "run_chunk", "chunk_steps", "jit_cache_cold", "COMPILE_NO
            "NOT_CONVERGED", "SINGULAR"]
 
 #: the line ``simulate(..., progress=True)`` prints on stderr before a first run compiles the kernels
-COMPILE_NOTICE = ("skfem-flex: compiling the floating-frame beam kernels (Numba); this happens once per "
+COMPILE_NOTICE = ("skfem-flex: compiling the floating-frame kernels (Numba); this happens once per "
                   "machine and takes about 30-60 s, later runs load them from the cache")
 
 _EPS = np.finfo(float).eps
@@ -63,19 +65,28 @@ def eligible(scene, scheme):
 
     Eligible: the :class:`~skfem_flex.integrators.EnergyMomentum` class itself (not a
     subclass, which may change the step) on a plain :class:`~skfem_flex.scene.Scene` of one
-    :class:`~skfem_flex.bodies.FloatingBeam`, no constraints, no force elements (loads,
-    gravity, springs) and no incremental-rotation coordinates; any of its coordinates may be
-    prescribed. Small scenes (``scene.dense``) solve dense; larger ones only if their free-free
-    Newton block is banded (bandwidth l + u ≤ 64, as the Python path's banded LAPACK solve:
-    e.g. the spin-up, whose frame coordinates are prescribed), which is solved as a band.
+    body that hands out compiled kernel data (``body.compiled_kernel_data()`` not None: a
+    :class:`~skfem_flex.bodies.FloatingBeam` or a :class:`~skfem_flex.bodies.ModalBody`), no
+    constraints, no force elements (loads, gravity, springs) and no incremental-rotation
+    coordinates; any of its coordinates may be prescribed. Small scenes (``scene.dense``) solve
+    dense; larger ones only if their free-free Newton block is banded (bandwidth l + u ≤ 64, as
+    the Python path's banded LAPACK solve: e.g. the spin-up, whose frame coordinates are
+    prescribed), which is solved as a band.
     """
-    if type(scheme) is not EnergyMomentum or type(scene) is not Scene:
+    if type(scheme) is not EnergyMomentum:
         return False
-    if len(scene.bodies) != 1 or not isinstance(scene.bodies[0], FloatingBeam):
-        return False
+    return _kernel_data(scene) is not None and _plan(scene) is not None
+
+
+def _kernel_data(scene):
+    """The compiled kernel data of the scene's one body if the scene has the form the loop runs
+    (plain Scene, one body with kernel data, no constraints, forces or incremental rotations), else None."""
+    if type(scene) is not Scene or len(scene.bodies) != 1:
+        return None
     if scene.n_constraints or scene.forces or len(getattr(scene, "cayley_index", ())):
-        return False
-    return hasattr(scene.bodies[0], "_kd") and _plan(scene) is not None
+        return None
+    get = getattr(scene.bodies[0], "compiled_kernel_data", None)
+    return None if get is None else get()
 
 
 def jit_cache_cold(scene):
@@ -83,10 +94,13 @@ def jit_cache_cold(scene):
 
     The kernels are compiled with ``cache=True`` into ``__pycache__`` next to their source: a
     kernel is cold when this process has not compiled it and its cache index is missing or
-    stale (the index records the stamp of `jit_cache.source_stamp`). Only scenes with a
-    :class:`~skfem_flex.bodies.FloatingBeam` run these kernels.
+    stale (the index records the stamp of `jit_cache.source_stamp`). Scenes with a
+    :class:`~skfem_flex.bodies.FloatingBeam` run these kernels on every path; other bodies with
+    compiled kernel data (a :class:`~skfem_flex.bodies.ModalBody`) only in the compiled loop, i.e. in
+    scenes of the form :func:`eligible` accepts.
     """
-    if not any(isinstance(b, FloatingBeam) for b in getattr(scene, "bodies", ())):
+    if not (any(isinstance(b, FloatingBeam) for b in getattr(scene, "bodies", ()))
+            or _kernel_data(scene) is not None):
         return False
     for kernel in (_run, energy_momentum_terms, momentum, potential_energy):
         if kernel.signatures:
@@ -108,10 +122,10 @@ def _plan(scene):
     sub- and ku superdiagonals, column-major (LAPACK gbsv, :func:`_solve`); −1 for entries outside the block.
     None if the scene is too large for dense and its block is not banded. Built once per scene."""
     body = scene.bodies[0]
+    kd, n = body.compiled_kernel_data(), body.n_dofs
     hit = _PLANS.get(scene)
-    if hit is not None and hit[0] is body._kd:
+    if hit is not None and hit[0] is kd:
         return hit[1]
-    kd, n = body._kd, body.n_dofs
     free = scene.free_index
     nfr = free.size
     fpos = -np.ones(n, dtype=np.int64)
@@ -292,7 +306,7 @@ def _run(kd, q, v, t, hs, qp, pres, free, target, mat_size, kl, ku, rtol, etol, 
     rec_work = np.empty(n_rec)
     rec_its = np.empty(n_rec, dtype=np.int64)
     rec_reac = np.empty((n_rec, npr))
-    # T, V, p_R (2) and L about the origin of the recorded states, as FloatingBeam's kinetic_energy,
+    # T, V, p_R (2) and L about the origin of the recorded states, as the body's kinetic_energy,
     # potential_energy, linear_momentum and angular_momentum (R × p_R + p_θ) give them
     rec_derived = np.empty((n_rec, 5))
     reaction = np.zeros(npr)
@@ -380,9 +394,10 @@ def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, rec
     laws = [p.law.position for p in scene.prescribed]
     qp = np.array([[float(f(tk)) for f in laws] for tk in times], dtype=float).reshape(n_chunk, len(laws))
     target, size, kl, ku = _plan(scene)
-    out = _run(body._kd, np.ascontiguousarray(state.q, dtype=float), np.ascontiguousarray(state.v, dtype=float),
-               float(state.t), hs, qp, scene.prescribed_index.astype(np.int64), scene.free_index.astype(np.int64),
-               target, size, kl, ku, float(s.rtol), float(s.etol), int(s.max_iterations), bool(s.line_search), float(work),
+    out = _run(body.compiled_kernel_data(), np.ascontiguousarray(state.q, dtype=float),
+               np.ascontiguousarray(state.v, dtype=float), float(state.t), hs, qp,
+               scene.prescribed_index.astype(np.int64), scene.free_index.astype(np.int64), target, size, kl, ku,
+               float(s.rtol), float(s.etol), int(s.max_iterations), bool(s.line_search), float(work),
                int(first_step), int(record_every), int(n_steps))
     (status, done, t, q, v, _, reaction, work, its_total, n_rec, rec_t, rec_q, rec_v, rec_work, rec_its,
      rec_reac, rec_derived) = out

@@ -340,6 +340,14 @@ class FloatingFrame(Body):
 
 
     # ================================================================ fused evaluation
+    def compiled_kernel_data(self):
+        """The packed arrays (:class:`~skfem_flex.bodies.floating_kernel.FloatingKernelData`) on which the
+        compiled floating-frame kernels evaluate this body, or None if it has none (subclasses provide them).
+
+        What :mod:`skfem_flex.compiled_loop` asks a body for; the kernels' reference is the numpy
+        contract methods of the body."""
+        return None
+
     def energy_momentum_terms(self, q0, q1, v0, v1, dt):
         """Everything one Newton evaluation of the energy-momentum scheme needs, in one call.
 

@@ -457,6 +457,10 @@ class FloatingBeam(FloatingFrame):
                             self._Sbar, self._c, self._k0n, blocks, (ptr, idx), maps, self._dNt, loc,
                             self._wq, map_loc)
 
+    def compiled_kernel_data(self):
+        """The packed arrays of the compiled kernels (:mod:`.floating_kernel`), built once at construction."""
+        return self._kd
+
     # ================================================================ kinetic
     def momentum(self, q, v):
         """p = M(q) v (compiled kernel :func:`.floating_kernel.momentum`; cached for the last (q, v))."""

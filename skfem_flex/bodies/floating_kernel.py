@@ -1,6 +1,7 @@
-r"""Compiled (Numba) arithmetic of :class:`~skfem_flex.bodies.floating.FloatingBeam`.
+r"""Compiled (Numba) arithmetic of the floating-frame bodies (:class:`~skfem_flex.bodies.floating.FloatingBeam`,
+:class:`~skfem_flex.bodies.modal.ModalBody`).
 
-The energy-momentum scheme asks a floating-frame beam, at every Newton evaluation, for
+The energy-momentum scheme asks a floating-frame body, at every Newton evaluation, for
 
 .. math::
 
@@ -9,18 +10,24 @@ The energy-momentum scheme asks a floating-frame beam, at every Newton evaluatio
         - 2\,\partial_{v_1} g_{kin} + \Delta t\,\partial_{q_1} g_{pot},\quad
     \text{floor} = \Delta t\,|\partial_{q_1} g_{pot}|\,(|q_0| + |q_1|)
 
-(formulas in :meth:`FloatingBeam.kinetic_discrete_gradient`,
-:meth:`FloatingBeam.potential_discrete_gradient` and the module docstring of
+(formulas in :meth:`FloatingFrame.kinetic_discrete_gradient <skfem_flex.bodies.ffr.FloatingFrame>`,
+the bodies' ``potential_discrete_gradient`` and the module docstrings of ``ffr.py`` and
 ``floating.py``). The numpy implementation spends most of its time in the Python overhead
 of many small array operations; the kernels here do the same arithmetic in loops over
-plain arrays that :class:`FloatingBeam` precomputes once (:func:`pack`):
+plain arrays that the body precomputes once (:func:`pack`, handed out by the body's
+``compiled_kernel_data()``):
 
 * the constant elastic blocks M_A, H, M_ff = M_A + M_I and K as CSR arrays,
-* the inertia shape integrals m, S_0, I_00 + J_r, S̄, c, k_0 + n_φ,
-* the quadrature arrays of the axial (Green–Lagrange) kernel: dN/dx per element and point,
-  EA dx per point, the local-to-elastic DOF map (−1 = eliminated by the reference condition),
+* the inertia invariants m, S_0, I_0, S̄, c, k_0n (table in ``ffr.py``),
+* the strain energy beyond ½ q_fᵀ K q_f: for a FloatingBeam with Green–Lagrange strain the
+  quadrature arrays of the axial kernel (dN/dx per element and point, EA dx per point, the
+  local-to-elastic DOF map, −1 = eliminated by the reference condition); for a ModalBody with
+  Green–Lagrange strain the cubic and quartic tensors K3, K4 of its quartic energy, folded by
+  their symmetries (:func:`.modal_kernel.pack_quartic`); empty arrays where they do not apply,
 * the CSR pattern of the body matrix (the full n × n pattern for dense bodies, the fixed
   sparse pattern for large ones) and the positions in it of every term.
+
+The kinetic terms depend only on the invariants, so one kernel serves every floating-frame body.
 
 The tangent is written as the data array of that pattern, so one kernel serves both the
 dense (reshaped to n × n) and the sparse (``csr_matrix``) return types.
@@ -36,16 +43,19 @@ from collections import namedtuple
 import numpy as np
 import numba
 
+from .modal_kernel import quartic_discrete_gradient, quartic_energy
+
 __all__ = ["FloatingKernelData", "pack", "energy_momentum_terms", "momentum", "potential_energy"]
 
-#: the arrays a FloatingBeam hands its kernels (built once by :func:`pack`)
+#: the arrays a floating-frame body hands its kernels (built once by :func:`pack`)
 FloatingKernelData = namedtuple("FloatingKernelData", [
     "n", "nf", "green", "mass", "s0x", "s0y", "i0",
     "sbar", "c", "k0n",
     "ma_ptr", "ma_idx", "ma_dat", "h_ptr", "h_idx", "h_dat",
     "mff_ptr", "mff_idx", "mff_dat", "k_ptr", "k_idx", "k_dat",
     "pat_ptr", "pat_idx", "map_top", "map_left", "map_ma", "map_h", "map_mff", "map_k",
-    "dn", "loc", "wq", "map_loc"])
+    "dn", "loc", "wq", "map_loc",
+    "quartic", "k3p", "k3q", "k3a", "k3b", "k4a", "k4s", "k4w", "map_ee"])
 
 
 def _csr_parts(mat):
@@ -57,15 +67,17 @@ def _csr_parts(mat):
     return x.indptr.astype(np.int64), x.indices.astype(np.int64), x.data.astype(float)
 
 
-def pack(n, nf, green, mass, s0, i0, sbar, c, k0n, blocks, pattern, maps, dn, loc, wq, map_loc):
-    """Build :class:`FloatingKernelData` from a FloatingBeam's precomputed operators.
+def pack(n, nf, green, mass, s0, i0, sbar, c, k0n, blocks, pattern, maps, dn=None, loc=None, wq=None, map_loc=None,
+         quartic=None):
+    """Build :class:`FloatingKernelData` from a floating-frame body's precomputed operators.
 
     Parameters
     ----------
     n, nf : int
         Body coordinates (3 + nf) and elastic coordinates.
     green : bool
-        Green–Lagrange axial strain (False: linear strain, the axial part is in K).
+        Green–Lagrange axial strain of a FloatingBeam (``dn, loc, wq, map_loc``; False: none, or
+        linear strain, whose axial part is in K).
     mass, s0, i0 : float, (2,), float
         m = ∫ρA (kg), S_0 = ∫ρA x_0 (kg m), I_00 + J_r (kg m²).
     sbar, c, k0n : (2, nf), (nf,), (nf,)
@@ -76,27 +88,46 @@ def pack(n, nf, green, mass, s0, i0, sbar, c, k0n, blocks, pattern, maps, dn, lo
         CSR pattern of the n × n body matrix.
     maps : dict
         Positions in the pattern data: ``"top"`` (3 n, rows 0–2 row-major), ``"left"``
-        (nf × 3 row-major, rows 3…, columns 0–2), and for each block key the positions of
-        the entries of its canonical CSR form (:func:`_csr_parts`).
-    dn : (n_el, n_qp, n_l)
+        (nf × 3 row-major, rows 3…, columns 0–2), for each block key the positions of
+        the entries of its canonical CSR form (:func:`_csr_parts`), and with ``quartic``
+        ``"ee"`` (nf × nf row-major: the whole elastic block).
+    dn : (n_el, n_qp, n_l), optional
         dN/dx of the local shape functions at the axial quadrature points, 1/m.
-    loc : (n_el, 2 n_l) int
+    loc : (n_el, 2 n_l) int, optional
         Elastic index of the local (u, w) DOFs, −1 where the reference condition eliminates it.
-    wq : (n_el n_qp,)
+    wq : (n_el n_qp,), optional
         EA dx per quadrature point, N m.
-    map_loc : (n_el, 2 n_l, 2 n_l) int
+    map_loc : (n_el, 2 n_l, 2 n_l) int, optional
         Position in the pattern data of each entry of the element axial tangent (−1: dropped).
+    quartic : tuple of seven arrays, optional
+        The cubic and quartic tensors of a :class:`~skfem_flex.bodies.stiffening.QuarticEnergy` on the
+        elastic coordinates, as :func:`.modal_kernel.pack_quartic` arranges them.
     """
     parts = {k: _csr_parts(blocks[k]) for k in ("MA", "H", "Mff", "K")}
     i64 = lambda a: np.ascontiguousarray(a, dtype=np.int64)      # noqa: E731
     f64 = lambda a: np.ascontiguousarray(a, dtype=float)         # noqa: E731
+    if green and dn is None:
+        raise ValueError("pack: green=True needs the axial quadrature arrays dn, loc, wq, map_loc")
+    if dn is None:                  # empty arrays of the same types: one compiled kernel serves every body
+        dn, loc, wq, map_loc = (np.zeros((0, 0, 0)), np.zeros((0, 0), np.int64), np.zeros(0),
+                                np.zeros((0, 0, 0), np.int64))
+    if quartic is None:
+        quartic_mats, map_ee = (np.zeros((0, 0)),) * 7, np.zeros(0, np.int64)
+    else:
+        quartic_mats, map_ee = tuple(quartic), maps["ee"]
+        ns, nw = nf * (nf + 1) // 2, nf * (nf - 1) // 2
+        shapes = [(nf, ns)] * 2 + [(nf * nf, nf)] * 2 + [(ns, ns)] * 2 + [(nw, nw)]
+        if [np.shape(a) for a in quartic_mats] != shapes or np.size(map_ee) != nf * nf:
+            raise ValueError(f"pack: quartic matrices of shapes {[np.shape(a) for a in quartic_mats]} (and "
+                             f"{np.size(map_ee)} block positions) do not fit {nf} elastic coordinates")
     return FloatingKernelData(
         int(n), int(nf), bool(green), float(mass), float(s0[0]), float(s0[1]), float(i0),
         f64(sbar), f64(c), f64(k0n),
         *parts["MA"], *parts["H"], *parts["Mff"], *parts["K"],
         i64(pattern[0]), i64(pattern[1]), i64(maps["top"]), i64(maps["left"]),
         i64(maps["MA"]), i64(maps["H"]), i64(maps["Mff"]), i64(maps["K"]),
-        f64(dn), i64(loc), f64(wq), i64(map_loc))
+        f64(dn), i64(loc), f64(wq), i64(map_loc),
+        quartic is not None, *(f64(a) for a in quartic_mats), i64(map_ee))
 
 
 @numba.njit(cache=True)
@@ -180,7 +211,8 @@ def _axial_strains(kd, q):
 
 @numba.njit(cache=True)
 def potential_energy(kd, q):
-    """Strain energy V = ½ q_fᵀ K q_f + ½ Σ EA dx ε² (Green–Lagrange part only if ``kd.green``), J."""
+    """Strain energy V = ½ q_fᵀ K q_f + ½ Σ EA dx ε² (beam's Green–Lagrange part, only if ``kd.green``)
+    + the cubic and quartic terms of a modal body's quartic energy (only if ``kd.quartic``), J."""
     kq = _matvec(kd.k_ptr, kd.k_idx, kd.k_dat, q, 3)
     e = 0.0
     for i in range(kd.nf):
@@ -192,12 +224,15 @@ def potential_energy(kd, q):
         for k in range(eps.size):
             s += kd.wq[k] * eps[k] * eps[k]
         e += 0.5 * s
+    if kd.quartic:
+        e += quartic_energy(kd.k3p, kd.k4a, q, 3)
     return e
 
 
 @numba.njit(cache=True)
 def energy_momentum_terms(kd, q0, q1, v0, v1, dt):
-    """Compiled twin of :meth:`FloatingBeam.energy_momentum_terms` (same equations).
+    """Compiled twin of :meth:`FloatingFrame.energy_momentum_terms` (same equations; FloatingBeam's
+    method is this kernel, a ModalBody's numpy method is its reference).
 
     Returns
     -------
@@ -237,8 +272,8 @@ def energy_momentum_terms(kd, q0, q1, v0, v1, dt):
     J = kd.i0
     for i in range(nf):
         J += q1[3 + i] * (kd.c[i] + (kd.c[i] + maq1[i]))
-    # at the midpoint: s̄_m (its y part without S_0, as the numpy code), c + M_A q_f,m
-    smx, smy = kd.s0x + sqmx, sqmy
+    # at the midpoint: s̄_m = S_0 + S̄ q_f,m, c + M_A q_f,m
+    smx, smy = kd.s0x + sqmx, kd.s0y + sqmy
     # ---------------------------------------------------------------- kinetic discrete gradient
     d = q1[2] - q0[2]
     tm = 0.5 * (q0[2] + q1[2])
@@ -353,6 +388,12 @@ def energy_momentum_terms(kd, q0, q1, v0, v1, dt):
                         pos = mloc[e, ia, ib]
                         if pos >= 0:
                             hv[pos] += coef[ia // nl, ib // nl] * (dn[e, kq, ia % nl] * dn[e, kq, ib % nl])
+    if kd.quartic:                                             # modal body: cubic and quartic energy terms
+        g4, dg4 = quartic_discrete_gradient(kd.k3p, kd.k3q, kd.k3a, kd.k3b, kd.k4a, kd.k4s, kd.k4w, q0, q1, 3)
+        for i in range(nf):
+            gp[3 + i] += g4[i]
+            for j in range(nf):
+                hv[kd.map_ee[i * nf + j]] += dg4[i, j]
     floor = np.zeros(n)
     ptr, idx = kd.pat_ptr, kd.pat_idx
     for i in range(n):

@@ -24,8 +24,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sps
 
-from .base import BodyGeometry, check_finite_vector
+from .base import DENSE_LIMIT, BodyGeometry, check_finite_vector
+from . import floating_kernel as fk
 from .ffr import FloatingFrame, FramePoint
+from .modal_kernel import pack_quartic
 from .rigid import E_MATRIX as E2, rotation as _rot
 from .stiffening import QuarticEnergy
 
@@ -214,6 +216,7 @@ class ModalBody(FloatingFrame):
                              f"eigenvalue {ev[0]:.3g} of {ev[-1]:.3g}); apply a reference condition")
         self.energy = model.strain.reduced(Phi, K) if strain == "green-lagrange" else QuarticEnergy(K)
         self._ffd = dict(MA=self._MA, H=self._H, Mff=self._Mff, K=K)
+        self._kd = None                                  # packed on first request (compiled_kernel_data)
         # modal stress fields: cell-mean displacement gradients of every basis vector, (n_cells, 4, m)
         self._modal_gradients = (None if model.stress_operators is None
                                  else np.stack([G @ Phi for G in model.stress_operators], axis=1))
@@ -259,6 +262,32 @@ class ModalBody(FloatingFrame):
         ge, dge = self.energy.discrete_gradient(np.asarray(q0)[3:], np.asarray(q1)[3:])
         g[3:] = ge
         return g, self._compose(None, None, extra=dge)
+
+    # ================================================================ compiled kernels
+    def compiled_kernel_data(self):
+        """The packed arrays on which the compiled floating-frame kernels (:mod:`.floating_kernel`, with the
+        quartic energy of :mod:`.modal_kernel`) evaluate this body; built on the first call. None above
+        ``DENSE_LIMIT`` coordinates (an unreduced body: its dense n × n tangent is no band).
+
+        The tangent goes into the full n × n pattern (the data reshapes to the dense matrix). This
+        body's own methods stay in numpy: they are the kernels' reference (tests/test_modal_kernel.py),
+        and the compiled energy-momentum loop (:mod:`skfem_flex.compiled_loop`) uses the kernels."""
+        if self.n_dofs > DENSE_LIMIT:
+            return None
+        if self._kd is None:
+            n, nf = self.n_dofs, self.n_elastic
+            ptr, idx = np.arange(0, n * n + 1, n), np.tile(np.arange(n), n)
+            r, c = np.divmod(np.arange(nf * 3), 3)
+            maps = {"top": np.arange(3 * n), "left": (r + 3) * n + c}
+            for key, mat in self._ffd.items():           # MA, H, Mff, K: their canonical CSR entries
+                ptr_b, idx_b, _ = fk._csr_parts(mat)
+                maps[key] = (np.repeat(np.arange(nf), np.diff(ptr_b)) + 3) * n + idx_b + 3
+            r, c = np.divmod(np.arange(nf * nf), nf)
+            maps["ee"] = (r + 3) * n + c + 3
+            quartic = None if self.energy.linear else pack_quartic(self.energy.K3, self.energy.K4)
+            self._kd = fk.pack(n, nf, False, self.mass_total, self._S0, self._I0, self._Sbar, self._c, self._k0n,
+                               self._ffd, (ptr, idx), maps, quartic=quartic)
+        return self._kd
 
     # ================================================================ points and output
     def point(self, locator=None):
