@@ -144,7 +144,7 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
         False: only check it. Either way redundant constraints raise.
     compiled : bool, optional
         Run eligible scenes through the compiled energy-momentum loop
-        (:mod:`skfem_flex.compiled_loop`: one floating-frame beam, prescribed
+        (:mod:`skfem_flex.compiled_loop`: one floating-frame body (beam or reduced), prescribed
         coordinates, no constraints or force elements, a dense or banded Newton
         block) — the same
         scheme and Newton rules, so the same trajectory to round-off, many times

@@ -712,7 +712,8 @@ class FloatingBeam(FloatingFrame):
 
         ``n_modes`` fixed-interface (Craig–Bampton) or free-interface modes; interfaces ``"root"``,
         ``"tip"``; further keywords go to :func:`~skfem_flex.bodies.reduction.reduce` (``method``,
-        ``reference``, ``strain`` (default: this beam's), ``n_derivatives``, ``centrifugal``, ``name``).
+        ``reference``, ``strain`` (default: this beam's), ``n_derivatives``, ``interface_derivatives``,
+        ``centrifugal``, ``name``).
         The beam's elastic initial state is not carried over (η starts at 0)."""
         from .reduction import reduce
         state = dict(position=self.q0[:2], angle=self.q0[2], velocity=self.v0[:2], angular_velocity=self.v0[2],
