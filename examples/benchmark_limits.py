@@ -1,7 +1,8 @@
 """Benchmark of the limits: memory against mesh size, and VTK series cost against frame count.
 
-* **memory**: one 1 ms step of the spin-up beam (floating frame, compiled loop) and of the
-  pinned flexible pendulum (Python path, constraint) at 1 000, 10 000 and 100 000 elements, each in
+* **memory**: one 1 ms step of the spin-up beam (floating frame, compiled loop), the pinned
+  flexible pendulum (Python path, constraint), the rigid–flexible double pendulum and the
+  slider–crank (joints between bodies) at 1 000, 10 000 and 100 000 elements, each in
   a fresh subprocess that reports its own peak resident set size (``ru_maxrss``); memory must grow
   linearly with the mesh (no dense n × n anywhere);
 * **series**: writing N = 500, 1 000, 2 000 and 4 000 frames of the pendulum with
@@ -35,7 +36,7 @@ print(json.dumps({"n_dofs": scene.n, "build_s": built - start, "step_s": time.pe
 """
 
 
-def memory(sizes, scenes=("spin_up_beam", "flexible_pendulum")):
+def memory(sizes, scenes=("spin_up_beam", "flexible_pendulum", "double_pendulum", "slider_crank")):
     """[(scene, elements, coordinates, build s, step s, peak RSS MB)], one subprocess each."""
     rows = []
     for name in scenes:

@@ -214,6 +214,84 @@ def _banded_plan(a):
     return lo, up, (up - off) * n + a.indices          # ab[u + i − j, j] = a[i, j]
 
 
+#: most coordinates a bordered band solve puts in its dense border (frame coordinates, multipliers)
+_MAX_BORDER = 128
+
+
+def _bordered_band_plan(a):
+    """Plan of a solve of the CSR matrix ``a`` as a band with a small dense border, or None.
+
+    Floating-frame bodies and joints make Newton matrices that are banded except for a few
+    rows and columns (a body's frame coordinates couple to all its elastic ones; a joint's
+    multiplier to a few far-apart coordinates). Those coordinates, the ones with an entry
+    farther than half the band limit from the diagonal, form the border B; the rest, the
+    interior I, keep their order and must then be banded. The plan holds the gathers that
+    lay out A_II in LAPACK band storage, A_IB and A_BB dense and A_BI sparse.
+    """
+    n = a.shape[0]
+    if a.shape[1] != n or n == 0:
+        return None
+    rows = np.repeat(np.arange(n), np.diff(a.indptr))
+    cols = a.indices
+    far = np.abs(rows - cols) > _MAX_BANDWIDTH // 2
+    fr, fc = rows[far], cols[far]
+    # coordinates without a diagonal entry (Lagrange multipliers) cannot be pivots of the band
+    border = a.diagonal() == 0.0
+    # the fewest coordinates that cover every far entry (greedy: the one in most far entries first;
+    # a frame coordinate's column is far from most elastic rows, so it is taken, not those rows)
+    while fr.size:
+        if border.sum() >= _MAX_BORDER:
+            return None
+        worst = int(np.argmax(np.bincount(fr, minlength=n) + np.bincount(fc, minlength=n)))
+        border[worst] = True
+        keep = (fr != worst) & (fc != worst)
+        fr, fc = fr[keep], fc[keep]
+    k = int(border.sum())
+    if k == 0 or k == n:
+        return None
+    interior = np.flatnonzero(~border)
+    bidx = np.flatnonzero(border)
+    pos = np.empty(n, dtype=np.int64)
+    pos[interior] = np.arange(interior.size)
+    pos[bidx] = np.arange(k)
+    r_in, c_in = ~border[rows], ~border[cols]
+    ii, ib, bi, bb = r_in & c_in, r_in & ~c_in, ~r_in & c_in, ~r_in & ~c_in
+    off = pos[cols[ii]] - pos[rows[ii]]
+    lo, up = int(max(0, -off.min(initial=0))), int(max(0, off.max(initial=0)))
+    if lo + up > _MAX_BANDWIDTH:
+        return None
+    ni = interior.size
+    band = (np.flatnonzero(ii), (up - off) * ni + pos[cols[ii]])
+    dense_ib = (np.flatnonzero(ib), pos[rows[ib]] * k + pos[cols[ib]])
+    dense_bb = (np.flatnonzero(bb), pos[rows[bb]] * k + pos[cols[bb]])
+    take_bi = np.flatnonzero(bi)                       # CSR order: rows ascending, so B rows ascending
+    bi_ptr = np.concatenate([[0], np.cumsum(np.bincount(pos[rows[bi]], minlength=k))])
+    return lo, up, interior, bidx, band, dense_ib, dense_bb, (take_bi, pos[cols[bi]], bi_ptr)
+
+
+def _bordered_band_solve(a, b, plan):
+    """x with a x = b by the plan of :func:`_bordered_band_plan`: band LU of A_II, dense Schur complement."""
+    lo, up, interior, bidx, band, dense_ib, dense_bb, (take_bi, bi_cols, bi_ptr) = plan
+    ni, k = interior.size, bidx.size
+    data = a.data
+    ab = np.zeros((lo + up + 1, ni))
+    ab.flat[band[1]] = data[band[0]]
+    a_ib = np.zeros(ni * k)
+    a_ib[dense_ib[1]] = data[dense_ib[0]]
+    a_bb = np.zeros(k * k)
+    a_bb[dense_bb[1]] = data[dense_bb[0]]
+    a_bi = sps.csr_matrix((data[take_bi], bi_cols, bi_ptr), shape=(k, ni))
+    rhs = np.column_stack([b[interior], a_ib.reshape(ni, k)])
+    sol = sla.solve_banded((lo, up), ab, rhs, overwrite_ab=True, overwrite_b=True, check_finite=False)
+    y, y_b = sol[:, 0], sol[:, 1:]
+    schur = a_bb.reshape(k, k) - a_bi @ y_b
+    x_b = np.linalg.solve(schur, b[bidx] - a_bi @ y)
+    x = np.empty(a.shape[0])
+    x[interior] = y - y_b @ x_b
+    x[bidx] = x_b
+    return x
+
+
 def _sparse_lu_solve(a_csc, b, trans="N"):
     """Solve with SuperLU (COLAMD ordering), preferring diagonal pivots.
 
@@ -241,17 +319,29 @@ def _sparse_lu_solve(a_csc, b, trans="N"):
 
 def _solve(a, b):
     if sps.issparse(a):
-        if a.format == "csr" and a.has_canonical_format:
-            plan = _SOLVE_PLANS.get(a, (), lambda: _banded_plan(a))
-            if plan is not None:                       # banded (free coordinates of a beam): LAPACK gbsv
-                lo, up, pos = plan
-                ab = np.zeros((lo + up + 1, a.shape[0]))
-                ab.flat[pos] = a.data
-                x = sla.solve_banded((lo, up), ab, b, overwrite_ab=True, check_finite=False)
-            else:                                      # Aᵀ of a CSR matrix is CSC without a copy
-                x = _sparse_lu_solve(a.T, b, trans="T")
-        else:
-            x = _sparse_lu_solve(a.tocsc(), b)
+        if a.format != "csr":
+            a = a.tocsr()
+        if not a.has_canonical_format:
+            a = a.copy()
+            a.sum_duplicates()
+        plan = _SOLVE_PLANS.get(a, (), lambda: _banded_plan(a) or _bordered_band_plan(a))
+        x = None
+        if plan is not None and len(plan) == 3:        # banded (free coordinates of a beam): LAPACK gbsv
+            lo, up, pos = plan
+            ab = np.zeros((lo + up + 1, a.shape[0]))
+            ab.flat[pos] = a.data
+            x = sla.solve_banded((lo, up), ab, b, overwrite_ab=True, check_finite=False)
+        elif plan is not None:                         # a band with a dense border (frames, joints)
+            try:
+                x = _bordered_band_solve(a, np.asarray(b, dtype=float), plan)
+            except np.linalg.LinAlgError:              # A_II singular on its own: general LU below
+                x = None
+            if x is not None:
+                res = a @ x - b
+                if not (np.all(np.isfinite(x)) and _inf(res) <= 1e-8 * max(_inf(b), 1e-300)):
+                    x = None
+        if x is None:                                  # Aᵀ of a CSR matrix is CSC without a copy
+            x = _sparse_lu_solve(a.T, b, trans="T")
         if not np.all(np.isfinite(x)):
             raise np.linalg.LinAlgError("singular sparse matrix")
         return x

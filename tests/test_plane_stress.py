@@ -216,6 +216,20 @@ def test_bad_material_and_interface_input():
         body.point("middle")
 
 
+def test_large_unreduced_body_is_refused_before_dense_allocation(monkeypatch):
+    """The unreduced body is dense in its DOFs: above the limit it is refused (naming the DOF count and
+    the way out), not built into an n × n allocation the machine cannot hold."""
+    from skfem_flex.bodies import reduction
+    rod = strip(8, 1)
+    n = rod.model().n_dofs
+    monkeypatch.setattr(reduction, "UNREDUCED_LIMIT", n - 1)
+    with pytest.raises(ValueError, match=f"{n} DOFs.*reduce it"):
+        rod.body()
+    rod.reduced(2, interfaces=["root", "tip"], strain="linear")      # the reduced body is still made
+    monkeypatch.setattr(reduction, "UNREDUCED_LIMIT", n)
+    assert rod.body().n_elastic > 0
+
+
 def test_averaging_coupling_is_softer_than_rigid_and_constraint_modes_move_their_interface():
     """CB constraint modes give the interface unit motion (P Φ_b = I) and hold the others; an averaging root leaves the
     root section free to warp, so the clamped frequency drops below that of the rigid root."""

@@ -388,11 +388,23 @@ def reduce(model, n_modes, interfaces=None, method=None, reference=None, strain=
     return ModalBody(model, Phi, strain=strain, reference=ref, frequencies=freqs, **body_kwargs)
 
 
+#: most DOFs of an unreduced (dense) floating-frame body made by :func:`full_body`
+UNREDUCED_LIMIT = 4000
+
+
 def full_body(model, reference=None, strain="linear", **body_kwargs):
     """The unreduced :class:`ModalBody` of ``model`` (Φ spans every DOF; only the reference condition applied).
 
     ``reference="interface"`` (default when an interface has a rotation) eliminates that interface's
-    DOFs by its coupling, ``"mean-axes"`` projects the rigid motion out in the mass metric."""
+    DOFs by its coupling, ``"mean-axes"`` projects the rigid motion out in the mass metric.
+
+    The unreduced body is dense (its floating-frame invariants couple every DOF), so it is
+    refused above :data:`UNREDUCED_LIMIT` DOFs, with a ``ValueError`` that says so, before
+    anything of size n × n is allocated: such meshes are what :func:`reduce` is for."""
+    if model.n_dofs > UNREDUCED_LIMIT:
+        raise ValueError(f"an unreduced floating-frame body is dense (n × n invariants): body {model.name!r} has "
+                         f"{model.n_dofs} DOFs, more than {UNREDUCED_LIMIT}; reduce it (body.reduced(n_modes=...), "
+                         f"or body='plane-stress-modal' in the catalogue scenes) or use a coarser mesh")
     names = list(model.interfaces)
     if reference is None:
         reference = "interface" if any(model.interface(n).has_rotation for n in names) else "mean-axes"

@@ -1,0 +1,68 @@
+"""The core's linear solver (``integrators.linear_solve``) on the shapes of Newton matrices it meets.
+
+A scene with floating-frame bodies and joints gives a matrix that is banded but for a few
+rows and columns (frame coordinates, Lagrange multipliers with a zero diagonal). It is solved
+as a band with a dense border (Schur complement), which keeps memory and time linear in the
+mesh; the reference is SciPy's general sparse LU.
+"""
+import numpy as np
+import pytest
+import scipy.sparse as sps
+import scipy.sparse.linalg as spla
+
+from skfem_flex import integrators
+
+
+def bordered_matrix(n, n_frame=3, n_mult=2, half_band=3, seed=0):
+    """Band (SPD-like) elastic block, dense frame rows and columns, multipliers touching far coordinates."""
+    rng = np.random.default_rng(seed)
+    nb = n_frame + n
+    offsets = range(-half_band, half_band + 1)
+    band = sps.diags([rng.normal(size=n - abs(k)) for k in offsets], list(offsets), shape=(n, n)).tocsr()
+    band = band + band.T + sps.identity(n) * (4.0 * half_band + 2.0)
+    frame = rng.normal(size=(n_frame, n))
+    top = np.hstack([rng.normal(size=(n_frame, n_frame)) + 10 * np.eye(n_frame), frame])
+    body = sps.vstack([sps.csr_matrix(top), sps.hstack([sps.csr_matrix(frame.T), band])]).tocsr()
+    cols = np.concatenate([np.arange(n_frame), [n_frame + n // 2, nb - 1]])    # far-apart coordinates
+    c = np.zeros((n_mult, nb))
+    c[:, cols[:n_frame + 2]] = rng.normal(size=(n_mult, cols[:n_frame + 2].size))
+    return sps.bmat([[body, sps.csr_matrix(c).T], [sps.csr_matrix(c), None]], format="csc")
+
+
+@pytest.mark.parametrize("n", [200, 2000])
+def test_bordered_band_matrix_matches_general_sparse_lu(n):
+    a = bordered_matrix(n)
+    b = np.random.default_rng(1).normal(size=a.shape[0])
+    plan = integrators._bordered_band_plan(a.tocsr())
+    assert plan is not None
+    lo, up, interior, border = plan[:4]
+    assert border.size <= 3 + 2 + 2 and lo + up <= 2 * 3 + 2    # frame, multipliers, their far coordinates
+    x = integrators.linear_solve(a, b)
+    ref = spla.spsolve(a.tocsc(), b)
+    np.testing.assert_allclose(x, ref, rtol=1e-9, atol=1e-12 * np.abs(ref).max())
+
+
+def test_singular_interior_falls_back_to_general_lu():
+    # two elastic coordinates with the same row and column inside the band (the interior block alone
+    # is singular) that differ in their coupling to a frame coordinate: the whole matrix is regular
+    a = bordered_matrix(60).tolil()
+    k = 3 + 30
+    for i in (k, k + 1):
+        a[i, :] = 0.0
+        a[:, i] = 0.0
+    a[k, k] = a[k, k + 1] = a[k + 1, k] = a[k + 1, k + 1] = 1.0
+    a[k, 0] = a[0, k] = 1.0
+    a = a.tocsr()
+    assert np.linalg.matrix_rank(a.toarray()) == a.shape[0]
+    plan = integrators._bordered_band_plan(a)
+    with pytest.raises(np.linalg.LinAlgError):          # the bordered solve alone cannot do it
+        integrators._bordered_band_solve(a, np.ones(a.shape[0]), plan)
+    b = np.arange(a.shape[0], dtype=float)
+    np.testing.assert_allclose(integrators.linear_solve(a, b), spla.spsolve(a.tocsc(), b), rtol=1e-8, atol=1e-10)
+
+
+def test_singular_matrix_raises():
+    a = bordered_matrix(200).tolil()
+    a[5, :] = 0.0
+    with pytest.raises(np.linalg.LinAlgError):
+        integrators.linear_solve(a.tocsc(), np.ones(a.shape[0]))
