@@ -201,7 +201,6 @@ class FloatingBeam(FloatingFrame):
         self._set_invariants(mass=mass, S0=np.array([s0x, 0.0]), I0=self._I00 + self._Jr, Sbar=np.vstack([Nu, Nw]),
                              c=c, k0n=k0 + nphi, MA=dense(MA), H=dense(H), Mff=dense((MA + MI).tocsr()))
         self._pcache = (None, None)                       # ((q, v) bytes, M(q) v) of the last momentum
-        self._v0cache = (None, None)
 
         # ------------------------------------------------ stiffness
         if strain == "linear":
@@ -242,9 +241,6 @@ class FloatingBeam(FloatingFrame):
         self._loc = red[np.concatenate([self._eu, self._ew], axis=1)]     # (nel, 2 nl), −1 = eliminated
         if self.sparse:
             self._build_pattern()
-            self._Wax = self._axial_map(self._map_loc, self._pat_nnz)
-            self._Kh_data = np.zeros(self._pat_nnz)
-            self._Kh_data[self._map_ff["K"]] = 0.5 * self._ffs_data["K"]
         else:
             self._ffd = dict(MA=self._MA, H=self._H, Mff=self._Mff, K=self._K)
             # element matrices of the axial kernel -> flat (n_elastic²) positions of the elastic block
@@ -252,9 +248,6 @@ class FloatingBeam(FloatingFrame):
             lc = np.broadcast_to(self._loc[:, None, :], lr.shape)
             self._loc_mask = (lr >= 0) & (lc >= 0)
             self._loc_flat = lr[self._loc_mask] * nf + lc[self._loc_mask]
-            self._ff_stack = np.stack([self._Mff, self._H, self._MA]).reshape(3, nf * nf)
-            self._K_half = 0.5 * self._K
-            self._Wax = self._axial_map(self._loc_flat, nf * nf)
         self._kd = self._kernel_data()
 
         # ------------------------------------------------ initial state
@@ -502,27 +495,6 @@ class FloatingBeam(FloatingFrame):
         out[:, :nl, :nl] += blk
         out[:, nl:, nl:] += blk
         return out
-
-    def _axial_map(self, target, size):
-        """Sparse W (size, 4 n_q) with W c = the axial tangent of :meth:`_axial_loc` scattered to ``target``
-        (flat positions of the element entries kept by ``_loc_mask``), for the per-point coefficients
-        c = (c_uu, c_uw, c_wu, c_ww) of :meth:`_axial_coefficients`: one sparse product per evaluation."""
-        dn = self._dNt
-        nel, nqp, nl = dn.shape
-        loc = np.arange(2 * nl)
-        E, Ia, Ib = np.meshgrid(np.arange(nel), loc, loc, indexing="ij")
-        m = self._loc_mask
-        e, ia, ib = (np.repeat(x[m], nqp) for x in (E, Ia, Ib))
-        k = np.tile(np.arange(nqp), int(m.sum()))
-        cols = ((ia // nl) * 2 + ib // nl) * self._nq + e * nqp + k
-        vals = dn[e, k, ia % nl] * dn[e, k, ib % nl]
-        return sps.csr_matrix((vals, (np.repeat(target, nqp), cols)), shape=(size, 4 * self._nq))
-
-    def _axial_coefficients(self, w, a, b, weps):
-        """Per-point coefficients (uu, uw, wu, ww blocks) of Σ_k w_k dε_k(a)ᵀ dε_k(b) + weps_k d²ε_k."""
-        wa0, wa1 = w * (1.0 + a[0]), w * a[1]
-        b0 = 1.0 + b[0]
-        return np.concatenate([wa0 * b0 + weps, wa0 * b[1], wa1 * b0, wa1 * b[1] + weps])
 
     def _gl(self, qf):
         """(u', w', ε) at the quadrature points; two-entry cache (q0 is reused through a step)."""
