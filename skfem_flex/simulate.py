@@ -108,6 +108,11 @@ def _reaction_maps(scene):
     return out
 
 
+#: a checkpoint that took s seconds to save is followed by at least CHECKPOINT_COST · s seconds of run
+#: (and ``checkpoint_every``): saving costs at most 1 / (CHECKPOINT_COST + 1) ≈ 5 % of the wall time
+CHECKPOINT_COST = 20.0
+
+
 def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newton=None, record_every=1,
              output=(), progress=False, max_halvings=8, project=True, compiled=None, start="initial", checkpoint=None,
              checkpoint_every=5.0, resume=None, handle_signals=True):
@@ -164,7 +169,11 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
         seconds of wall time, so that a run killed outright (SIGKILL, power)
         can be read back with :meth:`Result.load` and continued with ``resume``.
     checkpoint_every : float
-        Wall-clock seconds between checkpoints (> 0; default 5).
+        Wall-clock seconds between checkpoints (> 0; default 5). Each save
+        writes the whole history, so saves take longer as the run grows: after a
+        save that took s seconds the next one waits max(checkpoint_every, 20·s)
+        seconds (``CHECKPOINT_COST`` = 20), which keeps checkpointing below
+        about 5 % of the run's wall time however long the run is.
     resume : Result or str or Path, optional
         Continue an earlier run (a Result, or the path of its saved result or
         checkpoint) from its last saved state: same scene, scheme and dt; the
@@ -249,15 +258,23 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
                 s.resume(scene, prior)
     guard = _DivergenceGuard(scene, rec)
     bar, bar_its = None, 0
-    if progress:
+
+    def open_bar():
         from tqdm import tqdm
-        # shown only for runs longer than a second (delay); steps/s is tqdm's rate
-        bar = tqdm(total=n_steps, initial=min(step, n_steps), unit="step", desc=f"{scene.name} [{scheme.name}]",
-                   leave=False, file=sys.stderr, delay=1.0, mininterval=0.25, dynamic_ncols=True)
+        # shown only for runs longer than a second (delay); steps/s is tqdm's rate, counted from the
+        # steps done when the bar opens (initial)
+        return tqdm(total=n_steps, initial=min(step, n_steps), unit="step", desc=f"{scene.name} [{scheme.name}]",
+                    leave=False, file=sys.stderr, delay=1.0, mininterval=0.25, dynamic_ncols=True)
+
+    # a first run that compiles opens its bar after the compiling step, so that no rate it shows
+    # includes the compile time ("18 s/step")
+    if progress and not cold:
+        bar = open_bar()
     start = time.perf_counter()
     compile_time = 0.0
     meta = dict(scheme=scheme.name, dt=dt)
     last_checkpoint = start
+    checkpoint_wait = checkpoint_every          # grows with the time a save takes (CHECKPOINT_COST)
 
     def recorded(state, work, its, vres, derived=None):
         # the sinks first: a step whose output failed is not in the histories either, so that
@@ -268,8 +285,8 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
 
     def advanced(n, its):
         nonlocal bar_its
+        bar_its += its
         if bar is not None:
-            bar_its += its
             bar.set_postfix_str(f"t={state.t:.4g}/{t_end:.4g} s, Newton {bar_its / max(step, 1):.1f}/step",
                                 refresh=False)
             bar.update(n)
@@ -322,19 +339,21 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
                 if cold:                     # the first call compiled the kernels: report it on its own
                     compile_time = time.perf_counter() - compile_start
                     start = last_checkpoint = time.perf_counter()
-                    if bar is not None:
-                        bar.reset(total=n_steps)
-                        bar.update(min(step, n_steps))
+                    if progress:
+                        bar = open_bar()
+                        advanced(0, 0)       # the postfix (t, Newton/step), no steps
             guard.check_state(state)
             if stop.signum is not None:
                 raise Interrupted(f"interrupted at t = {state.t:.6g} s by {signal.Signals(stop.signum).name}",
                                   signal=stop.signum)
-            if checkpoint is not None and time.perf_counter() - last_checkpoint >= checkpoint_every:
+            if checkpoint is not None and time.perf_counter() - last_checkpoint >= checkpoint_wait:
+                saving = time.perf_counter()
                 try:
                     result(completed=False, stopped=f"checkpoint at t = {state.t:.6g} s").save(checkpoint)
                 except OSError as exc:
                     raise _output_error(exc, state.t) from None
                 last_checkpoint = time.perf_counter()
+                checkpoint_wait = max(checkpoint_every, CHECKPOINT_COST * (last_checkpoint - saving))
     except SimulationError as exc:
         if not isinstance(exc, (Interrupted, DivergenceError, OutputError)):
             exc.args = (f"{exc.args[0]} [step {step + 1} of {n_steps}]",) + exc.args[1:]
