@@ -12,8 +12,15 @@ tasks in submission order; this keeps the two workers evenly loaded at the end).
   return, *including* starting and closing the local cluster of N worker
   processes (each imports skfem_flex and loads the kernels from numba's
   cache once) and writing every case to the store;
-* sweep on a running cluster: the same with a ``Client`` started before the
-  clock starts (the cost a sweep pays on a cluster that is already up).
+* sweep on a running cluster: the same with a ``Client`` of
+  ``skfem_flex.sweep.local_cluster`` (the cluster a sweep starts, with the same
+  Dask settings) started before the clock starts (the cost a sweep pays on a
+  cluster that is already up);
+* plain processes: the same 16 ``simulate`` calls handed out in grid order to N
+  ``multiprocessing`` processes (``concurrent.futures.ProcessPoolExecutor``,
+  forked from this process inside the clock, so the kernels are already
+  loaded; no Dask, no store): what N processes give on this machine without
+  any of the sweep's machinery.
 
 Per-case overhead = (sweep wall time × N − Σ time the cases spent in
 ``simulate``) / 16: the worker time per case not spent integrating (task
@@ -30,7 +37,6 @@ Run ``python examples/sweep_benchmark.py [--workers 2] [--t-end 30] [--out DIR]`
 writes ``OUT/sweep_benchmark.md`` (default ``examples/output``).
 """
 import argparse
-import logging
 import os
 import platform
 import shutil
@@ -70,6 +76,26 @@ def sweep(t_end, dt, record_every, workers, client=None):
     return wall, float(ds.run_time.sum()), ds
 
 
+def _case(args):
+    """One case in a pool process: the time spent in simulate."""
+    n, w, t_end, dt, record_every = args
+    scene = sf.scenes.spin_up_beam(omega=w, n_elements=n)
+    start = time.perf_counter()
+    sf.simulate(scene, t_end, dt, record_every=record_every)
+    return time.perf_counter() - start
+
+
+def processes(t_end, dt, record_every, workers):
+    """(wall time, Σ simulate time) of the 16 cases on ``workers`` plain processes, pool start included."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    cases = [(n, w, t_end, dt, record_every) for n in GRID["n_elements"] for w in GRID["omega"]]
+    start = time.perf_counter()
+    with ProcessPoolExecutor(workers) as pool:
+        loops = list(pool.map(_case, cases))
+    return time.perf_counter() - start, sum(loops)
+
+
 def _one_run(_=None):
     scene = sf.scenes.spin_up_beam(n_elements=16)
     sf.simulate(scene, 0.01, 1e-3)                      # kernels loaded
@@ -100,12 +126,12 @@ def main():
     load0 = os.getloadavg()
     cores = capacity(args.workers)
     t_serial, loop_serial = serial(args.t_end, args.dt, args.record_every)
+    # before any Dask cluster: a Nanny leaves its variables (OMP_NUM_THREADS, ...) in this process's environment
+    t_plain, loop_plain = processes(args.t_end, args.dt, args.record_every, args.workers)
     t_sweep, run_sweep, ds = sweep(args.t_end, args.dt, args.record_every, args.workers)
-    import dask
-    from distributed import Client, LocalCluster
-    with dask.config.set({"distributed.worker.profile.enabled": False}), \
-            LocalCluster(n_workers=args.workers, threads_per_worker=1, dashboard_address=None,
-                         silence_logs=logging.ERROR) as cluster, Client(cluster) as client:
+    from distributed import Client
+    from skfem_flex.sweep import local_cluster
+    with local_cluster(args.workers) as cluster, Client(cluster) as client:
         client.run(lambda: sf.simulate(sf.scenes.spin_up_beam(), 0.01, args.dt) and None)   # workers warm
         t_warm, run_warm, _ = sweep(args.t_end, args.dt, args.record_every, args.workers, client)
         t_empty, run_empty, _ = sweep(args.dt, args.dt, args.record_every, args.workers, client)
@@ -114,6 +140,8 @@ def main():
     w = args.workers
     rows = [
         ("16 serial simulate calls", t_serial, 1.0, loop_serial, float("nan")),
+        (f"the 16 calls in {w} plain processes (no Dask)", t_plain,
+         t_plain / t_serial, loop_plain, (t_plain * w - loop_plain) / n),
         (f"sweep, {w} workers, cluster started and closed by it", t_sweep, t_sweep / t_serial, run_sweep,
          (t_sweep * w - run_sweep) / n),
         (f"sweep, {w} workers, cluster already running", t_warm, t_warm / t_serial, run_warm,

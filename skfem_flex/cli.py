@@ -7,7 +7,9 @@
                    [--no-vtk] [--quiet]
     skfem-flex list
     skfem-flex study work-precision [CASE] [--schemes ...] [--quick] [--out DIR]
+                     [--workers N | --scheduler ADDRESS] [--store DIR] [--resume | --no-resume]
     skfem-flex study stability [--cases ...] [--schemes ...] [--quick] [--out DIR]
+                     [--workers N | --scheduler ADDRESS] [--store DIR] [--resume | --no-resume]
     skfem-flex modes SCENE [--set key=value ...] [--n N] [--about static|steady|initial]
                      [--out DIR] [--frames F] [--no-vtk] [--quiet]
     skfem-flex campbell SCENE --vary NAME=VALUES [--set ...] [--n N] [--about ...] [--out DIR]
@@ -26,6 +28,12 @@ it and writes into DIR (default ``results/SCENE``): the VTK time series
 with ``--format zarr``), ``summary.csv``,
 ``sweep.json`` (counts of computed and skipped cases) and
 ``extremes_PROBE.png``; exit status 1 when a case did not complete.
+
+``study`` runs its cases one after another in this process by default (their
+wall times are what the work-precision study measures); ``--workers N`` or
+``--scheduler ADDRESS`` spread them over a Dask cluster as ``sweep`` does, and
+with ``--store DIR`` a rerun reads the runs already in that sweep store
+instead of running them again (``--no-resume`` recomputes them).
 
 Exit status: 0 on success; 2 on bad input (unknown scene or parameter, a
 value of the wrong type, dt ≤ 0, an unwritable output directory, a run that
@@ -562,36 +570,49 @@ def _add_list(sub):
 # --------------------------------------------------------------------- study
 def _cmd_study(args):
     from . import studies
+    from .sweep import connect
 
     out = Path(args.out or f"results/study-{args.kind}")
     _prepare_out(out)
     say = (lambda line: None) if args.quiet else (lambda line: print(line, file=sys.stderr))
+    if args.kind == "work-precision":
+        names = [args.scene] if args.scene else sorted(studies.WORK_PRECISION_CASES)
+        for name in names:
+            if name not in studies.WORK_PRECISION_CASES:
+                raise UsageError(f"no work-precision case {name!r}; known: "
+                                 f"{', '.join(sorted(studies.WORK_PRECISION_CASES))}")
+    elif args.scene:
+        raise UsageError("'study stability' takes no SCENE; choose cases with --cases")
+    client, n_workers = _where(args, default="serial")
+    computed = skipped = 0
     try:
-        if args.kind == "work-precision":
-            names = [args.scene] if args.scene else sorted(studies.WORK_PRECISION_CASES)
-            rows = []
-            for name in names:
-                if name not in studies.WORK_PRECISION_CASES:
-                    raise UsageError(f"no work-precision case {name!r}; known: "
-                                     f"{', '.join(sorted(studies.WORK_PRECISION_CASES))}")
-                case = studies.WORK_PRECISION_CASES[name]()
-                dts = case.dts[:2] if args.quick else case.dts
-                rows += studies.work_precision(case, schemes=args.schemes, dts=dts, out_dir=out, name=name,
-                                               progress=say)
-            stem = out / "work_precision"
-            figure = studies.plot_work_precision(rows, stem.with_suffix(".png"))
-        else:
-            if args.scene:
-                raise UsageError("'study stability' takes no SCENE; choose cases with --cases")
-            rows = studies.stability(cases=args.cases, schemes=args.schemes, progress=say, quick=args.quick,
-                                     budget=args.budget)
-            stem = out / "stability"
-            figure = studies.plot_stability(rows, stem.with_suffix(".png"))
+        # one cluster (or none: "serial") for all the study's sweeps
+        with connect(client, n_workers) as where:
+            run = {"store": args.store, "client": where, "resume": args.resume}
+            if args.kind == "work-precision":
+                rows = []
+                for name in names:
+                    case = studies.WORK_PRECISION_CASES[name]()
+                    dts = case.dts[:2] if args.quick else case.dts
+                    part = studies.work_precision(case, schemes=args.schemes, dts=dts, out_dir=out, name=name,
+                                                  progress=say, **run)
+                    rows += part
+                    computed, skipped = computed + part.computed, skipped + part.skipped
+                stem = out / "work_precision"
+                figure = studies.plot_work_precision(rows, stem.with_suffix(".png"))
+            else:
+                rows = studies.stability(cases=args.cases, schemes=args.schemes, progress=say, quick=args.quick,
+                                         budget=args.budget, **run)
+                computed, skipped = rows.computed, rows.skipped
+                stem = out / "stability"
+                figure = studies.plot_stability(rows, stem.with_suffix(".png"))
     except ValueError as exc:
         raise UsageError(_one_line(str(exc))) from None
     csv_path, md_path = studies.write_table(rows, stem)
     if not args.quiet:
         print(md_path.read_text())
+        print(f"{len(rows)} runs: {computed} computed, {skipped} read from the store"
+              + (f" {args.store}" if args.store is not None else ""))
         print(f"wrote {md_path}, {csv_path} and {figure}")
     return 0
 
@@ -615,6 +636,11 @@ def _add_study(sub):
                         f"{studies.QUICK_BUDGET:g} s each)")
     p.add_argument("--budget", type=_positive_number, default=300.0, metavar="S",
                    help="stability: wall-clock seconds per run before it is stopped and reported (default 300)")
+    _add_where_options(p, workers_default="default: run the cases one after another in this process, so that "
+                                          "their wall times do not disturb each other")
+    p.add_argument("--store", type=Path, default=None, metavar="DIR",
+                   help="sweep store of the runs (one netCDF file per run; a Zarr hierarchy if DIR ends in "
+                        ".zarr): a rerun reads the runs already there, timings included (default: no store)")
     p.add_argument("--out", default=None, metavar="DIR", help="output directory (default: results/study-KIND)")
     p.add_argument("--quiet", action="store_true", help="no progress lines and no table on stdout")
     p.set_defaults(func=_cmd_study)
@@ -763,6 +789,29 @@ def _add_campbell(sub):
     p.set_defaults(func=_cmd_campbell)
 
 
+# ------------------------------------------------- where sweeps run (sweep, study)
+def _add_where_options(p, workers_default):
+    """``--workers N | --scheduler ADDRESS`` and ``--resume/--no-resume``: where the cases of a sweep run
+    and whether the store's cases are reused (the options of ``sweep`` and ``study``)."""
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=_positive_int, default=None, metavar="N",
+                       help=f"run the cases on a local Dask cluster of N worker processes ({workers_default})")
+    where.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                       help="address of a running Dask scheduler (e.g. tcp://host:8786) to run the cases on")
+    p.add_argument("--resume", action=argparse.BooleanOptionalAction, default=True,
+                   help="skip cases already in the store (default); --no-resume recomputes them")
+
+
+def _where(args, default):
+    """(client, n_workers) for :func:`skfem_flex.sweep.run_cases` from ``--workers``/``--scheduler``;
+    ``default`` (None: a local cluster of one worker per core; "serial": this process) without either."""
+    if args.scheduler:
+        return args.scheduler, None
+    if args.workers is not None:
+        return None, args.workers
+    return default, None
+
+
 # --------------------------------------------------------------------- sweep
 def _sweep_grid(name, items):
     """{name: [values]} from ``--vary KEY=VALUES`` (as for ``campbell``: a comma list or START:STOP:COUNT),
@@ -815,10 +864,10 @@ def _cmd_sweep(args):
         raise UsageError(_one_line(exc)) from None
     out = Path(args.out) if args.out is not None else Path("results") / f"sweep-{args.scene}"
     _prepare_out(out)
-    client = args.scheduler if args.scheduler else None
+    client, n_workers = _where(args, default=None)
     start = time.perf_counter()
     store = out / ("sweep.zarr" if args.format == "zarr" else "sweep")
-    ds = run_cases(specs, store=store, client=client, resume=args.resume, n_workers=args.workers,
+    ds = run_cases(specs, store=store, client=client, resume=args.resume, n_workers=n_workers,
                    progress=not args.quiet)
     wall = time.perf_counter() - start
 
@@ -886,13 +935,7 @@ def _add_sweep(sub):
                    help="spectral radius of generalized-alpha (default 0.9)")
     p.add_argument("--record-every", type=_positive_int, default=1, metavar="N",
                    help="store every N-th step (default 1)")
-    where = p.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=_positive_int, default=None, metavar="N",
-                       help="worker processes of the local Dask cluster (default: one per core)")
-    where.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                       help="address of a running Dask scheduler (e.g. tcp://host:8786) to run the cases on")
-    p.add_argument("--resume", action=argparse.BooleanOptionalAction, default=True,
-                   help="skip cases already in the store (default); --no-resume recomputes them")
+    _add_where_options(p, workers_default="default: one per core")
     p.add_argument("--format", choices=["netcdf", "zarr"], default="netcdf",
                    help="store layout: one netCDF file per case in DIR/sweep (default) or a Zarr hierarchy "
                         "DIR/sweep.zarr")
@@ -923,10 +966,20 @@ def build_parser():
 def main(argv=None):
     """Entry point of the ``skfem-flex`` console script; returns the exit status."""
     import threading
+    import warnings
 
-    old_term = None
+    def one_line_warning(message, category, filename, lineno, file=None, line=None):
+        # Python warnings (ours, numpy's, matplotlib's) as one line like the CLI's own: no source echo
+        kind = "" if category is UserWarning else f"{category.__name__}: "
+        try:
+            print(f"skfem-flex: warning: {kind}{_one_line(message)}", file=sys.stderr if file is None else file)
+        except OSError:
+            pass
+
+    old_term, old_show = None, warnings.showwarning
     if threading.current_thread() is threading.main_thread():
         old_term = signal.signal(signal.SIGTERM, _raise_terminated)
+    warnings.showwarning = one_line_warning
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
@@ -963,6 +1016,7 @@ def main(argv=None):
               f"SKFEM_FLEX_DEBUG=1 shows the traceback)", file=sys.stderr)
         return EXIT_STOPPED
     finally:
+        warnings.showwarning = old_show
         if old_term is not None:
             signal.signal(signal.SIGTERM, old_term)
 

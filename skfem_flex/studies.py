@@ -21,7 +21,7 @@ from scipy.special import ellipj, ellipk, gamma
 
 from .simulate import simulate
 
-__all__ = ["WorkPrecisionRow", "StabilityRow", "work_precision", "stability", "write_table",
+__all__ = ["WorkPrecisionRow", "StabilityRow", "StudyRows", "work_precision", "stability", "write_table",
            "plot_work_precision", "plot_stability", "WORK_PRECISION_CASES", "STABILITY_CASES", "oscillator_period",
            "pendulum_period", "upward_crossings", "period_error", "history_error"]
 
@@ -181,8 +181,23 @@ WORK_PRECISION_CASES = {"spring_mass": _quartic_case, "pendulum": _pendulum_case
                         "rotating_beam": _rotating_beam_case}
 
 
+class StudyRows(list):
+    """A study's rows (a list, in the order of its cases) with the counts of the sweep that made them.
+
+    Attributes
+    ----------
+    computed : int
+        Runs made now.
+    skipped : int
+        Runs read back from the store (``resume=True``), timings included.
+    """
+
+    computed = 0
+    skipped = 0
+
+
 def work_precision(case, schemes=SCHEMES, dts=None, out_dir=None, name="case", progress=None, store=None,
-                   client="serial", resume=True):
+                   client="serial", resume=True, n_workers=None):
     """Error against run time for every scheme and step.
 
     Parameters
@@ -196,7 +211,7 @@ def work_precision(case, schemes=SCHEMES, dts=None, out_dir=None, name="case", p
         Where a reference run is saved (``reference_<name>.npz``) and reused.
     progress : callable(str), optional
         Called with a line per run.
-    store, client, resume
+    store, client, resume, n_workers
         As in :func:`skfem_flex.sweep.sweep`: the runs are the cases of a
         sweep (scheme × dt) keyed ``work-precision:<name>``. The default
         client ``"serial"`` runs them one after another in this process, so
@@ -205,8 +220,9 @@ def work_precision(case, schemes=SCHEMES, dts=None, out_dir=None, name="case", p
 
     Returns
     -------
-    list of WorkPrecisionRow
-        Failed runs have ``error = nan`` and their message.
+    StudyRows of WorkPrecisionRow
+        Failed runs have ``error = nan`` and their message; ``computed`` and
+        ``skipped`` count the runs made now and read from the store.
     """
     from .sweep import plan
 
@@ -236,16 +252,19 @@ def work_precision(case, schemes=SCHEMES, dts=None, out_dir=None, name="case", p
         if progress:
             progress(f"{name} {r.scheme} dt={r.dt:.3g}: error {r.error:.3g}, {r.wall_time:.3g} s")
         return r
-    return _study_rows(specs, row, store, client, resume)
+    return _study_rows(specs, row, store, client, resume, n_workers)
 
 
-def _study_rows(specs, row, store, client, resume):
+def _study_rows(specs, row, store, client, resume, n_workers):
     """Run a study's cases as a sweep; ``row(spec, case Dataset)`` makes each table row (in plan order)."""
     from .sweep import run_cases
 
     rows = {}
-    run_cases(specs, store=store, client=client, resume=resume, on_case=lambda s, c: rows.update({s.index: row(s, c)}))
-    return [rows[s.index] for s in specs]
+    ds = run_cases(specs, store=store, client=client, resume=resume, n_workers=n_workers,
+                   on_case=lambda s, c: rows.update({s.index: row(s, c)}))
+    out = StudyRows(rows[s.index] for s in specs)
+    out.computed, out.skipped = int(ds.attrs["computed"]), int(ds.attrs["skipped"])
+    return out
 
 
 def _reference(case, out_dir, name):
@@ -395,8 +414,26 @@ def _finite_state(res):
     return float(np.all(np.isfinite(res.q)))
 
 
+def _compiled_first(factory, dt, schemes):
+    """``factory`` that, on a cold Numba cache, first runs one step of its scene under every scheme, so
+    that the kernels are compiled before the case starts: the sweep builds the scene before it starts a
+    case's wall-clock budget and run time, so the compile counts against neither."""
+    def build(**params):
+        from . import compiled_loop
+
+        scene = factory(**params)
+        if compiled_loop.jit_cache_cold(scene):
+            for scheme in schemes:
+                try:
+                    simulate(factory(**params), dt, dt, integrator=scheme, handle_signals=False)
+                except Exception:        # only a warm-up: the case itself reports any failure
+                    pass
+        return scene
+    return build
+
+
 def stability(cases=None, schemes=SCHEMES, progress=None, quick=False, budget=300.0, store=None, client="serial",
-              resume=True):
+              resume=True, n_workers=None):
     """The stability matrix: every case under every scheme.
 
     Parameters
@@ -410,17 +447,20 @@ def stability(cases=None, schemes=SCHEMES, progress=None, quick=False, budget=30
         most ``QUICK_BUDGET`` s of wall time each (a smoke test of the study).
     budget : float
         Wall-clock seconds a single run may use; a slower run is stopped and
-        reported as not completed, with the time it reached.
-    store, client, resume
+        reported as not completed, with the time it reached. The compile of
+        the Numba kernels on a cold cache is not counted: it happens before.
+    store, client, resume, n_workers
         As in :func:`skfem_flex.sweep.sweep`: every case × scheme is a case
         of one sweep (keyed ``stability:<case>``), in this process by default.
 
     Returns
     -------
-    list of StabilityRow
+    StudyRows of StabilityRow
         A run is *bounded* when it completed, its state stayed finite and its
         energy error stayed below ``bound`` times the energy scale. A failure
         is a row with ``completed = False``, the time reached and the message.
+        ``computed`` and ``skipped`` count the runs made now and read from
+        the store.
     """
     from .sweep import plan
 
@@ -437,7 +477,8 @@ def stability(cases=None, schemes=SCHEMES, progress=None, quick=False, budget=30
         case = STABILITY_CASES[n]()
         t_end = min(case.t_end / 20.0, QUICK_STEPS * case.dt) if quick else case.t_end
         bounds[n] = case.bound
-        specs += plan(case.scene, vary={"integrator": list(schemes)}, t_end=t_end, dt=case.dt, budget=budget,
+        specs += plan(_compiled_first(case.scene, case.dt, schemes), vary={"integrator": list(schemes)},
+                      t_end=t_end, dt=case.dt, budget=budget,
                       record=(), measures={"energy_error": _energy_error(case.energy_scale),
                                            "finite": _finite_state},
                       name=f"stability:{n}", label=n)
@@ -456,7 +497,7 @@ def stability(cases=None, schemes=SCHEMES, progress=None, quick=False, budget=30
         if progress:
             progress(f"{n} / {scheme}: {'bounded' if bounded else 'NOT bounded'}, energy error {e_err:.2g}")
         return r
-    return _study_rows(specs, row, store, client, resume)
+    return _study_rows(specs, row, store, client, resume, n_workers)
 
 
 def plot_stability(rows, path):

@@ -41,6 +41,7 @@ cases (``q_dof`` of meshes with more or fewer elements) are padded the same way.
 """
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import inspect
@@ -59,8 +60,9 @@ import numpy as np
 
 from .errors import SimulationError
 
-__all__ = ["sweep", "plan", "run_cases", "open_sweep", "probe_extremes", "CaseSpec", "BudgetExceeded", "WallClockBudget",
-           "RUN_SETTINGS", "RECORD_GROUPS", "DEFAULT_RECORD", "STATUSES"]
+__all__ = ["sweep", "plan", "run_cases", "open_sweep", "probe_extremes", "local_cluster", "connect", "CaseSpec",
+           "BudgetExceeded", "WallClockBudget", "RUN_SETTINGS", "RECORD_GROUPS", "DEFAULT_RECORD", "STATUSES",
+           "LOCAL_CLUSTER_CONFIG"]
 
 #: run settings a case may vary like a scene parameter (``vary={"dt": [...]}``)
 RUN_SETTINGS = ("t_end", "dt", "integrator")
@@ -673,28 +675,92 @@ def run_cases(specs, store=None, client=None, resume=True, n_workers=None, progr
     return out
 
 
-def _run_on_dask(specs, client, n_workers, finished):
-    import dask
-    from distributed import Client, LocalCluster, as_completed
+#: Dask settings of the local clusters a sweep starts itself (:func:`local_cluster`)
+LOCAL_CLUSTER_CONFIG = {
+    # the statistical profiler samples every thread's stack every 10 ms: several per cent of a GIL-bound time loop
+    "distributed.worker.profile.enabled": False,
+    # Dask starts its workers with MALLOC_TRIM_THRESHOLD_=65536 (freed memory goes back to the system at
+    # once). Setting it also stops glibc from adapting its mmap threshold, and the time loop's many
+    # short-lived arrays then cost page faults: some 20 000-40 000 per spin-up case instead of a few hundred,
+    # and about 10 % more CPU time per case with two workers at once. The workers of our clusters keep
+    # glibc's defaults (a value set in the environment still wins: Dask's precedence).
+    "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
+    # every process of the cluster (scheduler and nannies in the driver, each worker) measures its event
+    # loop's delay every 20 ms, for diagnostics only: a few per cent of a core each, taken from the
+    # workers on a machine with one core per worker
+    "distributed.admin.tick.interval": "200ms",
+}
 
-    own_cluster = own_client = None
-    try:
+
+def local_cluster(n_workers=None, **kwargs):
+    """The local Dask cluster a sweep starts when no ``client`` is given (the caller closes it).
+
+    ``n_workers`` worker processes (default one per core), one thread each,
+    no dashboard, with :data:`LOCAL_CLUSTER_CONFIG`; ``kwargs`` go to
+    ``distributed.LocalCluster`` (e.g. ``env={...}`` for the workers).
+    Start a cluster that stays up for several sweeps with it
+    (``Client(local_cluster(2))``) so that its workers run cases as fast as
+    the sweep's own.
+
+    Raises
+    ------
+    ValueError
+        ``n_workers`` is not a positive integer.
+    """
+    import dask
+    from distributed import LocalCluster
+
+    n = _default_workers() if n_workers is None else n_workers
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise ValueError(f"n_workers must be a positive integer, got {n_workers!r}")
+    options = {"threads_per_worker": 1, "processes": True, "dashboard_address": None,
+               "silence_logs": logging.ERROR, **kwargs}
+    with dask.config.set(LOCAL_CLUSTER_CONFIG):
+        return LocalCluster(n_workers=int(n), **options)
+
+
+@contextlib.contextmanager
+def connect(client=None, n_workers=None):
+    """Where cases run, as :func:`run_cases` takes it, for the length of a ``with`` block.
+
+    ``"serial"`` and a ``distributed.Client`` are yielded as they are; a
+    scheduler address yields a Client connected to it; None starts
+    :func:`local_cluster` (``n_workers``) and yields its Client. What was
+    opened here is closed at the end of the block. Several sweeps (a study
+    over several scenes) run on one cluster this way.
+
+    Raises
+    ------
+    TypeError
+        ``client`` is none of these.
+    ValueError
+        A bad ``n_workers``.
+    """
+    from distributed import Client
+
+    if isinstance(client, str) and client == "serial":
+        yield client
+        return
+    if client is not None and not isinstance(client, (str, Client)):
+        raise TypeError(f"client must be None, 'serial', a scheduler address or a distributed.Client, "
+                        f"got {client!r}")
+    if isinstance(client, Client):
+        yield client
+        return
+    with contextlib.ExitStack() as stack:
         if client is None:
-            n = _default_workers() if n_workers is None else int(n_workers)
-            if n < 1:
-                raise ValueError(f"n_workers must be a positive integer, got {n_workers!r}")
-            # the workers' statistical profiler samples every thread's stack every 10 ms and costs the
-            # (GIL-bound) recording in the time loop several per cent: off for the clusters we start
-            with dask.config.set({"distributed.worker.profile.enabled": False}):
-                own_cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                           dashboard_address=None, silence_logs=logging.ERROR)
-            client = own_client = Client(own_cluster)
-        elif isinstance(client, str):
-            client = own_client = Client(client)
-        elif not isinstance(client, Client):
-            raise TypeError(f"client must be None, 'serial', a scheduler address or a distributed.Client, "
-                            f"got {client!r}")
-        _warm_up(client, specs[0])
+            cluster = stack.enter_context(local_cluster(n_workers))
+            client = stack.enter_context(Client(cluster))
+        else:
+            client = stack.enter_context(Client(client))
+        yield client
+
+
+def _run_on_dask(specs, client, n_workers, finished):
+    from distributed import as_completed
+
+    with connect(client, n_workers) as client:
+        _warm_up(client, specs)
         futures = {client.submit(run_case, s, key=s.task_name, pure=False): s for s in specs}
         for fut in as_completed(futures):
             s = futures.pop(fut)
@@ -704,27 +770,48 @@ def _run_on_dask(specs, client, n_workers, finished):
                 ds = _case_dataset(s, "lost", f"{type(exc).__name__}: {_one_line(exc)}", None, math.nan, {})
             fut.release()
             finished(ds)
-    finally:
-        if own_client is not None:
-            own_client.close()
-        if own_cluster is not None:
-            own_cluster.close()
 
 
-def _warm_up(client, spec):
-    """Run ``spec`` for one step on one worker per machine first, so that the Numba kernels are
-    compiled once per machine (into numba's on-disk cache) rather than by every worker at once;
-    the other workers of that machine then load them from the cache."""
+def _kernel_set(spec):
+    """What decides which Numba kernels a case compiles, and for which argument types: its scene, its
+    integrator, whether it may take the compiled loop, and its parameters that are not numbers (switches
+    such as a body type). Numbers (sizes, speeds, steps) change values, not the compiled code."""
+    switches = sorted((k, json.dumps(_canonical(v), sort_keys=True)) for k, v in spec.params.items()
+                      if isinstance(v, bool) or not isinstance(v, (int, float)))
+    return (spec.scene_name, spec.settings["integrator"], spec.settings.get("compiled") is not False,
+            tuple(switches))
+
+
+def _warm_worker(specs, first, dask_worker=None):
+    """The warm-up on one worker (``client.run``; unpickling this function imported the package there).
+    The first worker of a machine runs the one-step ``specs`` one after another; the others import what
+    a case needs meanwhile, and no kernel (they would compile it at the same time). Nothing comes back."""
+    if dask_worker is not None and dask_worker.address in first:
+        for spec in specs:
+            run_case(spec)
+    else:
+        import xarray  # noqa: F401
+
+
+def _warm_up(client, specs):
+    """Before the cases start, run one step of one case per kernel set (:func:`_kernel_set`) on one worker
+    per machine, one after another, so that every Numba kernel the sweep needs is compiled once per machine
+    (into numba's on-disk cache) rather than by every worker at once; the other workers of the machine
+    then load it from the cache. Machines with a single worker need no warm-up."""
     hosts = {}
     for addr, info in client.scheduler_info(n_workers=-1)["workers"].items():
         hosts.setdefault(info.get("host", addr), []).append(addr)
     first = [addrs[0] for addrs in hosts.values() if len(addrs) > 1]
-    if first:
-        short = dataclasses.replace(spec, settings={**spec.settings, "t_end": spec.settings["dt"]}, measures={})
-        try:
-            client.run(run_case, short, workers=first)
-        except Exception:            # only a warm-up: the cases themselves report any failure
-            pass
+    if not first:
+        return
+    shorts = {}
+    for spec in specs:
+        shorts.setdefault(_kernel_set(spec), dataclasses.replace(
+            spec, settings={**spec.settings, "t_end": spec.settings["dt"]}, measures={}))
+    try:
+        client.run(_warm_worker, list(shorts.values()), first)
+    except Exception:                # only a warm-up: the cases themselves report any failure
+        pass
 
 
 def sweep(scene, vary=None, cases=None, *, t_end=None, dt=None, integrator="energy-momentum", record=DEFAULT_RECORD,
@@ -760,10 +847,14 @@ def sweep(scene, vary=None, cases=None, *, t_end=None, dt=None, integrator="ener
         ``.zarr``, else one netCDF file per case (see the module notes).
         None keeps the results in memory only.
     client : None, "serial", str or distributed.Client
-        None: start a ``LocalCluster`` of ``n_workers`` worker processes
-        (one thread each; default one per core) and close it at the end.
-        A Client or a scheduler address: run on that cluster. ``"serial"``:
-        run the cases one after another in this process (same code path).
+        None: start a local cluster of ``n_workers`` worker processes
+        (:func:`local_cluster`: one thread each, default one per core) and
+        close it at the end. A Client or a scheduler address: run on that
+        cluster. ``"serial"``: run the cases one after another in this
+        process (same code path). On a cluster, one worker per machine first
+        runs one step of one case per scene, integrator, compiled-or-not and
+        non-numeric parameters, so that the Numba kernels are compiled once
+        per machine.
     resume : bool
         Read cases already in the store instead of running them; False
         recomputes and replaces them.

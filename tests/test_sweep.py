@@ -1,7 +1,9 @@
-"""Parameter sweeps on a local Dask cluster: bit-for-bit equality with serial runs, faults, resume."""
+"""Parameter sweeps on a local Dask cluster: bit-for-bit equality with serial runs, faults, resume, kernels
+compiled once per machine, the command line's bar, table and study options."""
 import json
 import logging
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -16,7 +18,7 @@ from distributed import Client, LocalCluster
 
 import skfem_flex as sf
 from skfem_flex.integrators import NewtonSettings
-from skfem_flex.sweep import open_sweep, plan, probe_extremes
+from skfem_flex.sweep import local_cluster, open_sweep, plan, probe_extremes
 
 ROOT = Path(__file__).resolve().parents[1]
 GRID = {"omega": [4.0, 6.0, 8.0, 10.0], "n_elements": [2, 3, 4, 6]}
@@ -238,3 +240,96 @@ def test_studies_run_their_cases_through_the_sweep_on_a_cluster_and_resume(clien
                                    store=tmp_path / "wp", client=client)
     assert again == spread          # read back from the store: the same wall times, so nothing ran again
     assert len(open_sweep(tmp_path / "wp").case) == 4
+
+
+def test_a_mixed_sweep_compiles_each_kernel_once_per_machine(tmp_path):
+    # three integrators, two kernel sets: trapezoidal and generalized-alpha share the floating-frame kernels,
+    # the energy-momentum step (Python path) adds its discrete gradient. Warming only the first case would
+    # leave the second set to both workers at once.
+    cache, log = tmp_path / "numba-cache", tmp_path / "saves"
+    cache.mkdir()
+    log.mkdir()
+
+    def log_compilations(log_dir):
+        """In a worker: append (cache index, signature, index existed before) to a log at every save numba
+        makes into its cache (one save per compilation)."""
+        import json as _json
+        import os as _os
+
+        import numba
+        from numba.core import caching
+
+        save = caching.Cache.save_overload
+
+        def logged(self, sig, data):
+            index = self._cache_file._index_path
+            existed = _os.path.exists(index)
+            save(self, sig, data)
+            with open(_os.path.join(log_dir, f"{_os.getpid()}.jsonl"), "a") as fh:
+                fh.write(_json.dumps([_os.path.basename(index), str(sig), existed]) + "\n")
+        caching.Cache.save_overload = logged
+        return numba.config.CACHE_DIR
+
+    vary = {"integrator": ["trapezoidal", "generalized-alpha", "energy-momentum"], "omega": [4.0, 6.0]}
+    with local_cluster(2, env={"NUMBA_CACHE_DIR": str(cache)}) as cluster, Client(cluster) as c:
+        assert set(c.run(log_compilations, str(log)).values()) == {str(cache)}
+        ds = sf.sweep("spin_up_beam", vary=vary, t_end=0.1, dt=0.01, compiled=False, client=c)
+    assert set(ds.status.values) == {"completed"} and len(set(ds.worker.values)) == 2
+    saves = [json.loads(line) for f in log.iterdir() for line in f.read_text().splitlines()]
+    indexes = sorted(p.name for p in cache.rglob("*.nbi"))
+    assert any("energy_momentum_terms" in name for name in indexes) and any("momentum-" in n for n in indexes)
+    # every kernel was compiled for each of its signatures once on this machine, and its index created once
+    per_signature = {}
+    for index, sig, _ in saves:
+        per_signature[index, sig] = per_signature.get((index, sig), 0) + 1
+    assert {k: n for k, n in per_signature.items() if n != 1} == {}
+    assert sorted(index for index, _, existed in saves if not existed) == indexes
+    for i in range(ds.sizes["case"]):
+        case = ds.isel(case=i)
+        res = sf.simulate(sf.scenes.spin_up_beam(omega=float(case.omega)), 0.1, 0.01,
+                          integrator=str(case.integrator.item()), compiled=False)
+        assert _same_without_state(case, res), f"case {i} differs from the serial run"
+
+
+def test_cli_sweep_shows_a_progress_bar_and_a_summary_table(client, tmp_path, capsys):
+    from skfem_flex.cli import main
+
+    out = tmp_path / "bar"
+    assert main(["sweep", "spin_up_beam", "--vary", "omega=4,6", "--t-end", "0.05", "--dt", "0.01",
+                 "--scheduler", client.scheduler.address, "--out", str(out)]) == 0
+    captured = capsys.readouterr()
+    header = captured.out.splitlines()[0].split()
+    assert header[:6] == ["omega", "status", "steps", "wall_time", "newton_per_step", "max_energy_balance_error"]
+    assert "tip extreme[0]" in captured.out.splitlines()[0] and header[-1] == "message"
+    assert sum(line.split()[:2] in (["4", "completed"], ["6", "completed"]) for line in captured.out.splitlines()) == 2
+    assert "2 cases: 2 computed, 0 read from the store" in captured.out
+    # tqdm's bar over cases, on stderr, finished
+    assert re.search(r"sweep: 100%\|.*\| 2/2 \[.*(case/s|s/case)", captured.err), captured.err
+
+
+def test_cli_study_on_a_cluster_with_a_store_and_a_rerun_that_computes_nothing(client, tmp_path, capsys):
+    from skfem_flex.cli import main
+
+    store = tmp_path / "runs"
+    args = ["study", "stability", "--cases", "quartic_T4", "pendulum_near_upright",
+            "--schemes", "energy-momentum", "trapezoidal", "--quick", "--store", str(store)]
+    assert main([*args, "--scheduler", client.scheduler.address, "--out", str(tmp_path / "a")]) == 0
+    first = capsys.readouterr().out
+    assert "4 runs: 4 computed, 0 read from the store" in first
+    assert len(open_sweep(store).case) == 4
+    written = {p.name: p.stat().st_mtime_ns for p in store.iterdir()}
+    # the rerun (in this process, the default) reads every run back: same table, wall times included
+    assert main([*args, "--out", str(tmp_path / "b")]) == 0
+    again = capsys.readouterr().out
+    assert "4 runs: 0 computed, 4 read from the store" in again
+    table = (tmp_path / "a" / "stability.md").read_text()
+    assert (tmp_path / "b" / "stability.md").read_text() == table and table in first and table in again
+    assert {p.name: p.stat().st_mtime_ns for p in store.iterdir()} == written
+    # --no-resume runs them again and replaces them in the store
+    assert main([*args, "--no-resume", "--quiet", "--out", str(tmp_path / "c")]) == 0
+    assert len(open_sweep(store).case) == 4 and all(
+        p.stat().st_mtime_ns != written[p.name] for p in store.iterdir() if p.suffix == ".nc")
+    # --workers and --scheduler exclude each other, as for sweep
+    assert main(["study", "stability", "--workers", "2", "--scheduler", "tcp://x:1", "--out", str(tmp_path / "d")]) == 2
+    err = capsys.readouterr().err
+    assert "not allowed with argument" in err and len(err.strip().splitlines()) == 1
