@@ -18,6 +18,7 @@ from skfem_flex.bodies.modal import ModalBody
 from skfem_flex.bodies.modal_kernel import pack_quartic, quartic_discrete_gradient, quartic_energy
 from skfem_flex.bodies.stiffening import QuarticEnergy
 from skfem_flex.integrators import EnergyMomentum, Trapezoidal
+from test_compiled_loop import assert_loop_measures_are_the_scenes, assert_same_run as same_run
 
 SEC = dict(EA=2.8e7, EI=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4)
 
@@ -168,23 +169,8 @@ def test_bodies_without_kernel_data_and_eligibility():
 
 
 def assert_same_run(a, b, tol=1e-10):
-    """Compiled run a against Python run b: states, energies, momenta, reactions and work to ``tol`` relative."""
-    np.testing.assert_array_equal(a.t, b.t)
-    assert a.steps == b.steps and a.halvings == b.halvings
-    assert np.abs(a.q - b.q).max() <= tol * np.abs(b.q).max()
-    assert np.abs(a.v - b.v).max() <= 100 * tol * np.abs(b.v).max()      # v1 = 2Δq/Δt − v0 amplifies round-off
-    # (free flight: q agrees to 2e-13, v to 1e-10 after 200 steps)
-    e_scale = np.abs(b.total_energy).max() + np.abs(b.external_work).max()
-    for name in ("total_energy", "potential", "kinetic", "external_work"):
-        assert np.abs(getattr(a, name) - getattr(b, name)).max() <= tol * e_scale, name
-    p_scale = np.abs(b.linear_momentum).max() + 1e-300
-    assert np.abs(a.linear_momentum - b.linear_momentum).max() <= tol * p_scale
-    if b.prescribed_force.size:
-        assert np.abs(a.prescribed_force - b.prescribed_force).max() <= tol * np.abs(b.prescribed_force).max()
-    for k in b.probes:
-        np.testing.assert_allclose(a.probes[k], b.probes[k], rtol=0, atol=tol * np.abs(b.q).max())
-    total_a, total_b = a.newton_iterations.sum(), b.newton_iterations.sum()
-    assert abs(total_a - total_b) <= 0.05 * total_b + 0.3 * a.t.size
+    """Compiled run a against Python run b (free flight: q agrees to 2e-13, v to 1e-10 after 200 steps)."""
+    same_run(a, b, q_tol=tol, v_tol=100 * tol, e_tol=tol)
 
 
 def energy_balance(res):
@@ -237,11 +223,4 @@ def test_long_reduced_spin_up_energy_balance():
 
 
 def test_energies_and_momenta_computed_in_the_loop_equal_the_scene_methods():
-    scene = free_flying_modal()
-    res = sf.simulate(scene, t_end=0.2, dt=1e-2, record_every=3)
-    for k in range(res.t.size):
-        q, v = res.q[k], res.v[k]
-        assert res.kinetic[k] == pytest.approx(scene.kinetic_energy(q, v), rel=1e-12)
-        assert res.potential[k] == pytest.approx(scene.potential_energy(q), rel=1e-12, abs=1e-15)
-        np.testing.assert_allclose(res.linear_momentum[k], scene.linear_momentum(q, v), rtol=1e-12, atol=1e-13)
-        assert res.angular_momentum[k] == pytest.approx(scene.angular_momentum(q, v), rel=1e-12)
+    assert_loop_measures_are_the_scenes(free_flying_modal(), rel=1e-12)
