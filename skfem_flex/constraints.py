@@ -28,7 +28,8 @@ from __future__ import annotations
 import numpy as np
 
 from .bodies.base import BodyPoint, check_finite_vector, place_block, to_dense, zero_matrix
-from .bodies.rigid import E_MATRIX, dsinc, rotation, sinc
+from .bodies.rigid import E_MATRIX, rotation
+from .rotations import dsinc, sinc
 from .motion import MotionLaw
 
 __all__ = ["Constraint", "Distance", "UserConstraint", "Pin", "Revolute", "Slider", "Prismatic", "Weld",

@@ -13,7 +13,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sps
 
-from .bodies.base import BodyPoint, check_finite_vector
+from .bodies.base import DENSE_LIMIT, BodyPoint, check_finite_vector
 from .bodies.rigid import E_MATRIX, rotation
 from .constraints import PointLayout, _angle_term, _Difference, _Dot, _Position
 
@@ -136,7 +136,7 @@ class Gravity(ForceElement):
         sparse otherwise."""
         if len(blocks) == 1:
             return blocks[0]
-        if self._n <= 150 and not any(sps.issparse(blk) for blk in blocks):     # a small (dense) scene
+        if self._n <= DENSE_LIMIT and not any(sps.issparse(blk) for blk in blocks):     # a small (dense) scene
             return sla.block_diag(*[np.zeros((b.n_dofs, b.n_dofs)) if blk is None else blk
                                     for b, blk in zip(self.bodies, blocks)])
         return sps.block_diag([sps.csr_matrix((b.n_dofs, b.n_dofs)) if blk is None else sps.csr_matrix(blk)

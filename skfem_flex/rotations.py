@@ -24,10 +24,12 @@ discrete gradient by complex steps) and are defined for |Δφ| < π.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 __all__ = ["MAX_INCREMENT", "cayley", "cayley_derivative", "cayley_ratio", "cayley_ratio_derivative", "cayley_divided_difference",
-           "sinc"]
+           "sinc", "dsinc"]
 
 #: largest incremental rotation per step the Cayley update accepts, rad (W has a pole at π)
 MAX_INCREMENT = 0.9 * np.pi
@@ -38,6 +40,15 @@ _SERIES = 1e-2
 def sinc(x):
     """sin(x)/x, 1 at 0 (unnormalised; complex arguments allowed)."""
     return np.sinc(np.asarray(x) / np.pi)
+
+
+def dsinc(x):
+    """d sinc(x)/dx = (x cos x − sin x)/x², by its Taylor series near 0 (no cancellation)."""
+    x = float(x)
+    if abs(x) < 2e-2:
+        x2 = x * x
+        return x * (-1.0 / 3.0 + x2 * (1.0 / 30.0 - x2 / 840.0))
+    return (x * math.cos(x) - math.sin(x)) / (x * x)
 
 
 def cayley(dphi):

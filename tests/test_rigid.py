@@ -7,7 +7,8 @@ from scipy.integrate import solve_ivp
 from scipy.special import ellipk
 
 import skfem_flex as sf
-from skfem_flex.bodies.rigid import RigidBody, dsinc, rotation, sinc
+from skfem_flex.bodies.rigid import RigidBody, rotation
+from skfem_flex.rotations import dsinc, sinc
 
 G = 9.81
 

@@ -68,14 +68,12 @@ from ..beam import TimoshenkoBeam
 from ..forces import ForceElement
 from ..forms import bending, shear, translational_mass, rotary_mass
 from . import floating_kernel as _kernel
-from .base import BodyGeometry, check_finite_vector, to_dense
+from .base import DENSE_LIMIT, BodyGeometry, check_finite_vector, to_dense
 from .ffr import FloatingFrame, FramePoint
 from .rigid import E_MATRIX as E2, rotation as _rot
 
 __all__ = ["FloatingBeam", "DistributedLoad"]
 
-#: bodies with more coordinates than this use scipy.sparse matrices (same crossover as scene.DENSE_LIMIT)
-SPARSE_LIMIT = 150
 _FIELDS = {"u": 0, "w": 1, "theta": 2, "th": 2, "phi": 2}
 _FIELD_NAMES = ("u", "w", "th")
 
@@ -131,7 +129,8 @@ class FloatingBeam(FloatingFrame):
         Initial q_f and q̇_f (length ``n_elastic``; see :meth:`elastic_vector`).
     name : str
     sparse : bool, optional
-        Matrix format; default: sparse when the body has more than 150 coordinates.
+        Matrix format; default: sparse when the body has more than
+        :data:`~skfem_flex.bodies.base.DENSE_LIMIT` coordinates.
 
     Raises
     ------
@@ -165,7 +164,7 @@ class FloatingBeam(FloatingFrame):
         self.fixed_dofs = fixed
         self.n_elastic = nf = self.free_dofs.size
         self.n_dofs = n = 3 + nf
-        self.sparse = (n > SPARSE_LIMIT) if sparse is None else bool(sparse)
+        self.sparse = (n > DENSE_LIMIT) if sparse is None else bool(sparse)
         red = -np.ones(n_full, dtype=int)
         red[self.free_dofs] = np.arange(nf)
         self._red = red

@@ -27,8 +27,9 @@ import math
 import numpy as np
 
 from .base import Body, BodyGeometry, BodyPoint, check_finite_vector
+from ..rotations import dsinc, sinc
 
-__all__ = ["RigidBody", "rotation", "E_MATRIX", "sinc", "dsinc"]
+__all__ = ["RigidBody", "rotation", "E_MATRIX"]
 
 #: the planar "cross" matrix E = A(π/2): E v is v turned by +90°
 E_MATRIX = np.array([[0.0, -1.0], [1.0, 0.0]])
@@ -39,23 +40,6 @@ def rotation(theta):
     theta = float(theta)
     c, s = math.cos(theta), math.sin(theta)
     return np.array([[c, -s], [s, c]])
-
-
-def sinc(x):
-    """sin(x)/x with sinc(0) = 1 (unnormalised; not ``numpy.sinc``)."""
-    x = float(x)
-    if x == 0.0:
-        return 1.0
-    return math.sin(x) / x
-
-
-def dsinc(x):
-    """d sinc(x)/dx = (x cos x − sin x)/x², by its Taylor series near 0 (no cancellation)."""
-    x = float(x)
-    if abs(x) < 2e-2:
-        x2 = x * x
-        return x * (-1.0 / 3.0 + x2 * (1.0 / 30.0 - x2 / 840.0))
-    return (x * math.cos(x) - math.sin(x)) / (x * x)
 
 
 def _positive(name, value):
