@@ -31,7 +31,7 @@ Two more tables:
   step over the first ``--catalogue-steps`` steps (after a two-step warm-up),
   with the number of coordinates;
 * with exudyn installed (``pip install ".[bench]"``), the same problems in
-  both codes side by side in this process (:mod:`peer_exudyn`), alternating,
+  both codes side by side in this process (:mod:`skfem_flex.peer`), alternating,
   median of ``--repeat``, every step recorded on both sides: spin-up (8
   elements, Δt = 1e-3, 30 s), flexible pendulum (16 elements, Δt = 1e-4 and
   1e-3, 2 s), rigid pendulum (Δt = 1e-2, 10 s). Each code's error is the
@@ -224,7 +224,7 @@ def _reference(out, key, compute):
 
 def peer_problems(out):
     """[(label, our scene factory, our scheme, dt, t_end, probe, peer run, peer scheme, reference factory)]."""
-    import peer_exudyn as peer
+    from skfem_flex import peer
 
     def spin_ref():
         r = sf.simulate(sf.scenes.spin_up_beam(omega=4.0, n_elements=32), t_end=30.0, dt=2.5e-4)
@@ -277,7 +277,7 @@ def peer_rows(out, repeat=3, only=None):
 
 
 def peer_table(rows, repeat):
-    import peer_exudyn as peer
+    from skfem_flex import peer
     lines = [f"Side by side with exudyn {peer.version()} in this process, alternating, median of {repeat}, "
              f"every step recorded on both sides; error = largest distance (m) over the run from the converged "
              f"reference.", "",
@@ -332,8 +332,8 @@ if __name__ == "__main__":
     if not args.no_catalogue:
         parts.append(catalogue_table(catalogue_rows(args.catalogue_steps), args.catalogue_steps))
     if not args.no_peer:
-        import peer_exudyn
-        if peer_exudyn.available():
+        from skfem_flex.peer import peer_available
+        if peer_available():
             parts.append(peer_table(peer_rows(args.out, args.repeat), args.repeat))
         else:
             parts.append("exudyn is not installed (pip install \".[bench]\"): no side-by-side table.\n")

@@ -6,7 +6,7 @@
                    [--integrator NAME] [--rho-inf R] [--out DIR] [--every N]
                    [--no-vtk] [--quiet]
     skfem-flex list
-    skfem-flex study work-precision [CASE] [--schemes ...] [--quick] [--out DIR]
+    skfem-flex study work-precision [CASE] [--schemes ...] [--quick] [--no-peer] [--out DIR]
                      [--workers N | --scheduler ADDRESS] [--store DIR] [--resume | --no-resume]
     skfem-flex study stability [--cases ...] [--schemes ...] [--quick] [--out DIR]
                      [--workers N | --scheduler ADDRESS] [--store DIR] [--resume | --no-resume]
@@ -595,7 +595,7 @@ def _cmd_study(args):
                     case = studies.WORK_PRECISION_CASES[name]()
                     dts = case.dts[:2] if args.quick else case.dts
                     part = studies.work_precision(case, schemes=args.schemes, dts=dts, out_dir=out, name=name,
-                                                  progress=say, **run)
+                                                  progress=say, peer=not args.no_peer, **run)
                     rows += part
                     computed, skipped = computed + part.computed, skipped + part.skipped
                 stem = out / "work_precision"
@@ -634,6 +634,9 @@ def _add_study(sub):
     p.add_argument("--quick", action="store_true",
                    help=f"short runs, a smoke test of the study (at most {studies.QUICK_STEPS} steps and "
                         f"{studies.QUICK_BUDGET:g} s each)")
+    p.add_argument("--no-peer", action="store_true",
+                   help="work-precision: leave out the exudyn rows (by default, with exudyn installed, its models "
+                        "of flexible_pendulum and spin_up_beam run at the same steps against the same reference)")
     p.add_argument("--budget", type=_positive_number, default=300.0, metavar="S",
                    help="stability: wall-clock seconds per run before it is stopped and reported (default 300)")
     _add_where_options(p, workers_default="default: run the cases one after another in this process, so that "

@@ -6,6 +6,11 @@ on a Dask cluster with ``client=``, resumable with ``store=``), catch every
 failure (a failed run is a row with its message and the time it happened,
 never a crash) and return plain tables that the command line writes as
 Markdown, CSV and PNG.
+
+With exudyn installed (:func:`skfem_flex.peer.peer_available`), the work–precision
+study also runs the peer code's model of the flexible pendulum and the spin-up
+(:mod:`skfem_flex.peer`) at the same steps and measures its error in the same way
+against the same reference (rows with scheme :data:`PEER_SCHEME`).
 """
 from __future__ import annotations
 
@@ -19,13 +24,16 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 from scipy.special import ellipj, ellipk, gamma
 
+from . import peer as _peer
 from .simulate import simulate
 
 __all__ = ["WorkPrecisionRow", "StabilityRow", "StudyRows", "work_precision", "stability", "write_table",
            "plot_work_precision", "plot_stability", "WORK_PRECISION_CASES", "STABILITY_CASES", "oscillator_period",
-           "pendulum_period", "upward_crossings", "period_error", "history_error"]
+           "pendulum_period", "upward_crossings", "period_error", "history_error", "PEER_SCHEME"]
 
 SCHEMES = ("energy-momentum", "trapezoidal", "generalized-alpha")
+#: the scheme label of the peer code's rows in the work–precision study (exudyn's generalized-α, ρ∞ = 0.9)
+PEER_SCHEME = "exudyn generalized-alpha"
 
 
 # --------------------------------------------------------------- references
@@ -128,6 +136,11 @@ class WorkPrecisionCase:
     reference run at ``reference_dt`` with the energy-momentum scheme is
     made (and saved when the study has an output folder) and the error is
     the history error of ``probe`` against it.
+
+    ``peer``, for such history cases, is None or callable(dt, t_end) -> run,
+    the same problem in the peer code (a model of :mod:`skfem_flex.peer`,
+    whose ``run()`` returns (t, probe, seconds) with the probe as our scene's
+    ``probe``): its error is the same history error against the same reference.
     """
 
     scene: Callable
@@ -137,6 +150,7 @@ class WorkPrecisionCase:
     probe: str = ""
     reference_dt: float = 0.0
     description: str = ""
+    peer: Callable = None
 
 
 def _pendulum_case():
@@ -158,7 +172,17 @@ def _spin_up_case():
     from .scenes import spin_up_beam
     return WorkPrecisionCase(spin_up_beam, 10.0, (0.05, 0.02, 0.01, 0.005), probe="tip", reference_dt=0.005 / 8,
                              description="tip history (hub frame) against a run at Δt/8, ω = 4 rad/s, 8 elements, "
-                                         "first 10 s")
+                                         "first 10 s",
+                             peer=lambda dt, t_end: _peer.spin_up(n_elements=8, dt=dt, t_end=t_end, omega=4.0, T=15.0))
+
+
+def _flexible_pendulum_case():
+    from .scenes import flexible_pendulum
+    return WorkPrecisionCase(flexible_pendulum, 2.0, (0.01, 0.005, 0.002, 0.001), probe="tip",
+                             reference_dt=0.001 / 8,
+                             description="tip position (global frame) history against a run at Δt/8, 8 elements, "
+                                         "released horizontal, first 2 s",
+                             peer=lambda dt, t_end: _peer.flexible_pendulum(n_elements=8, dt=dt, t_end=t_end))
 
 
 def _rotating_beam_case():
@@ -178,7 +202,7 @@ def _rotating_beam_case():
 
 #: name -> callable returning a WorkPrecisionCase (built lazily so that imports stay light)
 WORK_PRECISION_CASES = {"spring_mass": _quartic_case, "pendulum": _pendulum_case, "spin_up_beam": _spin_up_case,
-                        "rotating_beam": _rotating_beam_case}
+                        "rotating_beam": _rotating_beam_case, "flexible_pendulum": _flexible_pendulum_case}
 
 
 class StudyRows(list):
@@ -197,7 +221,7 @@ class StudyRows(list):
 
 
 def work_precision(case, schemes=SCHEMES, dts=None, out_dir=None, name="case", progress=None, store=None,
-                   client="serial", resume=True, n_workers=None):
+                   client="serial", resume=True, n_workers=None, peer=True):
     """Error against run time for every scheme and step.
 
     Parameters
@@ -223,6 +247,17 @@ def work_precision(case, schemes=SCHEMES, dts=None, out_dir=None, name="case", p
     StudyRows of WorkPrecisionRow
         Failed runs have ``error = nan`` and their message; ``computed`` and
         ``skipped`` count the runs made now and read from the store.
+
+        With ``peer`` true, exudyn importable (:func:`skfem_flex.peer.peer_available`)
+        and a case that has a peer model (``flexible_pendulum``, ``spin_up_beam``),
+        rows with scheme :data:`PEER_SCHEME` follow: the peer's model of the
+        same problem at each Δt, in this process after our runs (never from the
+        store; counted in ``computed``), its error the same history error of the
+        same probe against the same reference run, its wall time exudyn's solve
+        (its model set-up excluded, as our scene's build is), its ``steps`` the
+        steps exudyn took.
+    peer : bool
+        False leaves the peer out even when exudyn is installed.
     """
     from .sweep import plan
 
@@ -237,6 +272,7 @@ def work_precision(case, schemes=SCHEMES, dts=None, out_dir=None, name="case", p
     if error_fn is None:
         ref = _reference(case, out_dir, name)
         error_fn = history_error(ref, case.probe)
+    with_peer = bool(peer) and case.peer is not None and case.error is None and _peer.peer_available()
     specs = plan(case.scene, vary={"integrator": list(schemes), "dt": [float(d) for d in dts]}, t_end=case.t_end,
                  record=(), measures={"error": error_fn}, name=f"work-precision:{name}", label=name)
 
@@ -252,7 +288,32 @@ def work_precision(case, schemes=SCHEMES, dts=None, out_dir=None, name="case", p
         if progress:
             progress(f"{name} {r.scheme} dt={r.dt:.3g}: error {r.error:.3g}, {r.wall_time:.3g} s")
         return r
-    return _study_rows(specs, row, store, client, resume, n_workers)
+    rows = _study_rows(specs, row, store, client, resume, n_workers)
+    if with_peer:
+        for dt in dts:
+            rows.append(_peer_row(case, name, float(dt), error_fn, progress))
+            rows.computed += 1
+    return rows
+
+
+def _peer_row(case, name, dt, error_fn, progress):
+    """One run of the case's peer model at ``dt``, measured by ``error_fn`` (a history error) as ours are."""
+    from types import SimpleNamespace
+
+    run = case.peer(dt, case.t_end)
+    try:
+        t, probe, seconds = run()
+        err = float(error_fn(SimpleNamespace(t=np.asarray(t), probes={case.probe: np.asarray(probe)})))
+        msg = "" if np.isfinite(err) else "error not measurable"
+    except Exception as exc:              # a failed peer run is a row, as ours are
+        seconds, err, msg = float("nan"), float("nan"), f"{type(exc).__name__}: {str(exc).strip()}".splitlines()[0]
+    stats = getattr(run, "stats", {})
+    steps = int(stats.get("steps", round(case.t_end / dt)))
+    newton = stats.get("newton", float("nan"))
+    r = WorkPrecisionRow(name, PEER_SCHEME, dt, steps, float(seconds), err, float(newton) / max(steps, 1), msg)
+    if progress:
+        progress(f"{name} {r.scheme} dt={r.dt:.3g}: error {r.error:.3g}, {r.wall_time:.3g} s")
+    return r
 
 
 def _study_rows(specs, row, store, client, resume, n_workers):
@@ -282,7 +343,10 @@ def _reference(case, out_dir, name):
 
 
 def plot_work_precision(rows, path, title="work–precision"):
-    """Log–log error against wall time: one panel per case, one line per scheme; returns the path."""
+    """Log–log error against wall time: one panel per case, one line per scheme; returns the path.
+
+    Our schemes are solid lines with circles; the peer code's rows (scheme starting with
+    ``"exudyn"``) dashed black lines with squares."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -292,12 +356,20 @@ def plot_work_precision(rows, path, title="work–precision"):
     ncol = min(2, len(cases))
     nrow = (len(cases) + ncol - 1) // ncol
     fig, axes = plt.subplots(nrow, ncol, figsize=(5.2 * ncol, 3.8 * nrow), constrained_layout=True, squeeze=False)
+    ours = [s for s in schemes if not s.startswith("exudyn")]
+    peers = [s for s in schemes if s.startswith("exudyn")]
+    style = {s: dict(fmt="o-", color=f"C{k}") for k, s in enumerate(ours)}
+    style.update({s: dict(fmt="s--", color=("k", "0.45", "0.7")[k % 3], markerfacecolor="none")
+                  for k, s in enumerate(peers)})
     for ax, case in zip(axes.flat, cases):
-        for k, scheme in enumerate(schemes):
+        for scheme in schemes:
             sel = [r for r in rows if r.case == case and r.scheme == scheme]
+            if not sel:
+                continue
             good = [r for r in sel if np.isfinite(r.error) and r.error > 0]
-            line, = ax.loglog([r.wall_time for r in good], [r.error for r in good], "o-", color=f"C{k}",
-                              label=scheme)
+            kw = dict(style[scheme])
+            line, = ax.loglog([r.wall_time for r in good], [r.error for r in good], kw.pop("fmt"), label=scheme,
+                              **kw)
             failed = [r for r in sel if not np.isfinite(r.error)]
             if failed:
                 line.set_label(f"{scheme} ({len(failed)} run(s) failed)")

@@ -83,3 +83,45 @@ def test_study_command_writes_tables_and_plot(tmp_path):
                  "--out", str(tmp_path / "w")]) == 0
     assert "energy-momentum" in (tmp_path / "w" / "work_precision.md").read_text()
     assert main(["study", "work-precision", "nope", "--quiet", "--out", str(tmp_path / "x")]) == 2
+    assert main(["study", "work-precision", "spring_mass", "--schemes", "energy-momentum", "--quick", "--quiet",
+                 "--no-peer", "--out", str(tmp_path / "w2")]) == 0
+
+
+def _tiny_flexible_pendulum():
+    """The flexible-pendulum work–precision case cut to 0.25 s (reference run at Δt = 1.25e-4: 2 000 steps)."""
+    import dataclasses
+    return dataclasses.replace(studies.WORK_PRECISION_CASES["flexible_pendulum"](), t_end=0.25)
+
+
+def test_work_precision_without_the_peer_has_only_our_rows(monkeypatch):
+    from skfem_flex import peer
+    monkeypatch.setattr(peer, "peer_available", lambda: False)
+    case = _tiny_flexible_pendulum()
+    assert case.peer is not None and studies.WORK_PRECISION_CASES["spin_up_beam"]().peer is not None
+    rows = studies.work_precision(case, schemes=["energy-momentum"], dts=[0.01, 0.005])
+    assert [r.scheme for r in rows] == ["energy-momentum"] * 2 and rows.computed == 2
+    assert all(np.isfinite(r.error) and r.message == "" for r in rows)
+    assert rows[1].error < rows[0].error
+    # cases without a peer model never ask for one
+    monkeypatch.setattr(peer, "peer_available", lambda: pytest.fail("asked for the peer"))
+    rows = studies.work_precision("spring_mass", schemes=["energy-momentum"], dts=[studies.oscillator_period(2.0) / 20])
+    assert [r.scheme for r in rows] == ["energy-momentum"]
+
+
+def test_work_precision_adds_the_peer_rows(tmp_path):
+    pytest.importorskip("exudyn")
+    rows = studies.work_precision(_tiny_flexible_pendulum(), schemes=["generalized-alpha"], dts=[0.01, 0.005],
+                                  name="flexible_pendulum")
+    assert [r.scheme for r in rows] == ["generalized-alpha"] * 2 + [studies.PEER_SCHEME] * 2
+    peer_rows = rows[2:]
+    assert [r.dt for r in peer_rows] == [0.01, 0.005] and [r.steps for r in peer_rows] == [25, 50]
+    assert all(r.message == "" and np.isfinite(r.error) and r.wall_time > 0 for r in peer_rows)
+    assert peer_rows[1].error < peer_rows[0].error
+    # the same physical quantity: at equal Δt the two codes' errors are of one size
+    for ours, theirs in zip(rows[:2], peer_rows):
+        assert 0.5 < theirs.error / ours.error < 2.0
+    assert rows.computed == 4
+    # peer=False leaves it out; the plot draws it
+    assert [r.scheme for r in studies.work_precision(_tiny_flexible_pendulum(), schemes=["generalized-alpha"],
+                                                     dts=[0.01], peer=False)] == ["generalized-alpha"]
+    assert studies.plot_work_precision(rows, tmp_path / "wp.png").stat().st_size > 1000
