@@ -22,7 +22,7 @@ Numba kernels or loads them from numba's cache; that warm-up is reported but
 not part of the table; the same warm-up in a fresh process with an empty
 numba cache gives the one-off compile time. Each case is run ``--repeat`` times; the table gives
 the median wall time, µs per step and Newton iterations per step, and is
-written as Markdown to ``OUT/benchmark.md`` (default ``examples/output``),
+written as Markdown to ``OUT/benchmark.md`` (``OUT/peer_benchmark.md`` with ``--no-loop``; default ``examples/output``),
 which the README quotes.
 
 Two more tables:
@@ -340,6 +340,9 @@ if __name__ == "__main__":
     text = "\n".join(parts)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    (out / "benchmark.md").write_text(text)
+    # the time-loop table and the catalogue/peer tables are separate documents: a run of only the
+    # latter (--no-loop) must not overwrite the former
+    name = "peer_benchmark.md" if args.no_loop else "benchmark.md"
+    (out / name).write_text(text)
     print(text)
-    print(f"written to {out / 'benchmark.md'}")
+    print(f"written to {out / name}")
