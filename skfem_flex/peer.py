@@ -118,11 +118,14 @@ def _hold(mbs, node, coordinates):
         for c in coordinates]
 
 
-def _solve(mbs, sensor, settings, stats=None):
-    """Solve; returns (t, sensor values, seconds). ``stats`` (a dict) receives the steps exudyn took
-    (``steps``: its adaptive step control may cut Δt below the requested one) and its Newton
-    iterations (``newton``)."""
-    exu, _ = _exudyn()
+def _solve(mbs, node, output, settings, stats=None):
+    """Record ``output`` ("Position", "Displacement") of ``node``, assemble and solve; returns (t,
+    recorded values, seconds). ``stats`` (a dict) receives the steps exudyn took (``steps``: its
+    adaptive step control may cut Δt below the requested one) and its Newton iterations (``newton``)."""
+    exu, ei = _exudyn()
+    sensor = mbs.AddSensor(ei.SensorNode(nodeNumber=node, storeInternal=True,
+                                         outputVariableType=getattr(exu.OutputVariableType, output)))
+    mbs.Assemble()
     start = time.perf_counter()
     exu.SolveDynamic(mbs, settings, storeSolver=True)
     seconds = time.perf_counter() - start
@@ -157,11 +160,8 @@ def spin_up(n_elements=8, dt=1e-3, t_end=30.0, omega=4.0, T=15.0, scheme="genera
             mbs.SetObjectParameter(hub, "offset", float(law.position(t)))
             return True
         mbs.SetPreStepUserFunction(prescribe)
-        sensor = mbs.AddSensor(ei.SensorNode(nodeNumber=nodes[-1], storeInternal=True,
-                                             outputVariableType=exu.OutputVariableType.Displacement))
-        mbs.Assemble()
-        t, disp, seconds = _solve(mbs, sensor, _settings(t_end, dt, scheme, rho_inf, absolute_tolerance),
-                                  run.stats)
+        t, disp, seconds = _solve(mbs, nodes[-1], "Displacement",
+                                  _settings(t_end, dt, scheme, rho_inf, absolute_tolerance), run.stats)
         theta = np.array([law.position(x) for x in t])
         x, y = length + disp[:, 0], disp[:, 1]
         c, s = np.cos(theta), np.sin(theta)
@@ -183,10 +183,7 @@ def flexible_pendulum(n_elements=16, dt=1e-3, t_end=2.0, EI=1e2, scheme="general
         for e in elements:
             mbs.AddLoad(ei.LoadMassProportional(markerNumber=mbs.AddMarker(ei.MarkerBodyMass(bodyNumber=e)),
                                                 loadVector=[0.0, -g, 0.0]))
-        sensor = mbs.AddSensor(ei.SensorNode(nodeNumber=nodes[-1], storeInternal=True,
-                                             outputVariableType=exu.OutputVariableType.Position))
-        mbs.Assemble()
-        t, pos, seconds = _solve(mbs, sensor, _settings(t_end, dt, scheme, rho_inf), run.stats)
+        t, pos, seconds = _solve(mbs, nodes[-1], "Position", _settings(t_end, dt, scheme, rho_inf), run.stats)
         return t, pos[:, :2], seconds
     run.stats = {}
     return run
@@ -206,10 +203,7 @@ def pendulum(dt=1e-2, t_end=10.0, length=0.5, v0=1.695, g=9.81, scheme="trapezoi
         mbs.AddObject(ei.DistanceConstraint(markerNumbers=[anchor, bob], distance=length))
         mbs.AddLoad(ei.LoadCoordinate(markerNumber=mbs.AddMarker(ei.MarkerNodeCoordinate(nodeNumber=node,
                                                                                          coordinate=1)), load=-g))
-        sensor = mbs.AddSensor(ei.SensorNode(nodeNumber=node, storeInternal=True,
-                                             outputVariableType=exu.OutputVariableType.Position))
-        mbs.Assemble()
-        t, pos, seconds = _solve(mbs, sensor, _settings(t_end, dt, scheme, rho_inf), run.stats)
+        t, pos, seconds = _solve(mbs, node, "Position", _settings(t_end, dt, scheme, rho_inf), run.stats)
         return t, pos[:, :2], seconds
     run.stats = {}
     return run
