@@ -17,9 +17,9 @@ after its ``.vtu`` is in place, so a reader or a killed run only ever sees
 collections that parse and name complete files. Writing N steps costs O(N)
 up to a logarithm: every step's entries are formatted once and kept, and the
 collections are rewritten (a join and one write) only when the steps not yet
-listed reach 1/64 of those listed, or a second has passed, and always at
+listed reach 1/256 of those listed, or a second has passed, and always at
 :meth:`VTKSeries.close`; a killed run therefore lists every step up to at
-most max(1, N/64) steps, or one second, before the kill. If a write fails
+most max(1, N/256) steps, or one second, before the kill. If a write fails
 (disk full), the steps not listed are removed, no temporary file is left and
 the ``OSError`` is raised.
 
@@ -58,7 +58,7 @@ __all__ = ["VTKSeries", "merge_geometry", "read_pvd", "POINT_ARRAYS", "CELL_ARRA
 #: point arrays every written file carries (name -> number of components; 3 = vector)
 POINT_ARRAYS = {"displacement": 3, "velocity": 3, "angle": 1}
 #: the collections are rewritten once the steps not listed reach 1/LISTING_FRACTION of the listed ones ...
-LISTING_FRACTION = 64
+LISTING_FRACTION = 256
 #: ... or this many seconds after the last rewrite (and always when the series closes)
 LISTING_SECONDS = 1.0
 #: cell arrays every written file carries (besides ``body_id``)

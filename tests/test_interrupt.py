@@ -120,9 +120,9 @@ def check_killed(proc, out, reference):
     assert proc.returncode == -signal.SIGKILL
     assert not (out / "summary.json").exists()
     # the frame, a collection and the checkpoint in flight may be left as temporary files (resume removes
-    # them); the collections list every frame up to at most N/64 frames before the kill
+    # them); the collections list every frame up to at most N/256 frames before the kill
     n_frames = len(list(out.glob(f"{SCENE}_*.vtu")))
-    check_collections(out, unlisted_allowed=max(1, n_frames // 64) + 1, tmp_allowed=3, killed=True)
+    check_collections(out, unlisted_allowed=max(1, n_frames // 256) + 1, tmp_allowed=3, killed=True)
     res = sf.Result.load(out / "checkpoint.npz")
     n = len(res.t)
     assert n >= 2 and res.final_state is not None
