@@ -266,12 +266,12 @@ def _bordered_band_plan(a):
     dense_bb = (np.flatnonzero(bb), pos[rows[bb]] * k + pos[cols[bb]])
     take_bi = np.flatnonzero(bi)                       # CSR order: rows ascending, so B rows ascending
     bi_ptr = np.concatenate([[0], np.cumsum(np.bincount(pos[rows[bi]], minlength=k))])
-    return lo, up, interior, bidx, band, dense_ib, dense_bb, (take_bi, pos[cols[bi]], bi_ptr)
+    return lo, up, interior, bidx, band, dense_ib, dense_bb, (take_bi, pos[cols[bi]], bi_ptr), rows
 
 
 def _bordered_band_solve(a, b, plan):
     """x with a x = b by the plan of :func:`_bordered_band_plan`: band LU of A_II, dense Schur complement."""
-    lo, up, interior, bidx, band, dense_ib, dense_bb, (take_bi, bi_cols, bi_ptr) = plan
+    lo, up, interior, bidx, band, dense_ib, dense_bb, (take_bi, bi_cols, bi_ptr), _ = plan
     ni, k = interior.size, bidx.size
     data = a.data
     ab = np.zeros((lo + up + 1, ni))
@@ -292,15 +292,15 @@ def _bordered_band_solve(a, b, plan):
     return x
 
 
-def _backward_stable(a, x, b, tol=1e-12):
+def _backward_stable(a, x, b, rows, tol=1e-12):
     """True if x solves a x = b to a normwise backward error ‖a x − b‖ / (‖a‖ ‖x‖ + ‖b‖) ≤ ``tol``.
 
     The residual relative to ‖b‖ alone is no test for the Newton matrices of fine meshes: their
     condition grows like (L/h)⁴, and an exact-arithmetic-quality solve leaves ‖r‖/‖b‖ ≈ 1e-7 at
-    10⁵ coordinates (as SuperLU does on the same matrix); the backward error stays near 1e-17."""
+    10⁵ coordinates (as SuperLU does on the same matrix); the backward error stays near 1e-17.
+    ``rows`` is the row index of every stored entry of ``a`` (part of the solve plan)."""
     if not np.all(np.isfinite(x)):
         return False
-    rows = np.repeat(np.arange(a.shape[0]), np.diff(a.indptr))
     row_sums = np.bincount(rows, weights=np.abs(a.data), minlength=a.shape[0])
     scale = float(row_sums.max(initial=0.0)) * _inf(x) + _inf(b)
     return _inf(a @ x - b) <= tol * max(scale, 1e-300)
@@ -331,6 +331,15 @@ def _sparse_lu_solve(a_csc, b, trans="N"):
     return x
 
 
+def _solve_plan(a):
+    """("band", plan), ("bordered", plan) or ("general", None): how the CSR matrix ``a`` is solved."""
+    plan = _banded_plan(a)
+    if plan is not None:
+        return "band", plan
+    plan = _bordered_band_plan(a)
+    return ("bordered", plan) if plan is not None else ("general", None)
+
+
 def _solve(a, b):
     if sps.issparse(a):
         if a.format != "csr":
@@ -338,19 +347,19 @@ def _solve(a, b):
         if not a.has_canonical_format:
             a = a.copy()
             a.sum_duplicates()
-        plan = _SOLVE_PLANS.get(a, (), lambda: _banded_plan(a) or _bordered_band_plan(a))
+        kind, plan = _SOLVE_PLANS.get(a, (), lambda: _solve_plan(a))
         x = None
-        if plan is not None and len(plan) == 3:        # banded (free coordinates of a beam): LAPACK gbsv
+        if kind == "band":                             # banded (free coordinates of a beam): LAPACK gbsv
             lo, up, pos = plan
             ab = np.zeros((lo + up + 1, a.shape[0]))
             ab.flat[pos] = a.data
             x = sla.solve_banded((lo, up), ab, b, overwrite_ab=True, check_finite=False)
-        elif plan is not None:                         # a band with a dense border (frames, joints)
+        elif kind == "bordered":                       # a band with a dense border (frames, joints)
             try:
                 x = _bordered_band_solve(a, np.asarray(b, dtype=float), plan)
             except np.linalg.LinAlgError:              # A_II singular on its own: general LU below
                 x = None
-            if x is not None and not _backward_stable(a, x, b):
+            if x is not None and not _backward_stable(a, x, b, plan[-1]):
                 x = None
         if x is None:                                  # Aᵀ of a CSR matrix is CSC without a copy
             x = _sparse_lu_solve(a.T, b, trans="T")

@@ -406,15 +406,10 @@ def full_body(model, reference=None, strain="linear", **body_kwargs):
                          f"{model.n_dofs} DOFs, more than {UNREDUCED_LIMIT}; reduce it (body.reduced(n_modes=...), "
                          f"or body='plane-stress-modal' in the catalogue scenes) or use a coarser mesh")
     names = list(model.interfaces)
-    if reference is None:
-        reference = "interface" if any(model.interface(n).has_rotation for n in names) else "mean-axes"
-    if reference == "mean-axes":
+    name = _reference_interface(model, reference, names)
+    if name is None:                                  # mean axes
         B, ref = _reference(model, np.eye(model.n_dofs), "mean-axes", names)
         Phi, freqs = _modal_form(model, B)
         return ModalBody(model, Phi, strain=strain, reference=ref, frequencies=freqs, **body_kwargs)
-    name = next((n for n in names if model.interface(n).has_rotation), None) if reference == "interface" else reference
-    if name is None or name not in model.interfaces or not model.interface(name).has_rotation:
-        raise ValueError(f"reference must be 'interface', 'mean-axes' or the name of an interface with a rotation "
-                         f"of body {model.name!r} {sorted(model.interfaces)}, got {reference!r}")
     To, _ = _coupling(model, [name])
     return ModalBody(model, To, strain=strain, reference=f"interface {name}", **body_kwargs)
