@@ -87,6 +87,61 @@ def warm_up():
     return time.perf_counter() - start
 
 
+def loop_name(scene, integrator="energy-momentum"):
+    """Which time loop ``simulate`` runs the scene on: "compiled" (one floating-frame body),
+    "compiled mechanism" or "Python"."""
+    from skfem_flex import compiled_scene
+    scheme = sf.integrators.make_integrator(integrator)
+    if compiled_loop.eligible(scene, scheme):
+        return "compiled"
+    return "compiled mechanism" if compiled_scene.eligible(scene, scheme) else "Python"
+
+
+STARTUP_SCENES = ("pendulum", "flexible_pendulum", "spin_up_beam")
+
+
+STARTUP_PROBE = ("import json, sys, time; t0 = time.perf_counter(); import skfem_flex as sf; "
+                 "scene = sf.scenes.get(sys.argv[1])(); res = sf.simulate(scene, 0.05, 1e-3); "
+                 "print(json.dumps([time.perf_counter() - t0, res.wall_time]))")
+
+
+def startup():
+    """[(scene, s of the first `skfem-flex run` in a fresh process with an empty numba cache, s of the same
+    command in the next process, s of start-up in a later process)]. Start-up is what the package adds to
+    a run: import, building the scene, loading the compiled kernels from the cache (the time to first
+    step, without the steps themselves); the CLI's wall time also holds the interpreter, plots and files."""
+    import json
+    import os
+    import subprocess
+    import sys
+    import tempfile
+    rows = []
+    for name in STARTUP_SCENES:
+        with tempfile.TemporaryDirectory() as tmp:
+            env = dict(os.environ, NUMBA_CACHE_DIR=str(Path(tmp) / "cache"))
+            cmd = [sys.executable, "-m", "skfem_flex.cli", "run", name, "--t-end", "0.05", "--no-vtk", "--quiet",
+                   "--out", str(Path(tmp) / "out")]
+            times = []
+            for _ in range(2):
+                start = time.perf_counter()
+                subprocess.run(cmd, env=env, check=True, capture_output=True)
+                times.append(time.perf_counter() - start)
+            out = subprocess.run([sys.executable, "-c", STARTUP_PROBE, name], env=env, check=True,
+                                 capture_output=True, text=True)
+            total, sim = json.loads(out.stdout.strip().splitlines()[-1])
+            rows.append((name, times[0], times[1], total - sim))
+    return rows
+
+
+def startup_table(rows):
+    lines = ["`skfem-flex run SCENE --t-end 0.05 --no-vtk --quiet` in fresh processes sharing an empty numba "
+             "cache (wall time, s, with the interpreter, plots and files), and the start-up a later process "
+             "adds to a run (import, scene, kernels loaded from the cache; `simulate` of 0.05 s minus its steps):",
+             "", "| scene | first run (compiles) | next run | start-up of a later run |", "|---|---|---|---|"]
+    lines += [f"| {n} | {a:.1f} | {b:.2f} | {c:.2f} |" for n, a, b, c in rows]
+    return "\n".join(lines) + "\n"
+
+
 def cold_compile():
     """Wall time (s) of the warm-up in a fresh process with an empty numba cache: the one-off JIT compile."""
     import os
@@ -116,6 +171,8 @@ def run(repeat=3, window=1.0, record_every=10, elements=SPIN_UP_ELEMENTS):
                                      record_every, compiled=False)
     rows.append(("spin-up, 8 P1 elements, 30 s", "Python", steps, wall, us, its))
     wall, us, its, steps = time_case(sf.scenes.pendulum, 10.0, 1e-3, repeat, record_every)
+    rows.append(("pendulum, 10 000 steps", loop_name(sf.scenes.pendulum()), steps, wall, us, its))
+    wall, us, its, steps = time_case(sf.scenes.pendulum, 10.0, 1e-3, 1, record_every, compiled=False)
     rows.append(("pendulum, 10 000 steps", "Python", steps, wall, us, its))
     return rows
 
@@ -134,7 +191,8 @@ def flexible(repeat=1, record_every=10):
         rows.append((label, "compiled" if loop else "Python", steps, wall, us, its))
     revolution = 2 * np.pi / 150.0
     wall, us, its, steps = time_case(lambda: sf.scenes.slider_crank(), revolution, 1e-4, repeat, record_every)
-    rows.append(("slider–crank, 8-element beam rod, one revolution, dt = 1e-4 s", "Python", steps, wall, us, its))
+    rows.append(("slider–crank, 8-element beam rod, one revolution, dt = 1e-4 s", loop_name(sf.scenes.slider_crank()),
+                 steps, wall, us, its))
     start = time.perf_counter()
     rod_scene = sf.scenes.slider_crank(body="plane-stress-modal", n_elements=250, n_across=8)
     setup = time.perf_counter() - start
@@ -180,22 +238,26 @@ def catalogue_rows(steps=200):
             try:
                 sf.simulate(factory(), t_end=2 * dt, dt=dt, integrator=scheme)         # compile / load
                 res = sf.simulate(factory(), t_end=t_end, dt=dt, integrator=scheme)
-                rows.append((name, n, scheme, dt, 1e6 * res.wall_time / res.steps, ""))
+                rows.append((name, n, scheme, dt, 1e6 * res.wall_time / res.steps, "", loop_name(factory(), scheme)))
             except sf.SimulationError as exc:
-                rows.append((name, n, scheme, dt, float("nan"), str(exc).splitlines()[0][:80]))
+                rows.append((name, n, scheme, dt, float("nan"), str(exc).splitlines()[0][:80], ""))
     return rows
 
 
 def catalogue_table(rows, steps):
     lines = [f"Every catalogue scene with its default parameters and step, the first {steps} steps "
              f"(or its default run if shorter), every step recorded, no files; after a two-step warm-up.", "",
-             "| scene | coordinates | Δt (s) | " + " | ".join(f"{s} µs/step" for s in SCHEMES) + " |",
-             "|---|---|---|" + "---|" * len(SCHEMES)]
-    by = {}
-    for name, n, scheme, dt, us, msg in rows:
+             "| scene | coordinates | Δt (s) | " + " | ".join(f"{s} µs/step" for s in SCHEMES)
+             + " | energy-momentum loop |",
+             "|---|---|---|" + "---|" * (len(SCHEMES) + 1)]
+    by, loops = {}, {}
+    for name, n, scheme, dt, us, msg, loop in rows:
         by.setdefault((name, n, dt), {})[scheme] = f"{us:.0f}" if np.isfinite(us) else f"failed: {msg}"
+        if scheme == "energy-momentum":
+            loops[(name, n, dt)] = loop
     for (name, n, dt), cells in by.items():
-        lines.append(f"| {name} | {n} | {dt:g} | " + " | ".join(cells.get(s, "") for s in SCHEMES) + " |")
+        lines.append(f"| {name} | {n} | {dt:g} | " + " | ".join(cells.get(s, "") for s in SCHEMES)
+                     + f" | {loops.get((name, n, dt), '')} |")
     return "\n".join(lines) + "\n"
 
 
@@ -303,6 +365,7 @@ if __name__ == "__main__":
     ap.add_argument("--no-loop", action="store_true", help="skip the spin-up/pendulum time-loop table")
     ap.add_argument("--no-catalogue", action="store_true", help="skip the table of every catalogue scene")
     ap.add_argument("--no-peer", action="store_true", help="skip the side-by-side runs with exudyn")
+    ap.add_argument("--no-startup", action="store_true", help="skip the first-run/next-run start-up table")
     ap.add_argument("--out", default=str(Path(__file__).parent / "output"))
     ap.add_argument("--flexible", action="store_true", help="only the flexible-body cases (flexible.md)")
     ap.add_argument("--limits", action="store_true",
@@ -329,6 +392,8 @@ if __name__ == "__main__":
         warm = warm_up()
         rows = run(args.repeat, args.window, args.record_every) + flexible(args.repeat, args.record_every)[0]
         parts.append(table(rows, args.record_every, warm, cold))
+    if not args.no_startup:
+        parts.append(startup_table(startup()))
     if not args.no_catalogue:
         parts.append(catalogue_table(catalogue_rows(args.catalogue_steps), args.catalogue_steps))
     if not args.no_peer:

@@ -12,9 +12,10 @@ many steps of the *same* scheme inside one compiled function:
 * residual r = p(q1, v1) − p(q0, v0) − Δt g_kin + Δt g_pot (the fused body kernel
   :func:`skfem_flex.bodies.floating_kernel.energy_momentum_terms` on the arrays the body hands
   out through its ``compiled_kernel_data()``);
-* convergence err = max(‖r_F‖∞ / (rtol · scale), |v̄_F · r_F| / (etol · E_scale)) ≤ 1, with the
-  round-off-floor acceptance, the update-below-round-off and stagnation exits and the line
-  search of :meth:`Integrator._newton`, initial guess Δq = Δt v0;
+* scaled error err = max(‖r_F‖∞ / (rtol · scale), |v̄_F · r_F| / (etol · E_scale)) with the
+  round-off-floor acceptance :func:`skfem_flex.newton.roundoff_floor`, initial guess Δq = Δt v0;
+* the Newton iteration itself is the package's one core (:mod:`skfem_flex.newton`: convergence,
+  exits, line search), driven with this module's ``_evaluate`` and ``_newton_solve``;
 * prescribed reaction r_P / Δt and its work Δq_P · r_P / Δt.
 
 LAPACK solves the Newton systems (gesv through numba's ``np.linalg.solve``; gbsv from
@@ -25,9 +26,9 @@ and reports its index; :func:`skfem_flex.simulate` then re-runs that step on the
 which halves it or raises :class:`~skfem_flex.errors.ConvergenceError` with its usual message,
 and continues compiled afterwards.
 
-The trajectory equals the Python path's to round-off (the two differ only in the order of
-floating-point sums), so the Newton iteration counts agree except where a scaled residual
-lands within round-off of a convergence threshold.
+The trajectory equals the Python path's to round-off (the two residuals differ only in the order
+of floating-point sums; the Newton iteration is the same compiled code), so the Newton iteration
+counts agree except where a scaled residual lands within round-off of a convergence threshold.
 """
 from __future__ import annotations
 
@@ -38,26 +39,23 @@ import numba
 import numpy as np
 from numba.extending import get_cython_function_address
 
-from .bodies.floating import FloatingBeam
 from .bodies.floating_kernel import energy_momentum_terms, momentum, potential_energy
-from . import integrators
 from .integrators import EnergyMomentum
+from .linear_solver import MAX_BANDWIDTH
+from .newton import (CONVERGED, EVALUATE, NONFINITE_RESIDUAL, all_finite, max_abs, newton_evaluated, newton_solved,
+                     newton_start, roundoff_floor)
 from .scene import Scene
 
-__all__ = ["eligible", "run_chunk", "chunk_steps", "jit_cache_cold", "COMPILE_NOTICE", "OK", "NONFINITE",
-           "NOT_CONVERGED", "SINGULAR"]
+__all__ = ["eligible", "run_chunk", "chunk_steps", "chunk_schedule", "record_count", "jit_cache_cold", "COMPILE_NOTICE", "OK"]
 
 #: the line ``simulate(..., progress=True)`` prints on stderr before a first run compiles the kernels
-COMPILE_NOTICE = ("skfem-flex: compiling the floating-frame kernels (Numba); this happens once per "
-                  "machine and takes about 30-60 s, later runs load them from the cache")
+COMPILE_NOTICE = ("skfem-flex: compiling the Numba kernels (the Newton core; with floating-frame bodies also "
+                  "their kernels and the compiled loop); this happens once per machine and takes a few seconds, "
+                  "about 30-60 s with floating-frame bodies; later runs load them from the cache")
 
-_EPS = np.finfo(float).eps
 _TINY = 1e-300
-_NEAR_FLOOR = 1e4
-#: widest band (l + u) solved as a band, as the Python path's banded LAPACK solve
-_MAX_BANDWIDTH = getattr(integrators, "_MAX_BANDWIDTH", 64)
-#: status codes of :func:`run_chunk`
-OK, NONFINITE, NOT_CONVERGED, SINGULAR = 0, 1, 2, 3
+#: status of :func:`run_chunk` when every step was done (the Newton core's CONVERGED)
+OK = CONVERGED
 
 
 def eligible(scene, scheme):
@@ -94,15 +92,19 @@ def jit_cache_cold(scene):
 
     The kernels are compiled with ``cache=True`` into ``__pycache__`` next to their source: a
     kernel is cold when this process has not compiled it and its cache index is missing or
-    stale (the index records the stamp of `jit_cache.source_stamp`). Scenes with a
-    :class:`~skfem_flex.bodies.FloatingBeam` run these kernels on every path; other bodies with
-    compiled kernel data (a :class:`~skfem_flex.bodies.ModalBody`) only in the compiled loop, i.e. in
-    scenes of the form :func:`eligible` accepts.
+    stale (the index records the stamp of `jit_cache.source_stamp`). Every scene runs the Newton
+    core (:mod:`skfem_flex.newton`); scenes with a body that hands out compiled kernel data (a
+    :class:`~skfem_flex.bodies.FloatingBeam`, a :class:`~skfem_flex.bodies.ModalBody`) also the
+    floating-frame kernels and this module's loop; small mechanisms the loop of
+    :mod:`skfem_flex.compiled_scene`.
     """
-    if not (any(isinstance(b, FloatingBeam) for b in getattr(scene, "bodies", ()))
-            or _kernel_data(scene) is not None):
-        return False
-    for kernel in (_run, energy_momentum_terms, momentum, potential_energy):
+    from . import compiled_scene                # it imports this module's neighbours, not this module
+    kernels = [newton_start, newton_evaluated, newton_solved]
+    if any(getattr(b, "compiled_kernel_data", lambda: None)() is not None for b in getattr(scene, "bodies", ())):
+        kernels += [_run, energy_momentum_terms, momentum, potential_energy]
+    if isinstance(scene, Scene) and compiled_scene.pack(scene) is not None:
+        kernels += [compiled_scene.run_loop]
+    for kernel in kernels:
         if kernel.signatures:
             continue
         try:
@@ -138,7 +140,7 @@ def _plan(scene):
     else:
         off = fc[both] - fr[both]
         kl, ku = (int(max(0, -off.min())), int(max(0, off.max()))) if off.size else (0, 0)
-        if kl + ku > _MAX_BANDWIDTH:
+        if kl + ku > MAX_BANDWIDTH:
             plan = None
         else:
             plan = (np.where(both, fc * (2 * kl + ku + 1) + kl + ku + fr - fc, -1), (2 * kl + ku + 1) * nfr, kl, ku)
@@ -152,24 +154,6 @@ def chunk_steps(scene):
     """Steps per compiled call: up to 1000, fewer for large bodies (about 0.1–0.2 s of work per call),
     so that recorded steps, output files and the progress bar follow the run closely."""
     return int(min(1000, max(10, 200_000 // max(scene.n, 1))))
-
-
-@numba.njit(cache=True)
-def _inf(x):
-    m = 0.0
-    for i in range(x.size):
-        a = abs(x[i])
-        if a > m:
-            m = a
-    return m
-
-
-@numba.njit(cache=True)
-def _all_finite(x):
-    for i in range(x.size):
-        if not np.isfinite(x[i]):
-            return False
-    return True
 
 
 # LAPACK's band solver dgbsv, from scipy's Cython LAPACK, callable from compiled code: its address
@@ -202,29 +186,31 @@ def _solve(mat, kl, ku, b):
 
 
 @numba.njit(cache=True)
-def _evaluate(kd, x, q0, v0, dq_base, free, target, mat_size, h, p0, p0_inf, e_scale0, rtol, etol):
-    """One Newton evaluation of the energy-momentum step (EnergyMomentum.step's ``fun``).
+def _evaluate(system, x):
+    """``evaluate`` of the Newton core for one energy-momentum step (EnergyMomentum.step's ``fun``).
 
-    Returns (r_F, J_FF, err, dq, q1, v1, p1, r); J_FF is the flat storage of the free-free block
-    (dense or banded) that ``target`` maps the body's CSR pattern entries to."""
-    dq = dq_base.copy()
+    Keeps r_F, the flat storage of the free-free block J_FF (dense or banded; ``target`` maps the
+    body's CSR pattern entries to it), Δq, q1, v1, p1 and r in the system's work arrays and
+    returns the scaled error."""
+    (kd, q0, v0, dq_base, free, target, h, p0, p0_inf, e_scale0, rtol, etol, kl, ku,
+     rf, jf, dq, q1, v1, p1, r) = system
+    dq[:] = dq_base
     for i in range(free.size):
         dq[free[i]] = x[i]
-    q1 = q0 + dq
-    v1 = (2.0 / h) * dq - v0
-    p1, gk, gp, data, floor = energy_momentum_terms(kd, q0, q1, v0, v1, h)
+    q1[:] = q0 + dq
+    v1[:] = (2.0 / h) * dq - v0
+    p1_, gk, gp, data, floor = energy_momentum_terms(kd, q0, q1, v0, v1, h)
+    p1[:] = p1_
     kin1 = 0.5 * np.dot(v1, p1)
-    r = p1 - p0
-    scale = max(_inf(p1), p0_inf)
+    r[:] = p1 - p0
+    scale = max(max_abs(p1), p0_inf)
     r -= h * gk
-    scale = max(scale, h * _inf(gk))
+    scale = max(scale, h * max_abs(gk))
     r += h * gp
-    scale = max(scale, h * _inf(gp))
+    scale = max(scale, h * max_abs(gp))
     e_scale = max(e_scale0, abs(kin1), abs(np.dot(dq, gp)), _TINY)
-    nfr = free.size
-    rf = np.empty(nfr)
     vr, fl_inf, vfl = 0.0, 0.0, 0.0
-    for i in range(nfr):
+    for i in range(free.size):
         j = free[i]
         rf[i] = r[j]
         vb = dq[j] / h
@@ -232,74 +218,54 @@ def _evaluate(kd, x, q0, v0, dq_base, free, target, mat_size, h, p0, p0_inf, e_s
         fl_inf = max(fl_inf, abs(floor[j]))
         vfl += abs(vb) * floor[j]
     vr = abs(vr)
-    r_inf = _inf(rf)
-    err = max(r_inf / (rtol * max(scale, _TINY)), 0.0, vr / (etol * e_scale))
-    # round-off floor acceptance (see EnergyMomentum.step)
-    if err > 1.0 and r_inf <= 16 * _EPS * fl_inf and vr <= 2 * _EPS * vfl:
-        err = min(err, 1e3)
-    # the free-free block of the tangent, gathered from the body's CSR pattern
-    jf = np.zeros(mat_size)
+    r_inf = max_abs(rf)
+    err = roundoff_floor(max(r_inf / (rtol * max(scale, _TINY)), vr / (etol * e_scale)), 0.0, r_inf, fl_inf, vr, vfl)
+    jf[:] = 0.0
     for k in range(data.size):
         if target[k] >= 0:
             jf[target[k]] = data[k]
-    return rf, jf, err, dq, q1, v1, p1, r
+    return err if all_finite(rf) else np.nan
+
+
+@numba.njit(cache=True)
+def _newton_solve(system):
+    """``solve`` of the Newton core: J_FF⁻¹ r_F of the last evaluation (overwrites the stored block)."""
+    kl, ku, rf, jf = system[12], system[13], system[14], system[15]
+    return _solve(jf, kl, ku, rf)
 
 
 @numba.njit(cache=True)
 def _step(kd, q0, v0, p0, h, qp1, pres, free, target, mat_size, kl, ku, rtol, etol, max_iterations, line_search):
-    """One energy-momentum step; (status, iterations, dq, q1, v1, p1, r) as EnergyMomentum.step and _newton."""
+    """One energy-momentum step by the Newton core; (status, iterations, dq, q1, v1, p1, r)."""
     n = q0.size
     dq_base = np.zeros(n)
     for i in range(pres.size):
         dq_base[pres[i]] = qp1[i] - q0[pres[i]]
-    p0_inf = _inf(p0)
-    e_scale0 = abs(0.5 * np.dot(v0, p0))
     x = np.empty(free.size)
     for i in range(free.size):
         x[i] = h * v0[free[i]]
-    rf, jf, err, dq, q1, v1, p1, r = _evaluate(kd, x, q0, v0, dq_base, free, target, mat_size, h, p0, p0_inf,
-                                               e_scale0, rtol, etol)
-    err_prev = np.inf
-    for it in range(max_iterations + 1):
-        if not (_all_finite(rf) and np.isfinite(err)):
-            return NONFINITE, it, dq, q1, v1, p1, r
-        if err <= 1.0:
-            return OK, it, dq, q1, v1, p1, r
-        if it == max_iterations:
-            break
-        sol, regular = _solve(jf, kl, ku, rf)
-        if not regular:
-            return SINGULAR, it, dq, q1, v1, p1, r
-        dx = -sol
-        if not _all_finite(dx):
-            return NONFINITE, it, dq, q1, v1, p1, r
-        dx_inf, x_inf = _inf(dx), _inf(x)
-        if dx_inf <= 8 * _EPS * max(x_inf, _TINY) and err < 1e6:
-            return OK, it + 1, dq, q1, v1, p1, r          # update below round-off
-        if it >= 2 and err >= 0.25 * err_prev and dx_inf <= 1.5e-8 * x_inf and err < 1e4:
-            return OK, it + 1, dq, q1, v1, p1, r          # stagnated at the round-off floor
-        err_prev = err
-        step = 1.0
-        for _ in range(7 if line_search else 1):
-            x_try = x + step * dx
-            rf_t, jf_t, err_t, dq_t, q1_t, v1_t, p1_t, r_t = _evaluate(kd, x_try, q0, v0, dq_base, free, target,
-                                                                       mat_size, h, p0, p0_inf, e_scale0, rtol, etol)
-            if not line_search or (np.isfinite(err_t) and (err_t < max(err, 1.0) or err_t <= _NEAR_FLOOR)):
-                break
-            step *= 0.5
-        x, rf, jf, err, dq, q1, v1, p1, r = x_try, rf_t, jf_t, err_t, dq_t, q1_t, v1_t, p1_t, r_t
-    return NOT_CONVERGED, max_iterations, dq, q1, v1, p1, r
+    x_scale = 0.0
+    for i in range(free.size):
+        x_scale = max(x_scale, abs(q0[free[i]]))
+    dq, q1, v1, p1, r = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
+    system = (kd, q0, v0, dq_base, free, target, h, p0, max_abs(p0), abs(0.5 * np.dot(v0, p0)), rtol, etol, kl, ku,
+              np.zeros(free.size), np.zeros(mat_size), dq, q1, v1, p1, r)
+    state = newton_start(x, x_scale, max_iterations, line_search)
+    action = EVALUATE
+    while action < 0:                  # do what the Newton core asks; its rules are all in the core
+        if action == EVALUATE:
+            action = newton_evaluated(state, _evaluate(system, state[2]))
+        else:
+            y, regular = _newton_solve(system)
+            action = newton_solved(state, y, regular)
+    return action, state[4][0], dq, q1, v1, p1, r
 
 
 @numba.njit(cache=True)
 def _run(kd, q, v, t, hs, qp, pres, free, target, mat_size, kl, ku, rtol, etol, max_iterations, line_search, work,
          first_step, record_every, n_steps):
     n, ns, npr = q.size, hs.size, pres.size
-    n_rec = 0
-    for k in range(ns):
-        s = first_step + k
-        if s % record_every == 0 or s == n_steps:
-            n_rec += 1
+    n_rec = record_count(first_step, ns, record_every, n_steps)
     rec_t = np.empty(n_rec)
     rec_q = np.empty((n_rec, n))
     rec_v = np.empty((n_rec, n))
@@ -317,8 +283,8 @@ def _run(kd, q, v, t, hs, qp, pres, free, target, mat_size, kl, ku, rtol, etol, 
         h = hs[k]
         status, its, dq, q1, v1, p1, r = _step(kd, q, v, p, h, qp[k], pres, free, target, mat_size, kl, ku, rtol,
                                                etol, max_iterations, line_search)
-        if status == OK and not (_all_finite(q1) and _all_finite(v1)):
-            status = NONFINITE
+        if status == OK and not (all_finite(q1) and all_finite(v1)):
+            status = NONFINITE_RESIDUAL
         if status != OK:
             return (status, k, t, q, v, p, reaction, work, its_total, i_rec,
                     rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac, rec_derived)
@@ -348,6 +314,33 @@ def _run(kd, q, v, t, hs, qp, pres, free, target, mat_size, kl, ku, rtol, etol, 
             i_rec += 1
     return (OK, ns, t, q, v, p, reaction, work, its_total, i_rec,
             rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac, rec_derived)
+
+
+def chunk_schedule(scene, t, dt, t_end, first_step, n_chunk, n_steps):
+    """Step sizes (n_chunk,) of steps ``first_step …`` of a run from time ``t`` (the last step of the run,
+    number ``n_steps``, shortened to land on ``t_end``; times summed step by step as the Python loop
+    does), and the prescribed coordinates' positions at their end times (n_chunk, n_prescribed),
+    evaluated here in Python."""
+    hs, times = np.empty(n_chunk), np.empty(n_chunk)
+    for k in range(n_chunk):              # the same sequence of sums as the Python loop's state.t + h
+        h = min(dt, t_end - t) if first_step + k == n_steps else dt
+        t = t + h
+        hs[k], times[k] = h, t
+    laws = [p.law.position for p in scene.prescribed]
+    qp = np.array([[float(f(tk)) for f in laws] for tk in times], dtype=float).reshape(n_chunk, len(laws))
+    return hs, qp
+
+
+@numba.njit(cache=True)
+def record_count(first_step, n_chunk, record_every, n_steps):
+    """How many of steps ``first_step … first_step + n_chunk − 1`` are recorded (step s is when
+    ``s % record_every == 0 or s == n_steps``)."""
+    n_rec = 0
+    for k in range(n_chunk):
+        s = first_step + k
+        if s % record_every == 0 or s == n_steps:
+            n_rec += 1
+    return n_rec
 
 
 def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, record_every, work):
@@ -385,14 +378,7 @@ def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, rec
     """
     body = scene.bodies[0]
     s = scheme.newton
-    hs, times = np.empty(n_chunk), np.empty(n_chunk)
-    t = state.t
-    for k in range(n_chunk):              # the same sequence of sums as the Python loop's state.t + h
-        h = min(dt, t_end - t) if first_step + k == n_steps else dt
-        t = t + h
-        hs[k], times[k] = h, t
-    laws = [p.law.position for p in scene.prescribed]
-    qp = np.array([[float(f(tk)) for f in laws] for tk in times], dtype=float).reshape(n_chunk, len(laws))
+    hs, qp = chunk_schedule(scene, state.t, dt, t_end, first_step, n_chunk, n_steps)
     target, size, kl, ku = _plan(scene)
     out = _run(body.compiled_kernel_data(), np.ascontiguousarray(state.q, dtype=float),
                np.ascontiguousarray(state.v, dtype=float), float(state.t), hs, qp,

@@ -15,7 +15,8 @@ energy-conserving scheme uses so that constraint forces do no work (Lee & Yun,
 Joints (:class:`Pin`, :class:`Revolute`, :class:`Slider`,
 :class:`Prismatic`, :class:`Weld`, :class:`Driver`) are built from body
 points (``body.point(locator)``, :class:`~skfem_flex.bodies.base.BodyPoint`)
-through a few small *terms* — the difference of two points' positions (or
+through a few small *terms* (:mod:`skfem_flex.point_terms`, shared with the
+point force elements) — the difference of two points' positions (or
 of a point and a ground point), a point's angle or a coordinate (linear), a
 constant, a vector turned with a body and a dot product — each with its
 value, Jacobian, Hessian product and an exact discrete gradient. Products
@@ -27,307 +28,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from .bodies.base import BodyPoint, check_finite_vector, place_block, to_dense, zero_matrix
+from .bodies.base import BodyPoint, check_finite_vector, zero_matrix
 from .bodies.rigid import E_MATRIX, rotation
-from .rotations import dsinc, sinc
 from .motion import MotionLaw
+# PointLayout is re-exported here (it was defined in this module and is part of its public names)
+from .point_terms import (Constant, Difference, Dot, PointLayout, Rotated, angle_term, coordinate_term,
+                          linear_combination)
 
 __all__ = ["Constraint", "Distance", "UserConstraint", "Pin", "Revolute", "Slider", "Prismatic", "Weld",
            "Driver", "PointLayout"]
 
 
-# ============================================================== point layout
-class PointLayout:
-    """Bodies touched by a list of body points, each body once, and each point's slice of the local vector.
-
-    Parameters
-    ----------
-    points : sequence of BodyPoint or None
-        ``None`` stands for the ground (no coordinates).
-
-    Attributes
-    ----------
-    bodies : tuple of Body
-        The distinct bodies in order of first appearance.
-    slices : list of slice or None
-        Where each point's body block sits in the concatenated local vector.
-    n : int
-        Length of the local vector.
-    """
-
-    def __init__(self, points):
-        self.bodies, self.slices = [], []
-        offsets, start = [], 0
-        for p in points:
-            if p is None:
-                self.slices.append(None)
-                continue
-            if not isinstance(p, BodyPoint):
-                raise ValueError(f"expected a body point (body.point(...)) or None for the ground, got {p!r}")
-            for b, o in zip(self.bodies, offsets):
-                if b is p.body:
-                    self.slices.append(slice(o, o + b.n_dofs))
-                    break
-            else:
-                self.bodies.append(p.body)
-                offsets.append(start)
-                self.slices.append(slice(start, start + p.body.n_dofs))
-                start += p.body.n_dofs
-        self.bodies = tuple(self.bodies)
-        self.n = start
-
-    @classmethod
-    def of_bodies(cls, bodies):
-        """A layout over whole bodies (no points)."""
-        out = cls([])
-        out.bodies = tuple(bodies)
-        out.slices, start = [], 0
-        for b in out.bodies:
-            out.slices.append(slice(start, start + b.n_dofs))
-            start += b.n_dofs
-        out.n = start
-        return out
-
-    def initial(self):
-        """The concatenated initial coordinates q0 of the bodies."""
-        if not self.bodies:
-            return np.zeros(0)
-        return np.concatenate([np.asarray(b.q0, dtype=float) for b in self.bodies])
-
-
-# ===================================================================== terms
-class _Term:
-    """A vector- (size 2) or scalar-valued (size 1) function of the local coordinates.
-
-    ``hessian(q, f)`` is ∂(Jᵀ f)/∂q; ``dgrad(q0, q1)`` is an exact discrete
-    gradient D with D (q1 − q0) = value(q1) − value(q0); ``dgrad_jacobian(q0,
-    q1, f)`` is ∂(Dᵀ f)/∂q1 for a fixed f.
-    """
-
-    size = 2
-    linear = False
-
-    def __init__(self, n):
-        self.n = n
-
-    def mean(self, q0, q1):
-        return 0.5 * (self.value(q0) + self.value(q1))
-
-    def _zero(self):
-        return zero_matrix(self.n)
-
-
-class _Constant(_Term):
-    linear = True
-
-    def __init__(self, n, c):
-        super().__init__(n)
-        self.c = np.atleast_1d(np.asarray(c, dtype=float))
-        self.size = self.c.size
-
-    def value(self, q):
-        return self.c.copy()
-
-    def jacobian(self, q):
-        return np.zeros((self.size, self.n))
-
-    def hessian(self, q, f):
-        return self._zero()
-
-    def dgrad(self, q0, q1):
-        return np.zeros((self.size, self.n))
-
-    def dgrad_jacobian(self, q0, q1, f):
-        return self._zero()
-
-
-class _Position(_Term):
-    """r(q) of a body point."""
-
-    def __init__(self, n, point, sl):
-        super().__init__(n)
-        self.point, self.sl = point, sl
-
-    def value(self, q):
-        return np.asarray(self.point.position(q[self.sl]), dtype=float)
-
-    def jacobian(self, q):
-        out = np.zeros((2, self.n))
-        out[:, self.sl] = to_dense(self.point.position_jacobian(q[self.sl]))
-        return out
-
-    def hessian(self, q, f):
-        return place_block(self.n, self.sl, self.point.position_hessian_product(q[self.sl], f))
-
-    def dgrad(self, q0, q1):
-        out = np.zeros((2, self.n))
-        out[:, self.sl] = to_dense(self.point.position_discrete_gradient(q0[self.sl], q1[self.sl]))
-        return out
-
-    def dgrad_jacobian(self, q0, q1, f):
-        return place_block(self.n, self.sl,
-                           self.point.position_discrete_gradient_jacobian(q0[self.sl], q1[self.sl], f))
-
-
-class _Difference(_Term):
-    """r_a(q) − r_b(q) of two body points, or r_a(q) − a for a ground point a (b is None)."""
-
-    def __init__(self, n, point_a, sl_a, point_b=None, sl_b=None, anchor=None):
-        super().__init__(n)
-        self.pa, self.sa, self.pb, self.sb = point_a, sl_a, point_b, sl_b
-        self.anchor = None if anchor is None else np.asarray(anchor, dtype=float)
-        if (point_b is None) == (anchor is None):
-            raise ValueError("a point difference needs exactly one of a second point and a ground anchor")
-
-    def value(self, q):
-        ra = np.asarray(self.pa.position(q[self.sa]), dtype=float)
-        if self.pb is None:
-            return ra - self.anchor
-        return ra - np.asarray(self.pb.position(q[self.sb]), dtype=float)
-
-    def jacobian(self, q):
-        out = np.zeros((2, self.n))
-        out[:, self.sa] = to_dense(self.pa.position_jacobian(q[self.sa]))
-        if self.pb is not None:
-            out[:, self.sb] -= to_dense(self.pb.position_jacobian(q[self.sb]))
-        return out
-
-    def hessian(self, q, f):
-        out = place_block(self.n, self.sa, self.pa.position_hessian_product(q[self.sa], f))
-        if self.pb is not None:
-            out = place_block(self.n, self.sb, self.pb.position_hessian_product(q[self.sb], f), -1.0, out)
-        return out
-
-    def dgrad(self, q0, q1):
-        out = np.zeros((2, self.n))
-        out[:, self.sa] = to_dense(self.pa.position_discrete_gradient(q0[self.sa], q1[self.sa]))
-        if self.pb is not None:
-            out[:, self.sb] -= to_dense(self.pb.position_discrete_gradient(q0[self.sb], q1[self.sb]))
-        return out
-
-    def dgrad_jacobian(self, q0, q1, f):
-        out = place_block(self.n, self.sa, self.pa.position_discrete_gradient_jacobian(q0[self.sa], q1[self.sa], f))
-        if self.pb is not None:
-            out = place_block(self.n, self.sb, self.pb.position_discrete_gradient_jacobian(q0[self.sb], q1[self.sb], f),
-                              -1.0, out)
-        return out
-
-
-class _Linear(_Term):
-    """A scalar linear in q: a point's angle or a coordinate (constant gradient)."""
-
-    size = 1
-    linear = True
-
-    def __init__(self, n, fun, grad):
-        super().__init__(n)
-        self.fun, self.grad = fun, np.asarray(grad, dtype=float)
-
-    def value(self, q):
-        return np.array([float(self.fun(q))])
-
-    def jacobian(self, q):
-        return self.grad[None, :].copy()
-
-    def hessian(self, q, f):
-        return self._zero()
-
-    def dgrad(self, q0, q1):
-        return self.grad[None, :].copy()
-
-    def dgrad_jacobian(self, q0, q1, f):
-        return self._zero()
-
-
-def _angle_term(n, point, sl):
-    if not point.has_angle:
-        point.angle(point.body.q0)          # raises the body's own "has no angle" ValueError
-    q0 = np.asarray(point.body.q0, dtype=float)
-    grad = np.zeros(n)
-    grad[sl] = to_dense(point.angle_jacobian(q0)).ravel()
-    return _Linear(n, lambda q: point.angle(q[sl]), grad)
-
-
-def _linear_combination(n, terms, coefs, const=0.0):
-    """Σ c_i s_i − const of linear scalar terms, as one :class:`_Linear` (gradient summed once)."""
-    terms, coefs = list(terms), [float(c) for c in coefs]
-    grad = sum(c * t.grad for c, t in zip(coefs, terms))
-    const = float(const)
-
-    def fun(q):
-        return sum(c * t.fun(q) for c, t in zip(coefs, terms)) - const
-    return _Linear(n, fun, grad)
-
-
-def _coordinate_term(n, index):
-    grad = np.zeros(n)
-    grad[index] = 1.0
-    return _Linear(n, lambda q: q[index], grad)
-
-
-class _Rotated(_Term):
-    """n(q) = A(ϑ(q)) n_loc: a vector fixed in the frame of a body point (ϑ linear in q)."""
-
-    def __init__(self, n, angle, local):
-        super().__init__(n)
-        self.angle, self.local = angle, np.asarray(local, dtype=float)
-        self.g = angle.grad
-
-    def value(self, q):
-        return rotation(self.angle.value(q)[0]) @ self.local
-
-    def jacobian(self, q):
-        return np.outer(E_MATRIX @ self.value(q), self.g)
-
-    def hessian(self, q, f):
-        return -float(f @ self.value(q)) * np.outer(self.g, self.g)
-
-    def _half(self, q0, q1):
-        t0, t1 = self.angle.value(q0)[0], self.angle.value(q1)[0]
-        half = 0.5 * (t1 - t0)
-        return half, rotation(t0 + half)
-
-    def dgrad(self, q0, q1):
-        half, am = self._half(q0, q1)
-        return np.outer(sinc(half) * (am @ (E_MATRIX @ self.local)), self.g)
-
-    def dgrad_jacobian(self, q0, q1, f):
-        half, am = self._half(q0, q1)
-        c = 0.5 * (dsinc(half) * float(f @ (am @ (E_MATRIX @ self.local))) - sinc(half) * float(f @ (am @ self.local)))
-        return c * np.outer(self.g, self.g)
-
-
-class _Dot(_Term):
-    """u · v of two 2-vector terms; exact discrete gradient Δ(u·v) = ū·Δv + v̄·Δu."""
-
-    size = 1
-
-    def __init__(self, n, u, v):
-        super().__init__(n)
-        self.u, self.v = u, v
-        self.linear = (u.linear and isinstance(v, _Constant)) or (v.linear and isinstance(u, _Constant))
-
-    def value(self, q):
-        return np.array([float(self.u.value(q) @ self.v.value(q))])
-
-    def jacobian(self, q):
-        return (self.u.value(q) @ self.v.jacobian(q) + self.v.value(q) @ self.u.jacobian(q))[None, :]
-
-    def hessian(self, q, f):
-        uu, vv = self.u.value(q), self.v.value(q)
-        ju, jv = self.u.jacobian(q), self.v.jacobian(q)
-        cross = ju.T @ jv
-        return f[0] * (self.v.hessian(q, uu) + self.u.hessian(q, vv) + cross + cross.T)
-
-    def dgrad(self, q0, q1):
-        ub, vb = self.u.mean(q0, q1), self.v.mean(q0, q1)
-        return (ub @ self.v.dgrad(q0, q1) + vb @ self.u.dgrad(q0, q1))[None, :]
-
-    def dgrad_jacobian(self, q0, q1, f):
-        ub, vb = self.u.mean(q0, q1), self.v.mean(q0, q1)
-        out = self.v.dgrad_jacobian(q0, q1, ub) + self.u.dgrad_jacobian(q0, q1, vb)
-        out += 0.5 * (self.v.dgrad(q0, q1).T @ self.u.jacobian(q1) + self.u.dgrad(q0, q1).T @ self.v.jacobian(q1))
-        return f[0] * out
 
 
 # ============================================================ the base class
@@ -404,6 +115,12 @@ class Constraint:
     def discrete_gradient_jacobian(self, q0, q1, mu, t):
         """∂(Dᵀ μ)/∂q1 (the Gonzalez correction's own derivative is left out)."""
         return 0.5 * self.hessian_product(0.5 * (q0 + q1), mu, t)
+
+    def compiled_form(self):
+        """How the compiled mechanism loop (:mod:`skfem_flex.compiled_scene`) evaluates this constraint:
+        ``("points", [(point, sign), ...], c)`` for Φ = Σ sign · r(point) − c, ``("distance", point, a, l)``
+        for Φ = ½(|r − a|² − l²), or None (the default: the scene runs on the Python path)."""
+        return None
 
     def reaction(self, q, lam):
         """What the constraint exerts, from its multipliers λ at coordinates q.
@@ -502,8 +219,11 @@ class Pin(_TermConstraint):
         self.point = point
         self.anchor = _point_position0(point) if anchor is None else check_finite_vector("anchor", anchor, 2)
         n = layout.n
-        self._set_terms(layout, [_Difference(n, point, layout.slices[0], anchor=self.anchor)])
+        self._set_terms(layout, [Difference(n, point, layout.slices[0], anchor=self.anchor)])
         self.name = name
+
+    def compiled_form(self):
+        return "points", [(self.point, 1.0)], self.anchor
 
     def reaction(self, q, lam):
         return -np.asarray(lam, dtype=float)
@@ -532,8 +252,11 @@ class Revolute(_TermConstraint):
         layout = PointLayout([point_a, point_b])
         n = layout.n
         self.points = (point_a, point_b)
-        self._set_terms(layout, [_Difference(n, point_a, layout.slices[0], point_b, layout.slices[1])])
+        self._set_terms(layout, [Difference(n, point_a, layout.slices[0], point_b, layout.slices[1])])
         self.name = name
+
+    def compiled_form(self):
+        return "points", [(self.points[0], 1.0), (self.points[1], -1.0)], np.zeros(2)
 
     def reaction(self, q, lam):
         return -np.asarray(lam, dtype=float)
@@ -568,17 +291,17 @@ class Weld(_TermConstraint):
         layout = PointLayout([point_a, point_b])
         n = layout.n
         sa, sb = layout.slices
-        ta = _angle_term(n, point_a, sa)
+        ta = angle_term(n, point_a, sa)
         if point_b is None:
-            pos = _Difference(n, point_a, sa, anchor=_point_position0(point_a))
+            pos = Difference(n, point_a, sa, anchor=_point_position0(point_a))
             rel0 = _point_angle0(point_a)
             ang = [ta]
         else:
-            pos = _Difference(n, point_a, sa, point_b, sb)
+            pos = Difference(n, point_a, sa, point_b, sb)
             rel0 = _point_angle0(point_a) - _point_angle0(point_b)
-            ang = [ta, _angle_term(n, point_b, sb)]
+            ang = [ta, angle_term(n, point_b, sb)]
         self.angle0 = rel0 if angle is None else float(check_finite_vector("angle", angle, 1)[0])
-        ang_term = _linear_combination(n, ang, [1.0, -1.0][:len(ang)], self.angle0)
+        ang_term = linear_combination(n, ang, [1.0, -1.0][:len(ang)], self.angle0)
         self.points = (point_a, point_b)
         self._set_terms(layout, [pos, ang_term])
         self.name = name
@@ -630,23 +353,23 @@ class Slider(_TermConstraint):
         if on is None:
             a = _point_position0(point) if anchor is None else check_finite_vector("anchor", anchor, 2)
             self.anchor = a
-            self._normal = _Constant(n, normal)
-            terms.append(_Dot(n, self._normal, _Difference(n, point, sp, anchor=a)))
+            self._normal = Constant(n, normal)
+            terms.append(Dot(n, self._normal, Difference(n, point, sp, anchor=a)))
         else:
             if anchor is not None:
                 raise ValueError("anchor applies to a ground line only; a line on a body passes through `on`")
-            theta = _angle_term(n, on, so)
+            theta = angle_term(n, on, so)
             local = rotation(-_point_angle0(on)) @ normal
-            self._normal = _Rotated(n, theta, local)
-            terms.append(_Dot(n, self._normal, _Difference(n, point, sp, on, so)))
+            self._normal = Rotated(n, theta, local)
+            terms.append(Dot(n, self._normal, Difference(n, point, sp, on, so)))
         if lock:
-            tp = _angle_term(n, point, sp)
+            tp = angle_term(n, point, sp)
             if on is None:
                 rel0 = _point_angle0(point)
-                terms.append(_linear_combination(n, [tp], [1.0], rel0))
+                terms.append(linear_combination(n, [tp], [1.0], rel0))
             else:
                 rel0 = _point_angle0(point) - _point_angle0(on)
-                terms.append(_linear_combination(n, [tp, _angle_term(n, on, so)], [1.0, -1.0], rel0))
+                terms.append(linear_combination(n, [tp, angle_term(n, on, so)], [1.0, -1.0], rel0))
         self._set_terms(layout, terms)
 
     def normal(self, q):
@@ -721,9 +444,9 @@ class Driver(_TermConstraint):
                 raise ValueError("coordinate applies to a body target, not to a body point (whose angle is driven)")
             layout = PointLayout([target, relative_to])
             n = layout.n
-            term = _angle_term(n, target, layout.slices[0])
+            term = angle_term(n, target, layout.slices[0])
             if relative_to is not None:
-                term = _linear_combination(n, [term, _angle_term(n, relative_to, layout.slices[1])], [1.0, -1.0])
+                term = linear_combination(n, [term, angle_term(n, relative_to, layout.slices[1])], [1.0, -1.0])
         else:
             if relative_to is not None:
                 raise ValueError("relative_to applies to a body-point (angle) target")
@@ -731,7 +454,7 @@ class Driver(_TermConstraint):
                 raise ValueError(f"Driver on body {getattr(target, 'name', target)!r} needs coordinate=...")
             index = target.coordinate_index(coordinate)
             layout = PointLayout.of_bodies([target])
-            term = _coordinate_term(layout.n, index)
+            term = coordinate_term(layout.n, index)
         self._s = term
         self._set_terms(layout, [term])
         self.quadratic = True
@@ -802,6 +525,9 @@ class Distance(Constraint):
 
     def hessian_product(self, q, mu, t):
         return mu[0] * np.eye(2)
+
+    def compiled_form(self):
+        return "distance", self.bodies[0].point(), self.anchor, self.length
 
     def reaction(self, q, lam):
         return -float(lam[0]) * (np.asarray(q, dtype=float) - self.anchor)

@@ -15,7 +15,7 @@ import scipy.sparse as sps
 
 from .bodies.base import DENSE_LIMIT, BodyPoint, check_finite_vector
 from .bodies.rigid import E_MATRIX, rotation
-from .constraints import PointLayout, _angle_term, _Difference, _Dot, _Position
+from .point_terms import Difference, Dot, PointLayout, Position, angle_term
 
 __all__ = ["ForceElement", "Gravity", "NonlinearSpring", "split_blocks", "LinearSpring", "LinearDamper",
            "RotationalSpring", "RotationalDamper", "PointForce", "PointMoment", "time_function", "half_sine_pulse"]
@@ -50,6 +50,11 @@ class ForceElement:
     def potential_discrete_gradient(self, q0, q1):
         """(g, ∂g/∂q1) with g · (q1 − q0) = V(q1) − V(q0)."""
         raise NotImplementedError
+
+    def compiled_form(self):
+        """How the compiled mechanism loop (:mod:`skfem_flex.compiled_scene`) evaluates this element:
+        ``("gravity", g)``, or None (the default: the scene runs on the Python path)."""
+        return None
 
     # non-conservative elements
     def generalized_force(self, q, v, t):
@@ -97,6 +102,9 @@ class Gravity(ForceElement):
     def on(self, bodies):
         """The same field acting on ``bodies`` (used by the scene for ``bodies=None``)."""
         return Gravity(self.g, bodies)
+
+    def compiled_form(self):
+        return "gravity", self.g
 
     def potential_energy(self, q):
         return sum(b.gravity_potential(q[s], self.g)[0] for b, s in zip(self.bodies, self._slices))
@@ -302,8 +310,8 @@ class _TwoPoint(ForceElement):
         self.points, self.anchor = (point_a, pb), anchor
         self.bodies = self.layout.bodies
         self.n = n
-        self._d = _Difference(n, point_a, sa, pb, sb, None if pb is not None else anchor)   # d = r_a − r_b
-        self._s = _Dot(n, self._d, self._d)                                            # s = |d|²
+        self._d = Difference(n, point_a, sa, pb, sb, None if pb is not None else anchor)    # d = r_a − r_b
+        self._s = Dot(n, self._d, self._d)                                                 # s = |d|²
 
 
 class LinearSpring(_TwoPoint):
@@ -442,12 +450,12 @@ class _Rotational(ForceElement):
         self.layout = PointLayout([point_a, point_b])
         n = self.layout.n
         sa, sb = self.layout.slices
-        ta = _angle_term(n, point_a, sa)
+        ta = angle_term(n, point_a, sa)
         if point_b is None:
             self.grad = ta.grad.copy()
             self._angle = ta.fun
         else:
-            tb = _angle_term(n, point_b, sb)
+            tb = angle_term(n, point_b, sb)
             self.grad = ta.grad - tb.grad
             self._angle = lambda q: ta.fun(q) - tb.fun(q)
         self.bodies = self.layout.bodies
@@ -555,9 +563,9 @@ class PointForce(ForceElement):
         self.bodies = self.layout.bodies
         self.force = time_function(force, 2, "force")
         self.follower = bool(follower)
-        self._pos = _Position(n, point, self.layout.slices[0])
+        self._pos = Position(n, point, self.layout.slices[0])
         if self.follower:
-            self._angle = _angle_term(n, point, self.layout.slices[0])
+            self._angle = angle_term(n, point, self.layout.slices[0])
         self.point = point
         self.name = name
 
@@ -599,7 +607,7 @@ class PointMoment(ForceElement):
         self.layout = PointLayout([point])
         self.bodies = self.layout.bodies
         self.moment = time_function(moment, 1, "moment")
-        self._angle = _angle_term(self.layout.n, point, self.layout.slices[0])
+        self._angle = angle_term(self.layout.n, point, self.layout.slices[0])
         self.point = point
         self.name = name
 

@@ -37,59 +37,18 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sps
-import scipy.sparse.linalg as spla
 
 from .errors import ConvergenceError, SimulationError
+from .linear_solver import PatternCache, linear_solve
+from .newton import NewtonSettings, newton_solve, roundoff_floor
 from .rotations import MAX_INCREMENT, cayley, cayley_derivative, cayley_ratio, cayley_ratio_derivative
 from .scene import add_matrices
 
 __all__ = ["SimulationError", "ConvergenceError", "NewtonSettings", "State", "Integrator", "newton_solve", "linear_solve",
            "EnergyMomentum", "Newmark", "Trapezoidal", "GeneralizedAlpha", "make_integrator", "INTEGRATORS"]
 
-_EPS = np.finfo(float).eps
 _TINY = 1e-300
-#: scaled residuals at or below this count as 'at the round-off floor' (no line search there)
-_NEAR_FLOOR = 1e4
-
-
-@dataclass(frozen=True)
-class NewtonSettings:
-    """Convergence control of the Newton–Raphson core.
-
-    A step is converged when every scaled measure is at most one:
-    ‖r‖∞ ≤ ``rtol`` · (largest term of the balance it checks), ‖Φ‖∞ ≤
-    ``ctol`` · (scale of Φ), and for the energy-conserving scheme
-    |v̄ · r| ≤ ``etol`` · (energy scale). The scales come from the terms
-    themselves, so the defaults work for a 1 kg oscillator and for a steel
-    beam with forces of 10⁷ N alike. An update below round-off of the state
-    also ends the iteration (the residual is then as small as floating
-    point allows).
-
-    Attributes
-    ----------
-    rtol, ctol, etol : float
-        Relative tolerances (dimensionless).
-    max_iterations : int
-        Cap on Newton iterations per step.
-    line_search : bool
-        Halve the update (up to 6 times) when the residual grows.
-    """
-
-    rtol: float = 1e-12
-    ctol: float = 1e-12
-    etol: float = 1e-14
-    max_iterations: int = 25
-    line_search: bool = True
-
-    def __post_init__(self):
-        for name in ("rtol", "ctol", "etol"):
-            val = getattr(self, name)
-            if not (np.isfinite(val) and 0 < val < 1):
-                raise ValueError(f"NewtonSettings.{name} must be in (0, 1), got {val!r}")
-        if int(self.max_iterations) < 1:
-            raise ValueError(f"NewtonSettings.max_iterations must be >= 1, got {self.max_iterations!r}")
 
 
 @dataclass
@@ -130,33 +89,8 @@ class StepInfo:
     velocity_residual: float = 0.0
 
 
-class _PatternCache:
-    """Small cache of work that depends only on a sparsity pattern (and index sets).
-
-    The time loop produces matrices with the same CSR pattern at every Newton evaluation; the
-    maps that restrict them to the free coordinates or lay them out for a banded solver are
-    built once per pattern and then applied as plain gathers."""
-
-    def __init__(self, size=4):
-        self.size, self.entries = size, []
-
-    def get(self, mat, extra, build):
-        for e in self.entries:
-            if (e[0] == mat.shape and all(x is y for x, y in zip(e[1], extra))
-                    and e[2].shape == mat.indptr.shape and e[3].shape == mat.indices.shape
-                    and np.array_equal(e[2], mat.indptr) and np.array_equal(e[3], mat.indices)):
-                return e[4]
-        val = build()
-        self.entries.insert(0, (mat.shape, extra, mat.indptr.copy(), mat.indices.copy(), val))
-        del self.entries[self.size:]
-        return val
-
-
-_SUB_PLANS = _PatternCache()
-_SOLVE_PLANS = _PatternCache()
+_SUB_PLANS = PatternCache()
 _IX = {}
-#: a sparse system is solved as a banded one (LAPACK gbsv) when its bandwidth l + u is at most this
-_MAX_BANDWIDTH = 64
 
 
 def _sub_block(mat, rows, cols):
@@ -201,264 +135,8 @@ def _bordered(jff, d_t, c_q, dense):
     return sps.bmat([[sps.csr_matrix(jff), sps.csr_matrix(d_t)], [sps.csr_matrix(c_q), None]], format="csc")
 
 
-def _banded_plan(a):
-    """(l, u, flat positions in the LAPACK band storage) for the CSR matrix ``a``, or None if wide."""
-    n = a.shape[0]
-    if a.shape[1] != n or n == 0:
-        return None
-    rows = np.repeat(np.arange(n), np.diff(a.indptr))
-    off = a.indices - rows                              # j − i
-    lo, up = int(max(0, -off.min())), int(max(0, off.max()))
-    if lo + up > _MAX_BANDWIDTH:
-        return None
-    return lo, up, (up - off) * n + a.indices          # ab[u + i − j, j] = a[i, j]
-
-
-#: most coordinates a bordered band solve puts in its dense border (frame coordinates, multipliers)
-_MAX_BORDER = 128
-
-
-def _bordered_band_plan(a):
-    """Plan of a solve of the CSR matrix ``a`` as a band with a small dense border, or None.
-
-    Floating-frame bodies and joints make Newton matrices that are banded except for a few
-    rows and columns (a body's frame coordinates couple to all its elastic ones; a joint's
-    multiplier to a few far-apart coordinates). Those coordinates, the ones with an entry
-    farther than half the band limit from the diagonal, form the border B; the rest, the
-    interior I, keep their order and must then be banded. The plan holds the gathers that
-    lay out A_II in LAPACK band storage, A_IB and A_BB dense and A_BI sparse.
-    """
-    n = a.shape[0]
-    if a.shape[1] != n or n == 0:
-        return None
-    rows = np.repeat(np.arange(n), np.diff(a.indptr))
-    cols = a.indices
-    far = np.abs(rows - cols) > _MAX_BANDWIDTH // 2
-    fr, fc = rows[far], cols[far]
-    # coordinates without a diagonal entry (Lagrange multipliers) cannot be pivots of the band
-    border = a.diagonal() == 0.0
-    # the fewest coordinates that cover every far entry (greedy: the one in most far entries first;
-    # a frame coordinate's column is far from most elastic rows, so it is taken, not those rows)
-    while fr.size:
-        if border.sum() >= _MAX_BORDER:
-            return None
-        worst = int(np.argmax(np.bincount(fr, minlength=n) + np.bincount(fc, minlength=n)))
-        border[worst] = True
-        keep = (fr != worst) & (fc != worst)
-        fr, fc = fr[keep], fc[keep]
-    k = int(border.sum())
-    if k == 0 or k == n:
-        return None
-    interior = np.flatnonzero(~border)
-    bidx = np.flatnonzero(border)
-    pos = np.empty(n, dtype=np.int64)
-    pos[interior] = np.arange(interior.size)
-    pos[bidx] = np.arange(k)
-    r_in, c_in = ~border[rows], ~border[cols]
-    ii, ib, bi, bb = r_in & c_in, r_in & ~c_in, ~r_in & c_in, ~r_in & ~c_in
-    off = pos[cols[ii]] - pos[rows[ii]]
-    lo, up = int(max(0, -off.min(initial=0))), int(max(0, off.max(initial=0)))
-    if lo + up > _MAX_BANDWIDTH:
-        return None
-    ni = interior.size
-    band = (np.flatnonzero(ii), (up - off) * ni + pos[cols[ii]])
-    dense_ib = (np.flatnonzero(ib), pos[rows[ib]] * k + pos[cols[ib]])
-    dense_bb = (np.flatnonzero(bb), pos[rows[bb]] * k + pos[cols[bb]])
-    take_bi = np.flatnonzero(bi)                       # CSR order: rows ascending, so B rows ascending
-    bi_ptr = np.concatenate([[0], np.cumsum(np.bincount(pos[rows[bi]], minlength=k))])
-    return lo, up, interior, bidx, band, dense_ib, dense_bb, (take_bi, pos[cols[bi]], bi_ptr), rows
-
-
-def _bordered_band_solve(a, b, plan):
-    """x with a x = b by the plan of :func:`_bordered_band_plan`: band LU of A_II, dense Schur complement."""
-    lo, up, interior, bidx, band, dense_ib, dense_bb, (take_bi, bi_cols, bi_ptr), _ = plan
-    ni, k = interior.size, bidx.size
-    data = a.data
-    ab = np.zeros((lo + up + 1, ni))
-    ab.flat[band[1]] = data[band[0]]
-    a_ib = np.zeros(ni * k)
-    a_ib[dense_ib[1]] = data[dense_ib[0]]
-    a_bb = np.zeros(k * k)
-    a_bb[dense_bb[1]] = data[dense_bb[0]]
-    a_bi = sps.csr_matrix((data[take_bi], bi_cols, bi_ptr), shape=(k, ni))
-    rhs = np.column_stack([b[interior], a_ib.reshape(ni, k)])
-    sol = sla.solve_banded((lo, up), ab, rhs, overwrite_ab=True, overwrite_b=True, check_finite=False)
-    y, y_b = sol[:, 0], sol[:, 1:]
-    schur = a_bb.reshape(k, k) - a_bi @ y_b
-    x_b = np.linalg.solve(schur, b[bidx] - a_bi @ y)
-    x = np.empty(a.shape[0])
-    x[interior] = y - y_b @ x_b
-    x[bidx] = x_b
-    return x
-
-
-def _backward_stable(a, x, b, rows, tol=1e-12):
-    """True if x solves a x = b to a normwise backward error ‖a x − b‖ / (‖a‖ ‖x‖ + ‖b‖) ≤ ``tol``.
-
-    The residual relative to ‖b‖ alone is no test for the Newton matrices of fine meshes: their
-    condition grows like (L/h)⁴, and an exact-arithmetic-quality solve leaves ‖r‖/‖b‖ ≈ 1e-7 at
-    10⁵ coordinates (as SuperLU does on the same matrix); the backward error stays near 1e-17.
-    ``rows`` is the row index of every stored entry of ``a`` (part of the solve plan)."""
-    if not np.all(np.isfinite(x)):
-        return False
-    row_sums = np.bincount(rows, weights=np.abs(a.data), minlength=a.shape[0])
-    scale = float(row_sums.max(initial=0.0)) * _inf(x) + _inf(b)
-    return _inf(a @ x - b) <= tol * max(scale, 1e-300)
-
-
-def _sparse_lu_solve(a_csc, b, trans="N"):
-    """Solve with SuperLU (COLAMD ordering), preferring diagonal pivots.
-
-    Partial pivoting picks the frame coordinates' dense mass rows of a floating beam and fills
-    the factors quadratically (6·10⁶ entries, 0.5 GB, for 6 000 coordinates instead of 4·10⁴),
-    which made memory grow with the square of the mesh. A diagonal pivot is therefore kept
-    unless another entry of its column is 1000 times larger; should that lose accuracy (residual
-    above 10⁻⁸ of the right-hand side), the system is solved again with partial pivoting.
-    """
-    b = np.asarray(b, dtype=float)
-    x = None
-    for threshold in (1e-3, 1.0):
-        try:
-            x = spla.splu(a_csc, permc_spec="COLAMD", diag_pivot_thresh=threshold).solve(b, trans=trans)
-        except RuntimeError as exc:                    # "Factor is exactly singular"
-            if threshold == 1.0:
-                raise np.linalg.LinAlgError(str(exc)) from None
-            continue
-        res = (a_csc.T @ x if trans == "T" else a_csc @ x) - b
-        if np.all(np.isfinite(x)) and np.max(np.abs(res), initial=0.0) <= 1e-8 * max(np.max(np.abs(b), initial=0.0),
-                                                                                     1e-300):
-            break
-    return x
-
-
-def _solve_plan(a):
-    """("band", plan), ("bordered", plan) or ("general", None): how the CSR matrix ``a`` is solved."""
-    plan = _banded_plan(a)
-    if plan is not None:
-        return "band", plan
-    plan = _bordered_band_plan(a)
-    return ("bordered", plan) if plan is not None else ("general", None)
-
-
-def _solve(a, b):
-    if sps.issparse(a):
-        if a.format != "csr":
-            a = a.tocsr()
-        if not a.has_canonical_format:
-            a = a.copy()
-            a.sum_duplicates()
-        kind, plan = _SOLVE_PLANS.get(a, (), lambda: _solve_plan(a))
-        x = None
-        if kind == "band":                             # banded (free coordinates of a beam): LAPACK gbsv
-            lo, up, pos = plan
-            ab = np.zeros((lo + up + 1, a.shape[0]))
-            ab.flat[pos] = a.data
-            x = sla.solve_banded((lo, up), ab, b, overwrite_ab=True, check_finite=False)
-        elif kind == "bordered":                       # a band with a dense border (frames, joints)
-            try:
-                x = _bordered_band_solve(a, np.asarray(b, dtype=float), plan)
-            except np.linalg.LinAlgError:              # A_II singular on its own: general LU below
-                x = None
-            if x is not None and not _backward_stable(a, x, b, plan[-1]):
-                x = None
-        if x is None:                                  # Aᵀ of a CSR matrix is CSC without a copy
-            x = _sparse_lu_solve(a.T, b, trans="T")
-        if not np.all(np.isfinite(x)):
-            raise np.linalg.LinAlgError("singular sparse matrix")
-        return x
-    return np.linalg.solve(a, b)
-
-
-def linear_solve(a, b):
-    """x with a x = b for a dense, banded-sparse or general sparse ``a`` (the core's one linear solver).
-
-    Raises ``numpy.linalg.LinAlgError`` when ``a`` is singular.
-    """
-    return _solve(a, b)
-
-
 def _inf(x):
     return float(np.abs(x).max()) if np.size(x) else 0.0
-
-
-def newton_solve(fun, x0, settings, name, where, x_scale=0.0):
-    """Solve fun(x) = 0 by Newton–Raphson under the rules every solver of the package shares.
-
-    Parameters
-    ----------
-    fun : callable x -> (r, J, err)
-        Residual r, its Jacobian J (dense or sparse) and the scaled error
-        err (≤ 1 means converged; the caller scales its own measures).
-    x0 : ndarray
-        Start.
-    settings : NewtonSettings
-        ``max_iterations`` and ``line_search`` are used here.
-    name : str
-        Solver name for messages.
-    where : str
-        Where the solve happens (time and step, load factor) for messages.
-    x_scale : float
-        Size of the state x belongs to when x is an increment of it (the time steppers'
-        Δq); a step that starts at rest has x ≈ 0, and its updates are then judged
-        against this size for the stagnation exit.
-
-    Returns
-    -------
-    x, r, iterations
-
-    Raises
-    ------
-    ConvergenceError
-        On a non-finite residual, a singular Jacobian or no convergence
-        within ``settings.max_iterations``.
-
-    Notes
-    -----
-    An update below round-off of x, or a stagnating residual at its
-    round-off floor, also ends the iteration; when the residual grows the
-    update is halved (line search, at most 6 times).
-    """
-    s = settings
-    x = x0.copy()
-    r, jac, err = fun(x)
-    err_prev = np.inf
-    for it in range(s.max_iterations + 1):
-        if not (np.all(np.isfinite(r)) and np.isfinite(err)):
-            raise ConvergenceError(f"{name}: residual is not finite at {where} after {it} iterations "
-                                   f"(the solution escaped or the step is far too large)",
-                                   iterations=it, residual=float("nan"))
-        if err <= 1.0:
-            return x, r, it
-        if it == s.max_iterations:
-            break
-        try:
-            dx = -_solve(jac, r)
-        except np.linalg.LinAlgError:
-            raise ConvergenceError(f"{name}: singular Newton matrix at {where}, iteration {it} "
-                                   f"(redundant constraints or a coordinate without inertia or stiffness)",
-                                   iterations=it, residual=err) from None
-        if not np.all(np.isfinite(dx)):
-            raise ConvergenceError(f"{name}: Newton update is not finite at {where}, iteration {it}",
-                                   iterations=it, residual=err)
-        if _inf(dx) <= 8 * _EPS * max(_inf(x), _TINY) and err < 1e6:
-            return x, r, it + 1          # update below round-off: as converged as floating point allows
-        if it >= 2 and err >= 0.25 * err_prev and _inf(dx) <= 1.5e-8 * max(_inf(x), x_scale) and err < 1e4:
-            return x, r, it + 1          # stagnated at the round-off floor of the residual's own terms
-        err_prev = err
-        step = 1.0
-        for _ in range(7 if s.line_search else 1):
-            x_try = x + step * dx
-            r_try, jac_try, err_try = fun(x_try)
-            # backtrack only on a real increase far from convergence: near the round-off floor
-            # (err_try ≤ _NEAR_FLOOR) the scaled residual jitters by factors of a few between
-            # equally good iterates, and halving would only burn residual evaluations
-            if not s.line_search or (np.isfinite(err_try) and (err_try < max(err, 1.0)
-                                                               or err_try <= _NEAR_FLOOR)):
-                break
-            step *= 0.5
-        x, r, jac, err = x_try, r_try, jac_try, err_try
-    raise ConvergenceError(f"{name}: Newton did not converge at {where}: scaled residual {err:.3g} "
-                           f"after {s.max_iterations} iterations", iterations=s.max_iterations, residual=err)
 
 
 class Integrator:
@@ -503,7 +181,7 @@ class Integrator:
         else:
             a, b = _sub_block(mass, free, free), rhs
         try:
-            x = _solve(a, b)
+            x = linear_solve(a, b)
         except np.linalg.LinAlgError as exc:
             raise ValueError("the initial mass/constraint matrix is singular: a coordinate has no inertia, or "
                              "constraints are redundant") from exc
@@ -519,7 +197,7 @@ class Integrator:
 
     # ---------------------------------------------------------------- Newton
     def _newton(self, fun, x0, where, x_scale=0.0):
-        """Solve fun(x) = 0 by :func:`newton_solve` with this scheme's settings and name."""
+        """Solve fun(x) = 0 by the Newton core (:func:`skfem_flex.newton.newton_solve`) with this scheme's settings and name."""
         return newton_solve(fun, x0, self.newton, self.name, where, x_scale)
 
     def step(self, scene, state, dt):
@@ -625,9 +303,7 @@ class EnergyMomentum(Integrator):
             err = max(r_inf / (s.rtol * max(scale, _TINY)), err_c, vr / (s.etol * e_scale))
             # within what round-off lets r and v̄·r reach (measured: ≈ 0.5 ε |floor|, ≤ 0.3 ε |v̄|·|floor|),
             # the core may accept the step once Newton stagnates (start from rest, very stiff beams)
-            if err > 1.0 and err_c <= 1.0 and r_inf <= 16 * _EPS * _inf(floor[free]) and \
-                    vr <= 2 * _EPS * float(np.abs(vbar_free) @ floor[free]):
-                err = min(err, 1e3)
+            err = roundoff_floor(err, err_c, r_inf, _inf(floor[free]), vr, float(np.abs(vbar_free) @ floor[free]))
             cache.update(dq=dq, z=z, mu=mu, q1=q1, v1=v1, r=r, d=d, ext=ext)
             return res, full, err
 
@@ -875,6 +551,11 @@ def make_integrator(integrator, rho_inf=None, newton=None):
         to a scheme that has none.
     """
     if isinstance(integrator, Integrator):
+        # a scheme object carries its own parameters; a second, ignored copy would be a silent error
+        for name, value in (("rho_inf", rho_inf), ("newton", newton)):
+            if value is not None:
+                raise ValueError(f"{name}={value!r} given with the scheme object {type(integrator).__name__}; "
+                                 f"set it on the object instead (e.g. GeneralizedAlpha(rho_inf=0.8, newton=...))")
         return integrator
     if not isinstance(integrator, str) or integrator not in INTEGRATORS:
         raise ValueError(f"unknown integrator {integrator!r}; choose one of {sorted(INTEGRATORS)}")

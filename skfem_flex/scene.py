@@ -140,12 +140,16 @@ class Scene:
                             for f in forces)
         self.constraints = tuple(constraints)
         self._force_idx = [self._indices(f.bodies, f"force {getattr(f, 'name', f)!r}") for f in self.forces]
-        self._con_idx = [self._indices(c.bodies, f"constraint {c.name!r}") for c in self.constraints]
-        self._con_rows = []
-        row = 0
+        layout, row = [], 0
         for c in self.constraints:
-            self._con_rows.append(np.arange(row, row + c.n_equations))
+            idx = self._indices(c.bodies, f"constraint {c.name!r}")
+            rows = np.arange(row, row + c.n_equations)
+            # read-only: constraint_layout hands these very arrays out, and the dense row assembly keys
+            # its cached index meshes by their identity, so no caller may change them in place
+            idx.flags.writeable = rows.flags.writeable = False
+            layout.append((idx, rows))
             row += c.n_equations
+        self._constraint_layout = tuple(layout)
         self.n_constraints = row
 
         self.prescribed = tuple(prescribed)
@@ -188,6 +192,29 @@ class Scene:
         self._fused = None
 
     # ---------------------------------------------------------------- layout
+    @property
+    def constraint_layout(self):
+        """Where each constraint reads and writes: its coordinate indices and its multiplier rows.
+
+        Returns
+        -------
+        tuple of (ndarray, ndarray)
+            One pair ``(indices, rows)`` per constraint, in the order of
+            ``scene.constraints`` (and of :attr:`reaction_names`): ``indices``
+            are the global coordinates of the constraint's bodies in the order
+            it reads them (``q[indices]`` is its local vector), ``rows`` the
+            positions of its equations in Φ and of its multipliers in λ
+            (``lam[rows]``). The arrays are read-only.
+
+        Examples
+        --------
+        The reaction of every constraint from the multipliers λ::
+
+            for c, (idx, rows) in zip(scene.constraints, scene.constraint_layout):
+                c.reaction(q[idx], lam[rows])
+        """
+        return self._constraint_layout
+
     def _indices(self, bodies, what):
         out = []
         for b in bodies:
@@ -429,7 +456,7 @@ class Scene:
     def constraint_value(self, q, t):
         """Φ(q, t), shape (n_constraints,)."""
         phi = np.zeros(self.n_constraints)
-        for c, i, r in zip(self.constraints, self._con_idx, self._con_rows):
+        for c, (i, r) in zip(self.constraints, self.constraint_layout):
             phi[r] = c.value(q[i], t)
         return phi
 
@@ -450,12 +477,12 @@ class Scene:
     def constraint_jacobian(self, q, t):
         """Φ_q(q, t), shape (n_constraints, n)."""
         return self._assemble_rows([(c.jacobian(q[i], t), i, r)
-                                    for c, i, r in zip(self.constraints, self._con_idx, self._con_rows)])
+                                    for c, (i, r) in zip(self.constraints, self.constraint_layout)])
 
     def constraint_time_derivative(self, q, t):
         """Φ_t(q, t)."""
         out = np.zeros(self.n_constraints)
-        for c, i, r in zip(self.constraints, self._con_idx, self._con_rows):
+        for c, (i, r) in zip(self.constraints, self.constraint_layout):
             if c.rheonomic:
                 out[r] = c.time_derivative(q[i], t)
         return out
@@ -463,31 +490,31 @@ class Scene:
     def constraint_acceleration_rhs(self, q, v, t):
         """γ with Φ_q q̈ = γ."""
         out = np.zeros(self.n_constraints)
-        for c, i, r in zip(self.constraints, self._con_idx, self._con_rows):
+        for c, (i, r) in zip(self.constraints, self.constraint_layout):
             out[r] = c.acceleration_rhs(q[i], v[i], t)
         return out
 
     def constraint_velocity_jacobian(self, q, v, t):
         """∂(Φ_q v)/∂q at fixed v, shape (n_constraints, n)."""
         return self._assemble_rows([(c.velocity_jacobian(q[i], v[i], t), i, r)
-                                    for c, i, r in zip(self.constraints, self._con_idx, self._con_rows)])
+                                    for c, (i, r) in zip(self.constraints, self.constraint_layout)])
 
     def constraint_hessian_product(self, q, mu, t):
         """∂(Φ_qᵀ μ)/∂q, shape (n, n)."""
         acc = self._zeros()
-        for c, i, r in zip(self.constraints, self._con_idx, self._con_rows):
+        for c, (i, r) in zip(self.constraints, self.constraint_layout):
             self._add(acc, c.hessian_product(q[i], mu[r], t), i)
         return acc.result()
 
     def constraint_discrete_gradient(self, q0, q1, t):
         """D with D (q1 − q0) = Φ(q1, t) − Φ(q0, t)."""
         return self._assemble_rows([(c.discrete_gradient(q0[i], q1[i], t), i, r)
-                                    for c, i, r in zip(self.constraints, self._con_idx, self._con_rows)])
+                                    for c, (i, r) in zip(self.constraints, self.constraint_layout)])
 
     def constraint_discrete_gradient_jacobian(self, q0, q1, mu, t):
         """∂(Dᵀ μ)/∂q1."""
         acc = self._zeros()
-        for c, i, r in zip(self.constraints, self._con_idx, self._con_rows):
+        for c, (i, r) in zip(self.constraints, self.constraint_layout):
             self._add(acc, c.discrete_gradient_jacobian(q0[i], q1[i], mu[r], t), i)
         return acc.result()
 
@@ -506,7 +533,7 @@ class Scene:
         if lam.size != self.n_constraints:
             raise ValueError(f"lam must have {self.n_constraints} entries, got {lam.size}")
         return {name: np.atleast_1d(np.asarray(c.reaction(q[i], lam[r]), dtype=float))
-                for name, c, i, r in zip(self.reaction_names, self.constraints, self._con_idx, self._con_rows)}
+                for name, c, (i, r) in zip(self.reaction_names, self.constraints, self.constraint_layout)}
 
     # ---------------------------------------------------------------- momenta
     def linear_momentum(self, q, v):

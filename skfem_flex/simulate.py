@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import compiled_loop
+from . import compiled_loop, compiled_scene
 from .errors import DivergenceError, Interrupted, OutputError
 from .initial_conditions import consistent_initial_state
 from .integrators import ConvergenceError, SimulationError, State, make_integrator
@@ -51,9 +51,10 @@ class _Recorder:
             if k in prior.reactions:
                 self.reaction_rows[k] = list(prior.reactions[k])
 
-    def record(self, state, work, iterations, vres, derived=None):
-        """Append one state. ``derived`` = (T, V, p_x, p_y, L), when the caller computed them already
-        (the compiled loop), replaces the scene's kinetic/potential energy and momenta calls."""
+    def record(self, state, work, iterations, vres, derived=None, probes=None):
+        """Append one state. ``derived`` = (T, V, p_x, p_y, L[, ‖Φ‖∞, ‖Φ_q v‖∞]), when the caller computed
+        them already (the compiled loops), replaces the scene's energy, momenta and constraint calls;
+        ``probes`` {name: value} the probes they recorded."""
         s = self.scene
         q, v, t = state.q, state.v, state.t
         r = self.rows
@@ -64,7 +65,10 @@ class _Recorder:
         r["kinetic"].append(s.kinetic_energy(q, v) if derived is None else float(derived[0]))
         r["potential"].append(s.potential_energy(q) if derived is None else float(derived[1]))
         r["external_work"].append(work)
-        r["constraint_residual"].append(float(np.max(np.abs(s.constraint_value(q, t)))) if s.n_constraints else 0.0)
+        if derived is not None and len(derived) > 5:
+            r["constraint_residual"].append(float(derived[5]))
+        else:
+            r["constraint_residual"].append(float(np.max(np.abs(s.constraint_value(q, t)))) if s.n_constraints else 0.0)
         r["velocity_constraint_residual"].append(vres)
         r["newton_iterations"].append(iterations)
         r["prescribed_force"].append(np.array(state.prescribed_force, dtype=float))
@@ -77,8 +81,12 @@ class _Recorder:
             else:
                 r["linear_momentum"].append(np.array(derived[2:4], dtype=float))
                 r["angular_momentum"].append(float(derived[4]))
-        for k, val in s.evaluate_probes(t, q, v).items():
-            self.probes[k].append(val)
+        if probes:                               # values the compiled loop recorded; the others here
+            for k, fn in s.probes.items():
+                self.probes[k].append(probes[k] if k in probes else np.asarray(fn(s, t, q, v), dtype=float))
+        else:
+            for k, val in s.evaluate_probes(t, q, v).items():
+                self.probes[k].append(val)
         if self.reactions:
             lam = np.asarray(state.lam, dtype=float)
             for k, fn in self.reactions:
@@ -99,7 +107,7 @@ class _Recorder:
 def _reaction_maps(scene):
     """[(unique name, fn(q, lam) -> reaction)] for the scene's constraints (names made unique with #2, #3...)."""
     out = []
-    for name, c, idx, rows in zip(scene.reaction_names, scene.constraints, scene._con_idx, scene._con_rows):
+    for name, c, (idx, rows) in zip(scene.reaction_names, scene.constraints, scene.constraint_layout):
         def fn(q, lam, c=c, idx=idx, rows=rows):
             if lam.size != scene.n_constraints:
                 return np.full(len(c.reaction_labels) or c.n_equations, np.nan)
@@ -231,7 +239,11 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
         compiled = os.environ.get("SKFEM_FLEX_COMPILED", "1").strip() != "0"
     elif not isinstance(compiled, (bool, np.bool_)):
         raise ValueError(f"compiled must be True, False or None, got {compiled!r}")
-    use_compiled = bool(compiled) and compiled_loop.eligible(scene, scheme)
+    # the compiled loop that runs this scene, if any: one floating-frame body alone, or a small mechanism
+    loop = None
+    if compiled:
+        loop = next((m for m in (compiled_loop, compiled_scene) if m.eligible(scene, scheme)), None)
+    use_compiled = loop is not None
     cold = compiled_loop.jit_cache_cold(scene)
     if cold and progress:
         print(compiled_loop.COMPILE_NOTICE, file=sys.stderr, flush=True)
@@ -276,11 +288,11 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
     last_checkpoint = start
     checkpoint_wait = checkpoint_every          # grows with the time a save takes (CHECKPOINT_COST)
 
-    def recorded(state, work, its, vres, derived=None):
+    def recorded(state, work, its, vres, derived=None, probes=None):
         # the sinks first: a step whose output failed is not in the histories either, so that
         # the histories and the final state of the result stay those of one step
         _write_sinks(sinks, scene, state)
-        rec.record(state, work, its, vres, derived)
+        rec.record(state, work, its, vres, derived, probes)
         guard.check_energy(state.t)
 
     def advanced(n, its):
@@ -308,13 +320,13 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
         while step < n_steps:
             python_step = not use_compiled
             if use_compiled:
-                chunk = min(1 if first and cold else compiled_loop.chunk_steps(scene), n_steps - step)
-                out = compiled_loop.run_chunk(scene, scheme, state, dt, t_end, step + 1, chunk, n_steps, record_every,
-                                              work)
-                for i, (t_r, q_r, v_r, w_r, its_r, reac_r, derived) in enumerate(out["records"]):
-                    s_r = State(t_r, q_r, v_r, lam=np.zeros(0), prescribed_force=reac_r)
+                chunk = min(1 if first and cold else loop.chunk_steps(scene), n_steps - step)
+                out = loop.run_chunk(scene, scheme, state, dt, t_end, step + 1, chunk, n_steps, record_every, work)
+                for i, (t_r, q_r, v_r, w_r, its_r, reac_r, derived, *more) in enumerate(out["records"]):
+                    s_r = State(t_r, q_r, v_r, lam=more[0] if more else np.zeros(0), prescribed_force=reac_r)
                     try:
-                        recorded(s_r, w_r, its_r, 0.0, derived)
+                        recorded(s_r, w_r, its_r, float(derived[6]) if len(derived) > 6 else 0.0, derived,
+                                 more[1] if more else None)
                     except OutputError:
                         if record_every == 1 and i:   # the result ends at the last step recorded
                             state, work, step = prev, out["records"][i - 1][3], step + i
@@ -323,12 +335,13 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
                         raise
                     prev = s_r
                 if out["done"]:
-                    state = State(out["t"], out["q"], out["v"], lam=np.zeros(0), prescribed_force=out["reaction"])
+                    state = State(out["t"], out["q"], out["v"], lam=out.get("lam", np.zeros(0)),
+                                  prescribed_force=out["reaction"])
                     work = out["work"]
                     step += out["done"]
                     advanced(out["done"], out["iterations"])
                 # a step the compiled loop could not finish goes the Python way (which halves or raises)
-                python_step = out["status"] != compiled_loop.OK
+                python_step = out["status"] != loop.OK
             if python_step:
                 state, work, halvings, its = _python_step(scheme, scene, state, dt, t_end, step + 1, n_steps,
                                                           max_halvings, work, halvings, record_every, recorded)

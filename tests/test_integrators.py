@@ -211,3 +211,13 @@ def test_newmark_converges_where_the_acceleration_nearly_cancels(scheme):
     res = sf.simulate(sf.scenes.spring_mass(exponent=2), t_end=1000 * period / 50, dt=period / 50, integrator=scheme)
     assert res.completed and res.halvings == 0
     assert np.max(res.newton_iterations) <= 4
+
+
+def test_scheme_objects_carry_their_parameters():
+    """A scheme object is used as given; a second copy of its parameters beside it is refused, not ignored."""
+    scene = sf.scenes.get("pendulum")()
+    by_object = sf.simulate(scene, 0.2, 1e-2, integrator=sf.GeneralizedAlpha(rho_inf=0.6))
+    by_name = sf.simulate(scene, 0.2, 1e-2, integrator="generalized-alpha", rho_inf=0.6)
+    np.testing.assert_array_equal(by_object.q, by_name.q)
+    with pytest.raises(ValueError, match="rho_inf=0.5 given with the scheme object GeneralizedAlpha"):
+        sf.simulate(scene, 0.2, 1e-2, integrator=sf.GeneralizedAlpha(rho_inf=0.8), rho_inf=0.5)

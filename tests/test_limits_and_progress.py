@@ -169,8 +169,10 @@ def test_checkpoint_waits_twenty_times_the_save(tmp_path, monkeypatch):
             pass
 
     monkeypatch.setattr(Result, "save", slow_save)
+    # the Python path checks for a checkpoint after every step (the compiled one after every chunk of
+    # steps): a clock that advances per step shows the rule step by step
     res = sf.simulate(sf.scenes.pendulum(), 6.0, 0.01, output=[OneSecondPerStep()], checkpoint=tmp_path / "c.npz",
-                      checkpoint_every=1.0)
+                      checkpoint_every=1.0, compiled=False)
     assert res.steps == 600 and len(saves) >= 5
     assert saves[0][0] >= 1.0
     for (b0, e0), (b1, _) in zip(saves, saves[1:]):
@@ -195,7 +197,7 @@ def test_cheap_checkpoints_keep_the_interval(tmp_path, monkeypatch):
             pass
 
     sf.simulate(sf.scenes.pendulum(), 0.5, 0.01, output=[OneSecondPerStep()], checkpoint=tmp_path / "c.npz",
-                checkpoint_every=3.0)
+                checkpoint_every=3.0, compiled=False)
     gaps = [b - a for a, b in zip(saves, saves[1:])]
     assert len(saves) >= 10 and all(g == 3.0 for g in gaps), saves
 

@@ -1,4 +1,4 @@
-"""The core's linear solver (``integrators.linear_solve``) on the shapes of Newton matrices it meets.
+"""The core's linear solver (``linear_solver.linear_solve``) on the shapes of Newton matrices it meets.
 
 A scene with floating-frame bodies and joints gives a matrix that is banded but for a few
 rows and columns (frame coordinates, Lagrange multipliers with a zero diagonal). It is solved
@@ -10,7 +10,7 @@ import pytest
 import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 
-from skfem_flex import integrators
+from skfem_flex import linear_solver
 
 
 def bordered_matrix(n, n_frame=3, n_mult=2, half_band=3, seed=0):
@@ -33,11 +33,11 @@ def bordered_matrix(n, n_frame=3, n_mult=2, half_band=3, seed=0):
 def test_bordered_band_matrix_matches_general_sparse_lu(n):
     a = bordered_matrix(n)
     b = np.random.default_rng(1).normal(size=a.shape[0])
-    plan = integrators._bordered_band_plan(a.tocsr())
+    plan = linear_solver._bordered_band_plan(a.tocsr())
     assert plan is not None
     lo, up, interior, border = plan[:4]
     assert border.size <= 3 + 2 + 2 and lo + up <= 2 * 3 + 2    # frame, multipliers, their far coordinates
-    x = integrators.linear_solve(a, b)
+    x = linear_solver.linear_solve(a, b)
     ref = spla.spsolve(a.tocsc(), b)
     np.testing.assert_allclose(x, ref, rtol=1e-9, atol=1e-12 * np.abs(ref).max())
 
@@ -54,15 +54,15 @@ def test_singular_interior_falls_back_to_general_lu():
     a[k, 0] = a[0, k] = 1.0
     a = a.tocsr()
     assert np.linalg.matrix_rank(a.toarray()) == a.shape[0]
-    plan = integrators._bordered_band_plan(a)
+    plan = linear_solver._bordered_band_plan(a)
     with pytest.raises(np.linalg.LinAlgError):          # the bordered solve alone cannot do it
-        integrators._bordered_band_solve(a, np.ones(a.shape[0]), plan)
+        linear_solver._bordered_band_solve(a, np.ones(a.shape[0]), plan)
     b = np.arange(a.shape[0], dtype=float)
-    np.testing.assert_allclose(integrators.linear_solve(a, b), spla.spsolve(a.tocsc(), b), rtol=1e-8, atol=1e-10)
+    np.testing.assert_allclose(linear_solver.linear_solve(a, b), spla.spsolve(a.tocsc(), b), rtol=1e-8, atol=1e-10)
 
 
 def test_singular_matrix_raises():
     a = bordered_matrix(200).tolil()
     a[5, :] = 0.0
     with pytest.raises(np.linalg.LinAlgError):
-        integrators.linear_solve(a.tocsc(), np.ones(a.shape[0]))
+        linear_solver.linear_solve(a.tocsc(), np.ones(a.shape[0]))

@@ -3,11 +3,13 @@ geometrically exact beams."""
 from .base import Body, BodyGeometry, BodyPoint
 from .exact import ElementInversionError, ExactBeam, ExactDistributedLoad, NodalLoad
 from .ffr import FloatingFrame, FramePoint
-from .floating import DistributedLoad, FloatingBeam
+from .floating import FloatingBeam
+from .floating_loads import DistributedLoad
 from .modal import ElasticModel, Interface, ModalBody
 from .plane_stress import PlaneStress, load_mesh
 from .reduction import craig_bampton, free_modes, full_body, reduce
 from .particle import PointMass
+from .probes import LinearProbe, PointProbe
 from .rigid import RigidBody
 
-__all__ = ["Body", "BodyGeometry", "BodyPoint", "PointMass", "RigidBody"]
+__all__ = ["Body", "BodyGeometry", "BodyPoint", "PointMass", "RigidBody", "PointProbe", "LinearProbe"]

@@ -125,29 +125,42 @@ class BodyPoint:
     #: True when the angle of the point is defined (rigid bodies, beams)
     has_angle = False
 
+    def _not_provided(self, method):
+        owner = getattr(self.body, "name", None)
+        return NotImplementedError(f"{type(self).__name__} (a point of body {owner!r}) does not implement {method}, "
+                                   f"which every body point used by a joint, load or probe must provide "
+                                   f"(docs/user_elements.md)")
+
     def position(self, q):
         """r(q), shape (2,)."""
-        raise NotImplementedError
+        raise self._not_provided("position(q)")
 
     def position_jacobian(self, q):
         """∂r/∂q, shape (2, n)."""
-        raise NotImplementedError
+        raise self._not_provided("position_jacobian(q)")
 
     def position_hessian_product(self, q, f):
         """∂(r_qᵀ f)/∂q for a fixed vector f (2,), shape (n, n)."""
-        raise NotImplementedError
+        raise self._not_provided("position_hessian_product(q, f)")
 
     def position_discrete_gradient(self, q0, q1):
         """D (2, n) with D (q1 − q0) = r(q1) − r(q0) exactly."""
-        raise NotImplementedError
+        raise self._not_provided("position_discrete_gradient(q0, q1)")
 
     def position_discrete_gradient_jacobian(self, q0, q1, f):
         """∂(Dᵀ f)/∂q1, shape (n, n)."""
-        raise NotImplementedError
+        raise self._not_provided("position_discrete_gradient_jacobian(q0, q1, f)")
 
     def velocity(self, q, v):
         """ṙ = r_q v."""
         return self.position_jacobian(q) @ v
+
+    def compiled_map(self):
+        """The position map in the form the compiled mechanism loop evaluates
+        (:mod:`skfem_flex.compiled_scene`): ``("linear", G, c)`` for r = G q + c,
+        ``("frame", m_R, y0, Y)`` for r = m_R R + A(θ)(y0 + Y q_f) with R = q[0:2], θ = q[2],
+        q_f = q[3:]; None (the default) if it is neither (the scene then runs on the Python path)."""
+        return None
 
     def angle(self, q):
         """Angle of the frame attached at the point, rad."""
@@ -181,6 +194,17 @@ class Body:
     cayley_coordinates: tuple = ()
     name: str = "body"
 
+    def _not_provided(self, method, why):
+        """The NotImplementedError a contract method raises when a subclass that needs it left it out."""
+        return NotImplementedError(f"body {self.name!r} ({type(self).__name__}) does not implement {method}, "
+                                   f"which {why} (the body contract: docs/user_elements.md)")
+
+    def _check_potential(self, method):
+        """Strain-energy defaults are zero only for bodies without strain energy: a body that sets
+        ``has_potential = True`` and leaves one out would silently lose its internal forces."""
+        if self.has_potential:
+            raise self._not_provided(method, "a body with has_potential = True must provide")
+
     # ----------------------------------------------------------------- state
     @property
     def coordinate_names(self):
@@ -208,7 +232,7 @@ class Body:
     # --------------------------------------------------------------- kinetic
     def mass_matrix(self, q):
         """M(q), kg (and kg m² for angles)."""
-        raise NotImplementedError
+        raise self._not_provided("mass_matrix(q)", "every body must provide")
 
     def kinetic_energy(self, q, v):
         """T = ½ vᵀ M(q) v, J."""
@@ -220,14 +244,16 @@ class Body:
 
     def momentum_jacobian(self, q, v):
         """B(q, v) = ∂(M(q) v)/∂q (zero for constant mass)."""
-        raise NotImplementedError("only bodies with constant_mass = False provide momentum_jacobian")
+        raise self._not_provided("momentum_jacobian(q, v)", "a body with constant_mass = False must provide "
+                                 "(the trapezoidal and generalized-alpha schemes need it)")
 
     def quadratic_velocity_force(self, q, v):
         """Q_v = ∂T/∂q − Ṁ v with its derivatives (f, ∂f/∂q, ∂f/∂v).
 
         Only bodies with ``constant_mass = False`` provide it.
         """
-        raise NotImplementedError
+        raise self._not_provided("quadratic_velocity_force(q, v)", "a body with constant_mass = False must provide "
+                                 "(every scheme's start and the trapezoidal and generalized-alpha steps need it)")
 
     def kinetic_discrete_gradient(self, q0, q1, v0, v1):
         """Discrete gradient of G(q) = ½ v0ᵀ M(q) v1 between q0 and q1.
@@ -235,47 +261,71 @@ class Body:
         Returns (g, ∂g/∂q1, ∂g/∂v1) with g · (q1 − q0) = G(q1) − G(q0).
         Only bodies with ``constant_mass = False`` provide it.
         """
-        raise NotImplementedError
+        raise self._not_provided("kinetic_discrete_gradient(q0, q1, v0, v1)", "a body with constant_mass = False "
+                                 "must provide (the energy-momentum scheme needs it)")
 
     # ------------------------------------------------------------- potential
     def potential_energy(self, q):
-        """Internal (strain) energy V(q), J."""
+        """Internal (strain) energy V(q), J (zero unless ``has_potential``)."""
+        self._check_potential("potential_energy(q)")
         return 0.0
 
     def potential_gradient(self, q):
         """∇V(q)."""
+        self._check_potential("potential_gradient(q)")
         return np.zeros(self.n_dofs)
 
     def potential_hessian(self, q):
         """∇²V(q)."""
+        self._check_potential("potential_hessian(q)")
         return zero_matrix(self.n_dofs)
 
     def potential_discrete_gradient(self, q0, q1):
         """(g, ∂g/∂q1) with g · (q1 − q0) = V(q1) − V(q0) exactly."""
+        self._check_potential("potential_discrete_gradient(q0, q1)")
         return np.zeros(self.n_dofs), zero_matrix(self.n_dofs)
 
     # --------------------------------------------------------------- gravity
     def mass_moment(self):
         """(Γ, c) with ∫ r dm = Γ q + c for bodies whose positions are linear in q.
 
-        Γ has shape (2, n_dofs) in kg, c shape (2,) in kg m.
+        Γ has shape (2, n_dofs) in kg, c shape (2,) in kg m. Bodies whose positions are not linear
+        in q raise ``NotImplementedError`` and override :meth:`gravity_potential` and
+        :meth:`gravity_discrete_gradient` instead.
         """
-        raise NotImplementedError
+        raise self._not_provided("mass_moment()", "gravity needs from a body whose positions are linear in q "
+                                 "(otherwise override gravity_potential(q, g) and "
+                                 "gravity_discrete_gradient(q0, q1, g))")
 
     def gravity_potential(self, q, g):
         """Potential of the uniform field g (m/s²): V = −g · ∫ r dm.
 
         Returns (V, ∇V, ∇²V).
         """
-        gam, c = self.mass_moment()
+        gam, c = self._linear_mass_moment("gravity_potential(q, g)")
         g = np.asarray(g, dtype=float)
         grad = -(g @ gam)
         return float(grad @ q - g @ c), grad, zero_matrix(self.n_dofs)
 
     def gravity_discrete_gradient(self, q0, q1, g):
-        """Discrete gradient of the gravity potential: (g, ∂g/∂q1)."""
-        _, grad, hess = self.gravity_potential(q0, g)
-        return grad, hess
+        """Discrete gradient of the gravity potential: (g, ∂g/∂q1).
+
+        The default is the constant gradient of a body linear in q (:meth:`mass_moment`); a body
+        that overrides :meth:`gravity_potential` because it is not linear must override this too.
+        """
+        gam, _ = self._linear_mass_moment("gravity_discrete_gradient(q0, q1, g)")
+        return -(np.asarray(g, dtype=float) @ gam), zero_matrix(self.n_dofs)
+
+    def _linear_mass_moment(self, method):
+        """(Γ, c) of :meth:`mass_moment`, or a NotImplementedError saying what gravity needs instead."""
+        try:
+            return self.mass_moment()
+        except NotImplementedError as exc:
+            own = "" if type(self).mass_moment is Body.mass_moment else f" (it says: {exc})"
+            raise NotImplementedError(
+                f"body {self.name!r} ({type(self).__name__}) provides neither mass_moment() (bodies whose positions "
+                f"are linear in q){own} nor its own {method} (bodies that are not); gravity needs one of them "
+                f"(the body contract: docs/user_elements.md)") from None
 
     # -------------------------------------------------------------- momenta
     def linear_momentum(self, q, v):
@@ -289,9 +339,9 @@ class Body:
     # ---------------------------------------------------------- body points
     def point(self, locator=None):
         """A :class:`BodyPoint` at ``locator``; ``ValueError`` if it lies outside the body."""
-        raise NotImplementedError
+        raise self._not_provided("point(locator)", "joints, point loads and probes need")
 
     # --------------------------------------------------------------- output
     def geometry(self, q, v):
         """A :class:`BodyGeometry` of the current configuration."""
-        raise NotImplementedError
+        raise self._not_provided("geometry(q, v)", "output sinks (VTK series) need")

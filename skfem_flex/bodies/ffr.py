@@ -52,7 +52,7 @@ from collections import namedtuple
 import numpy as np
 
 from .base import Body, BodyPoint
-from .floating_kernel import _sinc_half
+from .floating_kernel import sinc_half
 from .rigid import E_MATRIX as E2, rotation as _rot
 
 __all__ = ["FloatingFrame", "FramePoint"]
@@ -208,7 +208,7 @@ class FloatingFrame(Body):
         d = float(q1[2] - q0[2])
         tm = 0.5 * float(q0[2] + q1[2])
         ca, sa = math.cos(tm), math.sin(tm)
-        sig, dsig = _sinc_half(d)
+        sig, dsig = sinc_half(d)
         kap, dkap = math.cos(0.5 * d), -0.5 * math.sin(0.5 * d)
         y = self._Pq @ (0.5 * (q0[3:] + q1[3:]))
         smx, smy = self._S0[0] + y[0], self._S0[1] + y[1]
@@ -283,7 +283,7 @@ class FloatingFrame(Body):
         """D (2, n) with D (q1 − q0) = r(q1) − r(q0), r = mR R + A(θ)(y0 + Y q_f)."""
         d = q1[2] - q0[2]
         Am = _rot(0.5 * (q0[2] + q1[2]))
-        sig, _ = _sinc_half(d)
+        sig, _ = sinc_half(d)
         sm = y0 + Y @ (0.5 * (q0[3:] + q1[3:]))
         D = np.empty((2, self.n_dofs))
         D[:, :2] = mR * np.eye(2)
@@ -295,7 +295,7 @@ class FloatingFrame(Body):
         """∂(Dᵀ f)/∂q1 for :meth:`_map_dg`."""
         d = q1[2] - q0[2]
         Am = _rot(0.5 * (q0[2] + q1[2]))
-        sig, dsig = _sinc_half(d)
+        sig, dsig = sinc_half(d)
         kap = math.cos(0.5 * d)
         sm = y0 + Y @ (0.5 * (q0[3:] + q1[3:]))
         fA = f @ Am
@@ -310,6 +310,12 @@ class FloatingFrame(Body):
     def mass_moment(self):
         """Not linear in q (the frame turns): gravity goes through :meth:`gravity_potential`."""
         raise NotImplementedError("FloatingBeam positions are not linear in q; use gravity_potential")
+
+    def mass_moment_map(self):
+        """(m, S₀, S̄) with ∫ r dm = m R + A(θ)(S₀ + S̄ q_f): kg, kg m (2,), kg (2, n_elastic).
+
+        The first moment of mass as the compiled mechanism loop reads it (gravity)."""
+        return self.mass_total, self._S0.copy(), self._Sbar.copy()
 
     def gravity_potential(self, q, g):
         """V = −g · ∫ρA r dx = −g · (m R + A s̄), with gradient and Hessian."""
@@ -397,6 +403,9 @@ class FramePoint(BodyPoint):
 
     def position(self, q):
         return q[:2] + _rot(q[2]) @ (self.y0 + self.S @ q[3:])
+
+    def compiled_map(self):
+        return "frame", 1.0, self.y0, self.S
 
     def position_jacobian(self, q):
         A = _rot(q[2])

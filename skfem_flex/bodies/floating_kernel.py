@@ -45,7 +45,7 @@ import numba
 
 from .modal_kernel import quartic_discrete_gradient, quartic_energy
 
-__all__ = ["FloatingKernelData", "pack", "energy_momentum_terms", "momentum", "potential_energy"]
+__all__ = ["FloatingKernelData", "pack", "energy_momentum_terms", "momentum", "potential_energy", "sinc_half"]
 
 #: the arrays a floating-frame body hands its kernels (built once by :func:`pack`)
 FloatingKernelData = namedtuple("FloatingKernelData", [
@@ -144,7 +144,7 @@ def _matvec(ptr, idx, dat, x, off):
 
 
 @numba.njit(cache=True)
-def _sinc_half(d):
+def sinc_half(d):
     """σ = sin(d/2)/(d/2) and dσ/dd (series near 0); also used by the numpy methods of FloatingBeam."""
     h = 0.5 * d
     if abs(h) < 1e-3:
@@ -278,7 +278,7 @@ def energy_momentum_terms(kd, q0, q1, v0, v1, dt):
     d = q1[2] - q0[2]
     tm = 0.5 * (q0[2] + q1[2])
     ca, sa = math.cos(tm), math.sin(tm)
-    sig, dsig = _sinc_half(d)
+    sig, dsig = sinc_half(d)
     kap, dkap = math.cos(0.5 * d), -0.5 * math.sin(0.5 * d)
     w0, w1 = v0[2], v1[2]
     b0x, b0y = ca * v0[0] + sa * v0[1], -sa * v0[0] + ca * v0[1]

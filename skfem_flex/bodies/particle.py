@@ -99,6 +99,9 @@ class _MassPoint(BodyPoint):
     def position_jacobian(self, q):
         return np.eye(2)
 
+    def compiled_map(self):
+        return "linear", np.eye(2, self.body.n_dofs), np.zeros(2)
+
     def position_hessian_product(self, q, f):
         return np.zeros((2, 2))
 

@@ -183,6 +183,9 @@ class RigidPoint(BodyPoint):
     def position(self, q):
         return q[:2] + rotation(q[2]) @ self.s
 
+    def compiled_map(self):
+        return "frame", 1.0, self.s, np.zeros((2, 0))
+
     def position_jacobian(self, q):
         jac = np.zeros((2, 3))
         jac[0, 0] = jac[1, 1] = 1.0

@@ -19,6 +19,7 @@ import numpy as np
 from ..beam import TimoshenkoBeam, line_mesh
 from ..bodies.floating import FloatingBeam
 from ..bodies.particle import PointMass
+from ..bodies.probes import PointProbe
 from ..bodies.rigid import RigidBody
 from ..constraints import Driver, Pin, Revolute, Slider
 from ..forces import Gravity, PointForce, half_sine_pulse
@@ -43,9 +44,7 @@ def _beam(length, section, n_elements, reference="clamped", name="beam", strain=
 
 
 def _position_probe(body, point):
-    def probe(scene, t, q, v):
-        return point.position(scene.coordinates(body, q))
-    return probe
+    return PointProbe(point)
 
 
 def chord_deflection(body, q_body, x=None):

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 from ..bodies.particle import PointMass
+from ..bodies.probes import PointProbe
 from ..constraints import Distance
 from ..forces import Gravity, NonlinearSpring
 from ..scene import Scene
@@ -40,5 +41,5 @@ def pendulum(length=0.5, mass=1.0, v0=1.695, g=9.81):
     body = PointMass(mass, [0.0, -float(length)], [v0, 0.0], name="bob")
     rod = Distance(body, (0.0, 0.0), length, name="rod")
     return Scene([body], constraints=[rod], forces=[Gravity((0.0, -g))], name="pendulum",
-                 probes={"position": lambda s, t, q, v: q[:2]},
+                 probes={"position": PointProbe(body.point())},
                  parameters=dict(length=length, mass=mass, v0=v0, g=g))

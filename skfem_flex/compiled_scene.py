@@ -1,0 +1,827 @@
+r"""Compiled (Numba) energy-momentum loop for small mechanisms: joints and gravity included.
+
+:mod:`skfem_flex.compiled_loop` runs one floating-frame body without joints or loads. This module
+runs the energy-momentum scheme for the small (dense) scenes the benchmark is about beyond that:
+point masses and rigid bodies, floating-frame bodies (a :class:`~skfem_flex.bodies.FloatingBeam`
+or a reduced :class:`~skfem_flex.bodies.ModalBody`), gravity, and joints built on body points
+(pins, revolute joints, distance constraints), prescribed coordinates allowed — the rigid, the
+flexible and the double pendulum. A scene is *packed* once into flat arrays through public
+interfaces of its parts (no type checks):
+
+* a body with constant mass and no strain energy gives its constant mass matrix and the first
+  moment of its mass ``mass_moment()`` (Γ, c), ∫ r dm = Γ q + c; a floating-frame body its
+  ``compiled_kernel_data()`` and ``mass_moment_map()`` (m, S₀, S̄), ∫ r dm = m R + A(θ)(S₀ + S̄ q_f);
+* a body point its ``compiled_map()``: ("linear", G, c) for r = G q + c, or ("frame", y₀, Y) for
+  r = R + A(θ)(y₀ + Y q_f);
+* a force element its ``compiled_form()``: ("gravity", g) (others: None, the scene runs in Python);
+* a constraint its ``compiled_form()``: ("points", [(point, sign), ...], c) for
+  Φ = Σ sign · r(point) − c, or ("distance", point, a, l) for Φ = ½(|r − a|² − l²).
+
+Every position map, of a joint's point and of gravity's first moment alike, is one of the two
+forms above, and one set of kernels gives its value, Jacobian, exact discrete gradient
+(products by the mean-value rule, A(θ₁) − A(θ₀) = sinc(Δθ/2) Δθ A(θ_m) E, as the numpy points do)
+and that gradient's Jacobian. ``tests/test_compiled_scene.py`` holds these kernels to the numpy
+points and bodies at 1e-12 and the loop's trajectories to the Python step.
+
+The step is the one of :meth:`~skfem_flex.integrators.EnergyMomentum.step` (same residual, scales,
+round-off floor, initial guess), on the package's one Newton core
+(:mod:`skfem_flex.newton`), with a dense LAPACK solve of the bordered Newton matrix.
+On any failure the loop stops before the failing step and ``simulate`` re-runs that step on the
+Python path, as for :mod:`skfem_flex.compiled_loop`.
+"""
+from __future__ import annotations
+
+import weakref
+
+import numba
+import numpy as np
+import scipy.sparse as sps
+
+from .bodies.floating_kernel import energy_momentum_terms, momentum, potential_energy, sinc_half
+from .compiled_loop import chunk_schedule, record_count
+from .integrators import EnergyMomentum
+from .newton import (CONVERGED, EVALUATE, NONFINITE_RESIDUAL, all_finite, max_abs, newton_evaluated, newton_solved,
+                     newton_start, roundoff_floor)
+from .scene import Scene
+
+__all__ = ["run_loop", "eligible", "run_chunk", "chunk_steps", "pack", "pack_maps", "map_position", "map_jacobian", "map_dgrad",
+           "map_dgrad_jacobian", "LINEAR", "FRAME", "POINTS", "DISTANCE", "OK"]
+
+_TINY = 1e-300
+#: status of :func:`run_chunk` when every step was done
+OK = CONVERGED
+#: kinds of position maps
+LINEAR, FRAME = 0, 1
+#: kinds of constraints
+POINTS, DISTANCE = 0, 1
+
+
+
+# ==================================================================== position maps
+# A map k reads the coordinate block q[off[k] : off[k] + nb[k]] of one body. LINEAR: r = G q + c with G
+# (2 × nb) stored row-major at gptr[k]. FRAME: r = mR R + A(θ)(y0 + Y q_f), R = q[0:2], θ = q[2],
+# q_f = q[3:], Y (2 × (nb − 3)) stored row-major at yptr[k].
+
+@numba.njit(cache=True)
+def map_position(maps, k, q):
+    """r(q) of map k (2,), m; ``q`` is the body's block."""
+    kind, off, nb, m_r, c, y0, gdat, gptr, ydat, yptr = maps
+    r = np.zeros(2)
+    if kind[k] == LINEAR:
+        g0 = gptr[k]
+        for a in range(2):
+            s = c[k, a]
+            for j in range(nb[k]):
+                s += gdat[g0 + a * nb[k] + j] * q[j]
+            r[a] = s
+        return r
+    ne = nb[k] - 3
+    y = yptr[k]
+    sx, sy = y0[k, 0], y0[k, 1]
+    for j in range(ne):
+        sx += ydat[y + j] * q[3 + j]
+        sy += ydat[y + ne + j] * q[3 + j]
+    C, S = np.cos(q[2]), np.sin(q[2])
+    r[0] = m_r[k] * q[0] + C * sx - S * sy
+    r[1] = m_r[k] * q[1] + S * sx + C * sy
+    return r
+
+
+@numba.njit(cache=True)
+def map_jacobian(maps, k, q):
+    """∂r/∂q of map k (2, nb)."""
+    kind, off, nb, m_r, c, y0, gdat, gptr, ydat, yptr = maps
+    n = nb[k]
+    jac = np.zeros((2, n))
+    if kind[k] == LINEAR:
+        for a in range(2):
+            for j in range(n):
+                jac[a, j] = gdat[gptr[k] + a * n + j]
+        return jac
+    ne = n - 3
+    y = yptr[k]
+    sx, sy = y0[k, 0], y0[k, 1]
+    for j in range(ne):
+        sx += ydat[y + j] * q[3 + j]
+        sy += ydat[y + ne + j] * q[3 + j]
+    C, S = np.cos(q[2]), np.sin(q[2])
+    jac[0, 0] = jac[1, 1] = m_r[k]
+    jac[0, 2] = -S * sx - C * sy            # A E s, E = [[0, −1], [1, 0]]
+    jac[1, 2] = C * sx - S * sy
+    for j in range(ne):
+        yx, yy = ydat[y + j], ydat[y + ne + j]
+        jac[0, 3 + j] = C * yx - S * yy
+        jac[1, 3 + j] = S * yx + C * yy
+    return jac
+
+
+@numba.njit(cache=True)
+def map_dgrad(maps, k, q0, q1):
+    """Exact discrete gradient D (2, nb) of map k: D (q1 − q0) = r(q1) − r(q0).
+
+    FRAME: D = [mR I, sinc(Δθ/2) A(θ_m) E s_m, cos(Δθ/2) A(θ_m) Y] with s_m = y0 + Y (q0_f + q1_f)/2."""
+    kind, off, nb, m_r, c, y0, gdat, gptr, ydat, yptr = maps
+    if kind[k] == LINEAR:
+        return map_jacobian(maps, k, q0)
+    n = nb[k]
+    ne = n - 3
+    y = yptr[k]
+    half = 0.5 * (q1[2] - q0[2])
+    tm = q0[2] + half
+    C, S = np.cos(tm), np.sin(tm)
+    sig, kap = sinc_half(q1[2] - q0[2])[0], np.cos(half)
+    sx, sy = y0[k, 0], y0[k, 1]
+    for j in range(ne):
+        qm = 0.5 * (q0[3 + j] + q1[3 + j])
+        sx += ydat[y + j] * qm
+        sy += ydat[y + ne + j] * qm
+    d = np.zeros((2, n))
+    d[0, 0] = d[1, 1] = m_r[k]
+    d[0, 2] = sig * (-S * sx - C * sy)
+    d[1, 2] = sig * (C * sx - S * sy)
+    for j in range(ne):
+        yx, yy = ydat[y + j], ydat[y + ne + j]
+        d[0, 3 + j] = kap * (C * yx - S * yy)
+        d[1, 3 + j] = kap * (S * yx + C * yy)
+    return d
+
+
+@numba.njit(cache=True)
+def _dgrad_jacobian_parts(maps, k, q0, q1, f):
+    """The nonzero parts of ∂(Dᵀ f)/∂q1 of a FRAME map: the (θ, θ) entry, the θ row over q_f and
+    the q_f rows of the θ column (everything else is zero: D depends on q1 through θ and q_f only,
+    and its q_f columns only through θ)."""
+    kind, off, nb, m_r, c, y0, gdat, gptr, ydat, yptr = maps
+    ne = nb[k] - 3
+    y = yptr[k]
+    half = 0.5 * (q1[2] - q0[2])
+    tm = q0[2] + half
+    C, S = np.cos(tm), np.sin(tm)
+    sig, dsig = sinc_half(q1[2] - q0[2])          # σ and dσ/dΔθ
+    kap, sn = np.cos(half), np.sin(half)
+    sx, sy = y0[k, 0], y0[k, 1]
+    for j in range(ne):
+        qm = 0.5 * (q0[3 + j] + q1[3 + j])
+        sx += ydat[y + j] * qm
+        sy += ydat[y + ne + j] * qm
+    fax = f[0] * C + f[1] * S              # fA = Aᵀ(θ_m) f
+    fay = -f[0] * S + f[1] * C
+    # fA·(E s) and fA·s; E s = (−sy, sx)
+    h22 = dsig * (-fax * sy + fay * sx) - 0.5 * sig * (fax * sx + fay * sy)
+    row = np.empty(ne)
+    col = np.empty(ne)
+    for j in range(ne):
+        yx, yy = ydat[y + j], ydat[y + ne + j]
+        # ½ σ (fA E)·Y_j with fA E = (fay, −fax)
+        row[j] = 0.5 * sig * (fay * yx - fax * yy)
+        # −½ sin(Δθ/2) Y_jᵀ fA + ½ cos(Δθ/2) Y_jᵀ Eᵀ fA, Eᵀ fA = (fay, −fax)
+        col[j] = -0.5 * sn * (yx * fax + yy * fay) + 0.5 * kap * (yx * fay - yy * fax)
+    return h22, row, col
+
+
+@numba.njit(cache=True)
+def map_dgrad_jacobian(maps, k, q0, q1, f):
+    """∂(Dᵀ f)/∂q1 (nb, nb) of :func:`map_dgrad` at a fixed vector f (2,); zero for LINEAR maps."""
+    n = maps[2][k]
+    h = np.zeros((n, n))
+    if maps[0][k] == LINEAR:
+        return h
+    h22, row, col = _dgrad_jacobian_parts(maps, k, q0, q1, f)
+    h[2, 2] = h22
+    for j in range(n - 3):
+        h[2, 3 + j] = row[j]
+        h[3 + j, 2] = col[j]
+    return h
+
+
+@numba.njit(cache=True)
+def _add_dgrad_jacobian(maps, k, q0, q1, f, scale, mat, fpos, floor):
+    """mat[F, F] += scale · ∂(Dᵀ f)/∂q1 of map k, and, if ``floor`` is not empty, its round-off floor
+    |scale ∂(Dᵀf)/∂q1| (|q0| + |q1|) added to floor[o:o + nb] (the body's block; q0, q1 are the block's)."""
+    if maps[0][k] == LINEAR:
+        return
+    o, n = maps[1][k], maps[2][k]
+    h22, row, col = _dgrad_jacobian_parts(maps, k, q0, q1, f)
+    i2 = fpos[o + 2]
+    a2 = abs(q0[2]) + abs(q1[2])
+    if i2 >= 0:
+        mat[i2, i2] += scale * h22
+    fl2 = abs(scale * h22) * a2
+    for j in range(n - 3):
+        ij = fpos[o + 3 + j]
+        if ij >= 0 and i2 >= 0:
+            mat[i2, ij] += scale * row[j]
+            mat[ij, i2] += scale * col[j]
+        if floor.size:
+            fl2 += abs(scale * row[j]) * (abs(q0[3 + j]) + abs(q1[3 + j]))
+            floor[o + 3 + j] += abs(scale * col[j]) * a2
+    if floor.size:
+        floor[o + 2] += fl2
+
+
+# ==================================================================== packing
+def _map_of(entry, off, nb, store):
+    """Append one map (a ``compiled_map()`` entry) to ``store``; its index."""
+    kind = entry[0]
+    k = len(store["kind"])
+    store["off"].append(off)
+    store["nb"].append(nb)
+    store["gptr"].append(len(store["g"]))
+    store["yptr"].append(len(store["y"]))
+    if kind == "linear":
+        _, G, c = entry
+        G = np.asarray(G, dtype=float).reshape(2, nb)
+        store["kind"].append(LINEAR)
+        store["m_r"].append(0.0)
+        store["c"].append(np.asarray(c, dtype=float).reshape(2))
+        store["y0"].append(np.zeros(2))
+        store["g"].extend(G.ravel())
+    elif kind == "frame":
+        _, m_r, y0, Y = entry
+        Y = np.asarray(Y, dtype=float).reshape(2, nb - 3)
+        store["kind"].append(FRAME)
+        store["m_r"].append(float(m_r))
+        store["c"].append(np.zeros(2))
+        store["y0"].append(np.asarray(y0, dtype=float).reshape(2))
+        store["y"].extend(Y.ravel())
+    else:
+        raise ValueError(f"unknown map kind {kind!r}")
+    return k
+
+
+def _finish_maps(store):
+    nm = len(store["kind"])
+    return (np.asarray(store["kind"], dtype=np.int64), np.asarray(store["off"], dtype=np.int64),
+            np.asarray(store["nb"], dtype=np.int64), np.asarray(store["m_r"], dtype=float),
+            np.asarray(store["c"], dtype=float).reshape(nm, 2), np.asarray(store["y0"], dtype=float).reshape(nm, 2),
+            np.asarray(store["g"] or [0.0], dtype=float), np.asarray(store["gptr"], dtype=np.int64),
+            np.asarray(store["y"] or [0.0], dtype=float), np.asarray(store["yptr"], dtype=np.int64))
+
+
+def pack_maps(entries):
+    """Position maps as the kernels read them, each on its own body block (offset 0).
+
+    Parameters
+    ----------
+    entries : sequence of (map, nb)
+        A ``compiled_map()``-style tuple and the size of the body's coordinate block.
+
+    Returns
+    -------
+    tuple
+        The ``maps`` argument of :func:`map_position` and the other map kernels; map k is entry k.
+    """
+    store = {k: [] for k in ("kind", "off", "nb", "m_r", "c", "y0", "g", "gptr", "y", "yptr")}
+    for entry, nb in entries:
+        _map_of(entry, 0, int(nb), store)
+    return _finish_maps(store)
+
+
+def _call(obj, method):
+    fn = getattr(obj, method, None)
+    return None if fn is None else fn()
+
+
+_PACKS = weakref.WeakKeyDictionary()
+_PROBE_NAMES = weakref.WeakKeyDictionary()
+
+
+def pack(scene):
+    """The scene as flat arrays for the compiled loop, or None if a part has no compiled form.
+
+    Returns
+    -------
+    tuple or None
+        (mass, frames, frame_off, maps, gravity, constraints, bodies) — see the source; built
+        once per scene.
+    """
+    hit = _PACKS.get(scene)
+    if hit is not None:
+        return hit[0]
+    packed = _pack(scene)
+    _PACKS[scene] = (packed,)
+    return packed
+
+
+def _pack(scene):
+    if type(scene) is not Scene or not scene.dense or len(getattr(scene, "cayley_index", ())):
+        return None
+    n = scene.n
+    store = {k: [] for k in ("kind", "off", "nb", "m_r", "c", "y0", "g", "gptr", "y", "yptr")}
+    mass = np.zeros((n, n))
+    frames, frame_off, body_layout = [], [], []
+    first_moment = {}
+    rng = np.random.default_rng(0)
+    for b in scene.bodies:
+        sl = scene.slice(b)
+        off, nb = sl.start, sl.stop - sl.start
+        kd = _call(b, "compiled_kernel_data")
+        if kd is not None:
+            moment = _call(b, "mass_moment_map")
+            if moment is None:
+                return None
+            frames.append(kd)
+            frame_off.append(off)
+            first_moment[id(b)] = ("frame", moment[0], moment[1], moment[2])
+        elif b.constant_mass and not b.has_potential:
+            try:
+                gam, c = b.mass_moment()
+            except NotImplementedError:
+                return None
+            mass[sl, sl] = np.asarray(b.mass_matrix(np.asarray(b.q0, dtype=float)), dtype=float)
+            first_moment[id(b)] = ("linear", gam, c)
+        else:
+            return None
+        # the loop's momenta: p_lin = p[R], L = R × p[R] + p[θ] (R = q[0:2], θ = q[2] where present);
+        # a body that defines them otherwise runs in Python
+        if not _momentum_convention_holds(b, kd, rng):
+            return None
+        body_layout.append((off, nb))
+    grav_maps, grav_g = [], []
+    for f in scene.forces:
+        form = _call(f, "compiled_form")
+        if form is None or form[0] != "gravity":
+            return None
+        for b in (f.bodies if f.bodies is not None else scene.bodies):
+            sl = scene.slice(b)
+            grav_maps.append(_map_of(first_moment[id(b)], sl.start, sl.stop - sl.start, store))
+            grav_g.append(np.asarray(form[1], dtype=float))
+    con_kind, con_row, con_t0, term_map, term_sign, con_c, con_len = [], [], [], [], [], [], []
+    probe_names = []
+    for c, (idx, rows) in zip(scene.constraints, scene.constraint_layout):
+        form = _call(c, "compiled_form")
+        if form is None:
+            return None
+        con_row.append(int(rows[0]))
+        con_t0.append(len(term_map))
+        if form[0] == "points":
+            _, terms, const = form
+            con_kind.append(POINTS)
+            con_c.append(np.asarray(const, dtype=float).reshape(2))
+            con_len.append(0.0)
+            for point, sign in terms:
+                cm = _call(point, "compiled_map")
+                if cm is None:
+                    return None
+                sl = scene.slice(point.body)
+                term_map.append(_map_of(cm, sl.start, sl.stop - sl.start, store))
+                term_sign.append(float(sign))
+        elif form[0] == "distance":
+            _, point, anchor, length = form
+            cm = _call(point, "compiled_map")
+            if cm is None or cm[0] != "linear":
+                return None
+            sl = scene.slice(point.body)
+            con_kind.append(DISTANCE)
+            con_c.append(np.asarray(anchor, dtype=float).reshape(2))
+            con_len.append(float(length))
+            term_map.append(_map_of(cm, sl.start, sl.stop - sl.start, store))
+            term_sign.append(1.0)
+        else:
+            return None
+    con_t0.append(len(term_map))
+    nc = len(con_kind)
+    # probes with a position map are recorded by the loop; the others are called in Python
+    probe_maps = []
+    for name, fn in scene.probes.items():
+        cm = _call(fn, "compiled_map")
+        body = getattr(fn, "body", None)
+        if cm is None or body is None or not any(body is b for b in scene.bodies):
+            continue
+        sl = scene.slice(body)
+        probe_maps.append(_map_of(cm, sl.start, sl.stop - sl.start, store))
+        probe_names.append(name)
+    maps = _finish_maps(store)
+    gravity = (np.asarray(grav_maps, dtype=np.int64), np.asarray(grav_g, dtype=float).reshape(len(grav_maps), 2))
+    constraints = (np.asarray(con_kind, dtype=np.int64), np.asarray(con_row, dtype=np.int64),
+                   np.asarray(con_t0, dtype=np.int64), np.asarray(term_map, dtype=np.int64),
+                   np.asarray(term_sign, dtype=float), np.asarray(con_c, dtype=float).reshape(nc, 2),
+                   np.asarray(con_len, dtype=float), int(scene.n_constraints), float(scene.length_scale))
+    bodies = np.asarray(body_layout, dtype=np.int64).reshape(len(body_layout), 2)
+    _PROBE_NAMES[scene] = tuple(probe_names)
+    bodies = (bodies, np.asarray(probe_maps, dtype=np.int64))
+    mass = sps.csr_matrix(mass)
+    mass.sort_indices()
+    mass = (mass.indptr.astype(np.int64), mass.indices.astype(np.int64), mass.data.astype(float))
+    return (mass, tuple(frames) if frames else None, np.asarray(frame_off, dtype=np.int64), maps, gravity,
+            constraints, bodies)
+
+
+def _momentum_convention_holds(body, kd, rng):
+    """True if the body's linear and angular momenta are p[R] and R × p[R] + p[θ] (checked at two states)."""
+    nb = body.n_dofs
+    for _ in range(2):
+        q = np.asarray(body.q0, dtype=float) + 0.1 * rng.standard_normal(nb)
+        v = rng.standard_normal(nb)
+        p = body.momentum(q, v) if kd is not None else body.mass_matrix(q) @ v
+        lin = np.zeros(2)
+        lin[:min(nb, 2)] = p[:min(nb, 2)]
+        ang = (q[0] * p[1] - q[1] * p[0] if nb >= 2 else 0.0) + (p[2] if nb >= 3 else 0.0)
+        try:
+            ref_lin, ref_ang = body.linear_momentum(q, v), body.angular_momentum(q, v)
+        except NotImplementedError:
+            return False
+        if ref_lin is None or ref_ang is None:
+            return False
+        scale = max(np.abs(p).max(), 1.0) * max(np.abs(q).max(), 1.0)
+        if np.abs(np.asarray(ref_lin) - lin).max() > 1e-12 * scale or abs(float(ref_ang) - ang) > 1e-12 * scale:
+            return False
+    return True
+
+
+def eligible(scene, scheme):
+    """True if ``simulate`` may run ``scene`` with ``scheme`` through this loop: the
+    :class:`~skfem_flex.integrators.EnergyMomentum` class itself, a plain dense scene (at most
+    ``DENSE_LIMIT`` coordinates) without incremental-rotation coordinates, whose bodies, force
+    elements, constraints and joint points all have compiled forms (module docstring)."""
+    return type(scheme) is EnergyMomentum and pack(scene) is not None
+
+
+def chunk_steps(scene):
+    """Steps per compiled call (about 0.1 s of work per call)."""
+    return int(min(2000, max(50, 400_000 // max(scene.n, 1) ** 2)))
+
+
+# ==================================================================== the step
+@numba.njit(cache=True)
+def _csr_matvec(mass, v):
+    ptr, idx, dat = mass
+    out = np.zeros(v.size)
+    for i in range(v.size):
+        s = 0.0
+        for t in range(ptr[i], ptr[i + 1]):
+            s += dat[t] * v[idx[t]]
+        out[i] = s
+    return out
+
+
+@numba.njit(cache=True)
+def _scene_momentum(mass, frames, frame_off, q, v):
+    p = _csr_matvec(mass, v)
+    if frames is None:
+        return p
+    for i in range(len(frames)):
+        kd = frames[i]
+        o = frame_off[i]
+        p[o:o + kd.n] += momentum(kd, q[o:o + kd.n], v[o:o + kd.n])
+    return p
+
+
+@numba.njit(cache=True)
+def _constraint_terms(maps, constraints, q0, q1, mu, n, with_dgrad, mat, fpos):
+    """Φ(q1) (m), Φ_q(q1) (m × n) and, if ``with_dgrad``, D (m × n), adding ∂(Dᵀμ)/∂q1 to ``mat``."""
+    kind, row, t0, term_map, term_sign, const, length, m, _ = constraints
+    nb_, off_ = maps[2], maps[1]
+    phi = np.zeros(m)
+    cq = np.zeros((m, n))
+    d = np.zeros((m, n))
+    f = np.empty(2)
+    for i in range(kind.size):
+        r0 = row[i]
+        if kind[i] == POINTS:
+            for a in range(2):
+                phi[r0 + a] = -const[i, a]
+            for t in range(t0[i], t0[i + 1]):
+                k, s = term_map[t], term_sign[t]
+                o, nb = off_[k], nb_[k]
+                qb1 = q1[o:o + nb]
+                r = map_position(maps, k, qb1)
+                jac = map_jacobian(maps, k, qb1)
+                for a in range(2):
+                    phi[r0 + a] += s * r[a]
+                    for j in range(nb):
+                        cq[r0 + a, o + j] += s * jac[a, j]
+                if with_dgrad:
+                    qb0 = q0[o:o + nb]
+                    dk = map_dgrad(maps, k, qb0, qb1)
+                    for a in range(2):
+                        f[a] = s * mu[r0 + a]
+                        for j in range(nb):
+                            d[r0 + a, o + j] += s * dk[a, j]
+                    _add_dgrad_jacobian(maps, k, qb0, qb1, f, 1.0, mat, fpos, np.zeros(0))
+        else:                                   # DISTANCE on a linear map: Φ = ½(|r − a|² − l²)
+            k = term_map[t0[i]]
+            o, nb = off_[k], nb_[k]
+            qb1 = q1[o:o + nb]
+            r1 = map_position(maps, k, qb1)
+            jac = map_jacobian(maps, k, qb1)
+            dx, dy = r1[0] - const[i, 0], r1[1] - const[i, 1]
+            phi[r0] = 0.5 * (dx * dx + dy * dy - length[i] * length[i])
+            for j in range(nb):
+                cq[r0, o + j] = dx * jac[0, j] + dy * jac[1, j]
+            if with_dgrad:
+                r0m = map_position(maps, k, q0[o:o + nb])
+                mx = 0.5 * (r0m[0] + r1[0]) - const[i, 0]
+                my = 0.5 * (r0m[1] + r1[1]) - const[i, 1]
+                for j in range(nb):
+                    d[r0, o + j] = mx * jac[0, j] + my * jac[1, j]
+                # ∂(μ Jᵀ(r̄ − a))/∂q1 = ½ μ JᵀJ (J constant)
+                for a in range(nb):
+                    ia = fpos[o + a]
+                    if ia < 0:
+                        continue
+                    for j in range(nb):
+                        jb = fpos[o + j]
+                        if jb >= 0:
+                            mat[ia, jb] += 0.5 * mu[r0] * (jac[0, a] * jac[0, j] + jac[1, a] * jac[1, j])
+    return phi, cq, d
+
+
+@numba.njit(cache=True)
+def _add_frame_terms(frames, frame_off, q0, q1, v0, v1, h, p1, gk, gp, floor, mat, fpos):
+    """Add the floating-frame bodies' energy-momentum terms (a separate function: ``frames`` is
+    None in scenes without such bodies, and Numba prunes the branch only on an argument)."""
+    if frames is None:
+        return
+    for i in range(len(frames)):
+        kd = frames[i]
+        o = frame_off[i]
+        nb = kd.n
+        pb, gkb, gpb, data, flb = energy_momentum_terms(kd, q0[o:o + nb], q1[o:o + nb], v0[o:o + nb],
+                                                        v1[o:o + nb], h)
+        p1[o:o + nb] += pb
+        gk[o:o + nb] += gkb
+        gp[o:o + nb] += gpb
+        floor[o:o + nb] += flb
+        for a in range(nb):
+            ia = fpos[o + a]
+            if ia < 0:
+                continue
+            for t in range(kd.pat_ptr[a], kd.pat_ptr[a + 1]):
+                jb = fpos[o + kd.pat_idx[t]]
+                if jb >= 0:
+                    mat[ia, jb] += data[t]
+
+
+@numba.njit(cache=True)
+def _frame_strain_energy(frames, frame_off, q):
+    if frames is None:
+        return 0.0
+    pot = 0.0
+    for i in range(len(frames)):
+        kd = frames[i]
+        o = frame_off[i]
+        pot += potential_energy(kd, q[o:o + kd.n])
+    return pot
+
+
+@numba.njit(cache=True)
+def _evaluate(system, x):
+    """``evaluate`` of the Newton core: EnergyMomentum.step's residual on the packed scene, its Newton
+    matrix [[J_FF, D_Fᵀ], [Φ_q,F, 0]] assembled in place."""
+    (mass, frames, frame_off, maps, gravity, constraints, q0, v0, p0, dq_base, free, fpos, h, p0_inf, e_scale0,
+     rtol, ctol, etol, res, mat, dq, q1, v1, p1, r) = system
+    n, nf = q0.size, free.size
+    m = constraints[7]
+    mu = x[nf:]
+    dq[:] = dq_base
+    for i in range(nf):
+        dq[free[i]] = x[i]
+    for i in range(n):
+        q1[i] = q0[i] + dq[i]
+        v1[i] = (2.0 / h) * dq[i] - v0[i]
+    mat[:, :] = 0.0
+    ptr, idx, dat = mass
+    for i in range(n):                  # p1 = M v1 and (2/Δt) M of the constant-mass bodies
+        s = 0.0
+        ia = fpos[i]
+        for t in range(ptr[i], ptr[i + 1]):
+            s += dat[t] * v1[idx[t]]
+            jb = fpos[idx[t]]
+            if ia >= 0 and jb >= 0:
+                mat[ia, jb] += (2.0 / h) * dat[t]
+        p1[i] = s
+    gk = np.zeros(n)
+    gp = np.zeros(n)
+    floor = np.zeros(n)
+    _add_frame_terms(frames, frame_off, q0, q1, v0, v1, h, p1, gk, gp, floor, mat, fpos)
+    gmaps, gvec = gravity
+    f = np.empty(2)
+    for i in range(gmaps.size):
+        k = gmaps[i]
+        o, nb = maps[1][k], maps[2][k]
+        if maps[0][k] == LINEAR:          # constant gradient −gᵀΓ, no tangent, no floor
+            for j in range(nb):
+                gp[o + j] -= gvec[i, 0] * maps[6][maps[7][k] + j] + gvec[i, 1] * maps[6][maps[7][k] + nb + j]
+            continue
+        qb0, qb1 = q0[o:o + nb], q1[o:o + nb]
+        dk = map_dgrad(maps, k, qb0, qb1)
+        f[0], f[1] = -gvec[i, 0], -gvec[i, 1]
+        for j in range(nb):
+            gp[o + j] += f[0] * dk[0, j] + f[1] * dk[1, j]
+        _add_dgrad_jacobian(maps, k, qb0, qb1, f, h, mat, fpos, floor)
+    kin1 = 0.5 * np.dot(v1, p1)
+    scale = max(max_abs(p1), p0_inf)
+    scale = max(scale, h * max_abs(gk), h * max_abs(gp))
+    for i in range(n):
+        r[i] = p1[i] - p0[i] + h * gp[i] - h * gk[i]
+    err_c = 0.0
+    if m:
+        phi, cq, d = _constraint_terms(maps, constraints, q0, q1, mu, n, True, mat, fpos)
+        dtmu = d.T @ mu
+        r += dtmu
+        scale = max(scale, max_abs(dtmu))
+        cqq, cq_inf = 0.0, 0.0
+        for i in range(m):
+            s, sa = 0.0, 0.0
+            for j in range(n):
+                a = abs(cq[i, j])
+                s += a * abs(q1[j])
+                sa = max(sa, a)
+            cqq = max(cqq, s)
+            cq_inf = max(cq_inf, sa)
+        c_scale = max(cqq, cq_inf * constraints[8], _TINY)
+        err_c = max_abs(phi) / (ctol * c_scale)
+        for i in range(m):
+            for j in range(nf):
+                mat[j, nf + i] = d[i, free[j]]
+                mat[nf + i, j] = cq[i, free[j]]
+            res[nf + i] = phi[i]
+    vr, fl_inf, vfl = 0.0, 0.0, 0.0
+    for i in range(nf):
+        a = free[i]
+        res[i] = r[a]
+        vb = dq[a] / h
+        vr += vb * r[a]
+        fl_inf = max(fl_inf, abs(floor[a]))
+        vfl += abs(vb) * floor[a]
+    vr = abs(vr)
+    r_inf = max_abs(res[:nf])
+    e_scale = max(e_scale0, abs(kin1), abs(np.dot(dq, gp)), _TINY)
+    err = max(r_inf / (rtol * max(scale, _TINY)), err_c, vr / (etol * e_scale))
+    err = roundoff_floor(err, err_c, r_inf, fl_inf, vr, vfl)
+    return err if all_finite(res) else np.nan
+
+
+@numba.njit(cache=True)
+def _solve(system):
+    """``solve`` of the Newton core: the bordered Newton matrix by LAPACK gesv."""
+    res, mat = system[18], system[19]
+    try:
+        return np.linalg.solve(mat, res), True
+    except Exception:                  # singular: numba raises LinAlgError
+        return res.copy(), False
+
+
+@numba.njit(cache=True)
+def _step(packed, q0, v0, p0, h, qp1, pres, free, fpos, lam0, rtol, ctol, etol, max_iterations,
+          line_search):
+    mass, frames, frame_off, maps, gravity, constraints, bodies = packed
+    n, nf, m = q0.size, free.size, constraints[7]
+    dq_base = np.zeros(n)
+    for i in range(pres.size):
+        dq_base[pres[i]] = qp1[i] - q0[pres[i]]
+    x = np.empty(nf + m)
+    x_scale = 0.0
+    for i in range(nf):
+        x[i] = h * v0[free[i]]
+        x_scale = max(x_scale, abs(q0[free[i]]))
+    for i in range(m):
+        x[nf + i] = h * lam0[i]
+    dq, q1, v1, p1, r = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
+    system = (mass, frames, frame_off, maps, gravity, constraints, q0, v0, p0, dq_base, free, fpos, h, max_abs(p0),
+              abs(0.5 * np.dot(v0, p0)), rtol, ctol, etol, np.zeros(nf + m), np.zeros((nf + m, nf + m)), dq, q1,
+              v1, p1, r)
+    state = newton_start(x, x_scale, max_iterations, line_search)
+    action = EVALUATE
+    while action < 0:                  # do what the Newton core asks; its rules are all in the core
+        if action == EVALUATE:
+            action = newton_evaluated(state, _evaluate(system, state[2]))
+        else:
+            y, regular = _solve(system)
+            action = newton_solved(state, y, regular)
+    return action, state[4][0], state[0][nf:].copy(), dq, q1, v1, p1, r
+
+
+@numba.njit(cache=True)
+def _derived(packed, q, v, p):
+    """(T, V, p_x, p_y, L about the origin) of the scene at (q, v) with momentum p."""
+    mass, frames, frame_off, maps, gravity, constraints, bodies = packed
+    pot = _frame_strain_energy(frames, frame_off, q)
+    gmaps, gvec = gravity
+    for i in range(gmaps.size):
+        k = gmaps[i]
+        o, nb = maps[1][k], maps[2][k]
+        rk = map_position(maps, k, q[o:o + nb])
+        pot -= gvec[i, 0] * rk[0] + gvec[i, 1] * rk[1]
+    px, py, ang = 0.0, 0.0, 0.0
+    bodies = bodies[0]
+    for b in range(bodies.shape[0]):
+        o, nb = bodies[b, 0], bodies[b, 1]
+        px += p[o]
+        if nb >= 2:
+            py += p[o + 1]
+            ang += q[o] * p[o + 1] - q[o + 1] * p[o]
+        if nb >= 3:
+            ang += p[o + 2]
+    return 0.5 * np.dot(v, p), pot, px, py, ang
+
+
+@numba.njit(cache=True)
+def _run(packed, q, v, t, hs, qp, pres, free, fpos, lam, reaction, rtol, ctol, etol, max_iterations,
+         line_search, work, first_step, record_every, n_steps):
+    mass, frames, frame_off, maps, gravity, constraints, bodies = packed
+    n, ns, npr, m = q.size, hs.size, pres.size, constraints[7]
+    n_rec = record_count(first_step, ns, record_every, n_steps)
+    rec_t = np.empty(n_rec)
+    rec_q = np.empty((n_rec, n))
+    rec_v = np.empty((n_rec, n))
+    rec_work = np.empty(n_rec)
+    rec_its = np.empty(n_rec, dtype=np.int64)
+    rec_reac = np.empty((n_rec, npr))
+    rec_lam = np.empty((n_rec, m))
+    # T, V, p (2), L, ‖Φ‖∞, ‖Φ_q v‖∞
+    rec_derived = np.empty((n_rec, 7))
+    probe_maps = bodies[1]
+    rec_probe = np.empty((n_rec, probe_maps.size, 2))
+    its_total = 0
+    scratch = np.zeros((free.size + m, free.size + m))      # takes the unused tangent terms
+    p = _scene_momentum(mass, frames, frame_off, q, v)
+    i_rec = 0
+    for k in range(ns):
+        h = hs[k]
+        status, its, mu, dq, q1, v1, p1, r = _step(packed, q, v, p, h, qp[k], pres, free, fpos,
+                                                   lam, rtol, ctol, etol, max_iterations, line_search)
+        if status == OK and not (all_finite(q1) and all_finite(v1)):
+            status = NONFINITE_RESIDUAL
+        if status != OK:
+            return (status, k, t, q, v, lam, reaction, work, its_total, i_rec, rec_t, rec_q, rec_v, rec_work, rec_its,
+                    rec_reac, rec_lam, rec_derived, rec_probe)
+        w = 0.0
+        reaction = np.empty(npr)
+        for i in range(npr):
+            reaction[i] = r[pres[i]] / h
+            w += dq[pres[i]] * reaction[i]
+        phi, cq, d = _constraint_terms(maps, constraints, q, q1, mu, n, m > 0, scratch, fpos)
+        if m:
+            w -= np.dot(mu, d @ dq) / h          # μ = Δt λ̄: the work is −λ̄·ΔΦ
+        work += w
+        t = t + h
+        q, v, p, lam = q1.copy(), v1.copy(), p1.copy(), mu / h
+        its_total += its
+        s = first_step + k
+        if s % record_every == 0 or s == n_steps:
+            rec_t[i_rec] = t
+            rec_q[i_rec] = q
+            rec_v[i_rec] = v
+            rec_work[i_rec] = work
+            rec_its[i_rec] = its
+            rec_reac[i_rec] = reaction
+            rec_lam[i_rec] = lam
+            tk, vk, px, py, ang = _derived(packed, q, v, p)
+            rec_derived[i_rec, 0] = tk
+            rec_derived[i_rec, 1] = vk
+            rec_derived[i_rec, 2] = px
+            rec_derived[i_rec, 3] = py
+            rec_derived[i_rec, 4] = ang
+            rec_derived[i_rec, 5] = max_abs(phi)
+            rec_derived[i_rec, 6] = max_abs(cq @ v) if m else 0.0
+            for j in range(probe_maps.size):
+                k = probe_maps[j]
+                o = maps[1][k]
+                rec_probe[i_rec, j] = map_position(maps, k, q[o:o + maps[2][k]])
+            i_rec += 1
+    return (OK, ns, t, q, v, lam, reaction, work, its_total, i_rec, rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac,
+            rec_lam, rec_derived, rec_probe)
+
+
+def _free_positions(scene):
+    """fpos[i] = position of coordinate i among the free ones, −1 for a prescribed one."""
+    fpos = -np.ones(scene.n, dtype=np.int64)
+    fpos[scene.free_index] = np.arange(scene.free_index.size)
+    return fpos
+
+
+#: the compiled loop itself (what a cold cache compiles first)
+run_loop = _run
+
+
+def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, record_every, work):
+    """Run steps ``first_step … first_step + n_chunk − 1`` through the compiled loop.
+
+    As :func:`skfem_flex.compiled_loop.run_chunk`; the records are (t, q, v, work, iterations,
+    reaction, derived, λ, probes), ``derived`` = (T, V, p_x, p_y, L, ‖Φ‖∞, ‖Φ_q v‖∞), ``probes`` the
+    values of the probes with a position map ({name: (2,)}), and the result also holds ``lam``
+    (the multipliers, mean over the last step).
+    """
+    s = scheme.newton
+    packed = pack(scene)
+    hs, qp = chunk_schedule(scene, state.t, dt, t_end, first_step, n_chunk, n_steps)
+    m = scene.n_constraints
+    lam = np.asarray(state.lam, dtype=float) if np.size(state.lam) == m else np.zeros(m)
+    npr = scene.prescribed_index.size
+    reaction = (np.asarray(state.prescribed_force, dtype=float) if np.size(state.prescribed_force) == npr
+                else np.zeros(npr))
+    out = _run(packed, np.ascontiguousarray(state.q, dtype=float),
+               np.ascontiguousarray(state.v, dtype=float), float(state.t), hs, qp,
+               scene.prescribed_index.astype(np.int64), scene.free_index.astype(np.int64), _free_positions(scene),
+               lam, reaction,
+               float(s.rtol), float(s.ctol), float(s.etol), int(s.max_iterations), bool(s.line_search), float(work),
+               int(first_step), int(record_every), int(n_steps))
+    (status, done, t, q, v, lam, reaction, work, its_total, n_rec, rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac,
+     rec_lam, rec_derived, rec_probe) = out
+    names = _PROBE_NAMES[scene]
+    records = [(float(rec_t[i]), rec_q[i], rec_v[i], float(rec_work[i]), int(rec_its[i]), rec_reac[i],
+                rec_derived[i], rec_lam[i], dict(zip(names, rec_probe[i]))) for i in range(n_rec)]
+    return dict(status=int(status), done=int(done), t=float(t), q=q, v=v, lam=lam, reaction=reaction,
+                work=float(work), iterations=int(its_total), records=records)

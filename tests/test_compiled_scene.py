@@ -1,0 +1,407 @@
+"""The compiled mechanism loop (skfem_flex/compiled_scene.py) against the numpy points, bodies and the Python step.
+
+1. Its position-map kernels (value, Jacobian, exact discrete gradient and that gradient's Jacobian)
+   are held to the numpy body points (PointMass, RigidBody, FloatingBeam and ModalBody points) and
+   to the floating-frame bodies' gravity at 1e-12 of the entries' scale, at random states with large
+   rotation increments (Δθ up to 2 rad) and tiny ones (the series branch of sinc(Δθ/2)).
+2. Its trajectories (pendulum, flexible and double pendulum, rigid mechanisms with and without a
+   prescribed coordinate) are those of the Python step to round-off amplified by the Newton tolerance.
+3. Scenes with parts that have no compiled form are not eligible, and ``compiled=False`` is honoured.
+4. A step the compiled loop cannot finish is re-run on the Python path, which halves or raises as usual.
+"""
+import numpy as np
+import pytest
+import scipy.sparse as sps
+
+import skfem_flex as sf
+from skfem_flex import compiled_scene
+from skfem_flex.integrators import ConvergenceError, EnergyMomentum, NewtonSettings, Trapezoidal
+from skfem_flex.scenes.links import link
+
+EPS = np.finfo(float).eps
+SEC = dict(EA=1e6, EI=1e2, kGA=3.205e5, rhoA=1.0, rhoI=1e-4)
+#: rotation increments of the random states: large ones and tiny ones (series branch of sinc(Δθ/2), |Δθ| < 2e-3)
+DTHETAS = [2.0, -1.9, 0.6, 2.1e-3, -3e-5, 1e-9, 0.0]
+#: relative tolerance of the kernels against the numpy points
+KERNEL_TOL = 1e-12
+
+
+def dense(a):
+    return a.toarray() if sps.issparse(a) else np.asarray(a, dtype=float)
+
+
+def rel(a, ref, floor=0.0):
+    """max |a − ref| over the larger of max |ref| and ``floor`` (0 if both are zero and a == ref)."""
+    a, ref = dense(a), dense(ref)
+    assert a.shape == ref.shape
+    err = np.abs(a - ref).max() if a.size else 0.0
+    scale = max(np.abs(ref).max() if ref.size else 0.0, floor)
+    return err / scale if scale > 0 else (0.0 if err == 0 else np.inf)
+
+
+# ==================================================================== 1. kernels
+_POINTS = {}
+
+
+def _flexible_pendulum_body():
+    return sf.scenes.get("flexible_pendulum")().bodies[0]
+
+
+def points():
+    """{name: (body, BodyPoint)}: the body points the kernels must reproduce, built once."""
+    if not _POINTS:
+        pm = sf.PointMass(2.5, [0.3, -0.4], name="mass")
+        rb = sf.RigidBody(2.0, 0.3, (0.2, -0.1), 0.4, name="rigid")
+        beam = _flexible_pendulum_body()
+        modal = link("beam-modal", 1.0, sf.Section(**SEC), 8, n_modes=3)
+        _POINTS.update({
+            "point-mass": (pm, pm.point()),
+            "rigid-centre": (rb, rb.point()),
+            "rigid-arm": (rb, rb.point((0.7, -0.2))),
+            "rigid-far": (rb, rb.point((-3.0, 1.5))),
+            "beam-root": (beam, beam.point(0.0)),
+            "beam-tip": (beam, beam.point(None)),
+            "beam-interior": (beam, beam.point(0.37)),          # inside an element
+            "modal-root": (modal.body, modal.root),
+            "modal-tip": (modal.body, modal.tip),
+            "modal-interior": (modal.body, modal.mid),
+        })
+    return _POINTS
+
+
+def random_states(body, rng, dtheta):
+    """(q0, q1): reference coordinates of order 1, elastic ones of a few cm, θ1 = θ0 + dtheta."""
+    nb = body.n_dofs
+    q0 = rng.normal(size=nb)
+    q1 = q0 + 0.5 * rng.normal(size=nb)
+    if nb >= 3:
+        q0[2] = rng.uniform(-4.0, 4.0)
+        q1[2] = q0[2] + dtheta
+        q0[3:] = 0.05 * rng.normal(size=nb - 3)
+        q1[3:] = q0[3:] + 0.02 * rng.normal(size=nb - 3)
+    return q0, q1
+
+
+def kernel_errors(entry, nb, ref_position, ref_jacobian, ref_dgrad, ref_dgrad_jacobian, states, rng):
+    """Largest relative deviations of the kernels on map ``entry`` from the numpy references, and of the
+    exactness identity D (q1 − q0) = r(q1) − r(q0) (in units of ε times the scale of its terms)."""
+    maps = compiled_scene.pack_maps([(entry, nb)])
+    out = dict(position=0.0, jacobian=0.0, dgrad=0.0, dgrad_jacobian=0.0, exactness_eps=0.0)
+    for q0, q1 in states:
+        jac_scale = 0.0
+        for q in (q0, q1):
+            r = compiled_scene.map_position(maps, 0, q)
+            jac = compiled_scene.map_jacobian(maps, 0, q)
+            jac_scale = max(jac_scale, np.abs(jac).max())
+            # the scale of r: its largest term (|m R| or |A s|), not |r| itself (which may cancel)
+            out["position"] = max(out["position"], rel(r, ref_position(q), np.abs(jac).max() * max(1.0, np.abs(q).max())))
+            out["jacobian"] = max(out["jacobian"], rel(jac, ref_jacobian(q)))
+        d = compiled_scene.map_dgrad(maps, 0, q0, q1)
+        out["dgrad"] = max(out["dgrad"], rel(d, ref_dgrad(q0, q1)))
+        for f in (rng.normal(size=2), np.array([0.0, -9.81])):
+            h = compiled_scene.map_dgrad_jacobian(maps, 0, q0, q1, f)
+            out["dgrad_jacobian"] = max(out["dgrad_jacobian"],
+                                        rel(h, ref_dgrad_jacobian(q0, q1, f), np.abs(f).max() * jac_scale))
+        # exactness: D (q1 − q0) = r(q1) − r(q0) to round-off of the terms involved
+        r0, r1 = compiled_scene.map_position(maps, 0, q0), compiled_scene.map_position(maps, 0, q1)
+        dq = q1 - q0
+        terms = np.abs(d) @ np.abs(dq) + np.abs(r0) + np.abs(r1) + jac_scale * np.abs(np.concatenate([q0, q1])).max()
+        out["exactness_eps"] = max(out["exactness_eps"], np.abs(d @ dq - (r1 - r0)).max() / (EPS * terms.max()))
+    return out
+
+
+def point_kernel_errors(name, seed=0):
+    body, pt = points()[name]
+    rng = np.random.default_rng(seed)
+    states = [random_states(body, rng, dth) for dth in DTHETAS for _ in range(2)]
+    return kernel_errors(pt.compiled_map(), body.n_dofs, pt.position, pt.position_jacobian,
+                         pt.position_discrete_gradient, pt.position_discrete_gradient_jacobian, states, rng)
+
+
+@pytest.mark.parametrize("name", ["point-mass", "rigid-centre", "rigid-arm", "rigid-far", "beam-root", "beam-tip",
+                                  "beam-interior", "modal-root", "modal-tip", "modal-interior"])
+def test_map_kernels_equal_the_numpy_points(name):
+    err = point_kernel_errors(name)
+    for k in ("position", "jacobian", "dgrad", "dgrad_jacobian"):
+        assert err[k] <= KERNEL_TOL, (name, k, err[k])
+    assert err["exactness_eps"] <= 16, (name, err["exactness_eps"])
+
+
+def gravity_kernel_errors(body, seed=1):
+    """The first-moment map of ``body`` against its gravity potential and discrete gradient, for two fields.
+
+    The loop adds −gᵀD to the discrete gradient of V and ∂(Dᵀ(−g))/∂q1 to its Jacobian; the body returns
+    (−gᵀD, ∂(Dᵀ(−g))/∂q1) from ``gravity_discrete_gradient(q0, q1, g)``; V = −g · r, ∇V = −gᵀ ∂r/∂q."""
+    kd = getattr(body, "compiled_kernel_data", lambda: None)()
+    entry = ("frame", *body.mass_moment_map()) if kd is not None else ("linear", *body.mass_moment())
+    nb = body.n_dofs
+    maps = compiled_scene.pack_maps([(entry, nb)])
+    rng = np.random.default_rng(seed)
+    states = [random_states(body, rng, dth) for dth in DTHETAS]
+    out = dict(potential=0.0, gradient=0.0, dgrad=0.0, dgrad_jacobian=0.0, exactness_eps=0.0)
+    for g in (np.array([0.0, -9.81]), np.array([3.0, -7.5])):
+        for q0, q1 in states:
+            jac_scale = np.abs(compiled_scene.map_jacobian(maps, 0, q0)).max()
+            for q in (q0, q1):
+                v_ref, grad_ref, _ = body.gravity_potential(q, g)
+                r = compiled_scene.map_position(maps, 0, q)
+                out["potential"] = max(out["potential"], rel(-(g @ r), v_ref, np.abs(g).max() * jac_scale
+                                                             * max(1.0, np.abs(q).max())))
+                out["gradient"] = max(out["gradient"], rel(-(g @ compiled_scene.map_jacobian(maps, 0, q)), grad_ref))
+            d = compiled_scene.map_dgrad(maps, 0, q0, q1)
+            h = compiled_scene.map_dgrad_jacobian(maps, 0, q0, q1, -g)
+            dg_ref, h_ref = body.gravity_discrete_gradient(q0, q1, g)
+            out["dgrad"] = max(out["dgrad"], rel(-(g @ d), dg_ref))
+            h_ref = np.zeros((nb, nb)) if h_ref is None else dense(h_ref)
+            out["dgrad_jacobian"] = max(out["dgrad_jacobian"], rel(h, h_ref, np.abs(g).max() * jac_scale))
+            v0, v1 = body.gravity_potential(q0, g)[0], body.gravity_potential(q1, g)[0]
+            out["exactness_eps"] = max(out["exactness_eps"], abs(float(dg_ref @ (q1 - q0)) - (v1 - v0))
+                                       / (EPS * max(abs(v0), abs(v1), np.abs(g).max() * jac_scale
+                                                    * np.abs(np.concatenate([q0, q1])).max())))
+    return out
+
+
+@pytest.mark.parametrize("kind", ["point-mass", "rigid", "beam", "modal"])
+def test_gravity_map_equals_the_bodies_gravity(kind):
+    body = points()[{"point-mass": "point-mass", "rigid": "rigid-arm", "beam": "beam-tip", "modal": "modal-tip"}[kind]][0]
+    err = gravity_kernel_errors(body)
+    for k in ("potential", "gradient", "dgrad", "dgrad_jacobian"):
+        assert err[k] <= KERNEL_TOL, (kind, k, err[k])
+    assert err["exactness_eps"] <= 64, (kind, err["exactness_eps"])
+
+
+def test_pack_maps_keeps_several_maps_apart():
+    """Maps of different kinds and sizes packed together: map k is entry k."""
+    pts = points()
+    names = ["beam-interior", "point-mass", "rigid-far", "modal-tip", "rigid-centre"]
+    maps = compiled_scene.pack_maps([(pts[n][1].compiled_map(), pts[n][0].n_dofs) for n in names])
+    rng = np.random.default_rng(5)
+    for k, n in enumerate(names):
+        body, pt = pts[n]
+        q0, q1 = random_states(body, rng, 1.3)
+        assert rel(compiled_scene.map_position(maps, k, q1), pt.position(q1)) <= KERNEL_TOL
+        assert rel(compiled_scene.map_dgrad(maps, k, q0, q1), pt.position_discrete_gradient(q0, q1)) <= KERNEL_TOL
+
+
+# ==================================================================== 2. trajectories
+def rigid_pendulum(angular_velocity=2.0):
+    """A rigid bar pinned at one end to the ground, released from 30° below horizontal, under gravity."""
+    bar = sf.RigidBody.bar(1.5, 0.8, start=(0.0, 0.0), angle=-np.pi / 6, name="bar")
+    bar.v0[2] = angular_velocity
+    pin = sf.Pin(bar.point((-0.4, 0.0)), (0.0, 0.0), name="pivot")
+    tip = bar.point((0.4, 0.0))
+    return sf.Scene([bar], constraints=[pin], forces=[sf.Gravity((0.0, -9.81))], name="rigid pendulum",
+                    probes={"tip": lambda s, t, q, v: tip.position(q)})
+
+
+def driven_rigid_mechanism():
+    """A crank turned by a prescribed angle (θ = 3 t + t², pinned at one end) carrying a pendulum bar and,
+    at the bar's end, a point mass on a third, pinned bar: prescribed coordinate, Pin, Revolute and gravity."""
+    crank = sf.RigidBody.bar(0.5, 0.3, start=(0.0, 0.0), angle=0.0, name="crank")
+    bar = sf.RigidBody.bar(1.0, 0.6, start=(0.3, 0.0), angle=-0.5 * np.pi, name="bar")
+    law = sf.MotionLaw(lambda t: 3.0 * t + t * t, lambda t: 3.0 + 2.0 * t, lambda t: 2.0)
+    cons = [sf.Pin(crank.point((-0.15, 0.0)), (0.0, 0.0), name="crank pin"),
+            sf.Revolute(crank.point((0.15, 0.0)), bar.point((-0.3, 0.0)), name="hinge")]
+    return sf.Scene([crank, bar], constraints=cons, forces=[sf.Gravity((0.0, -9.81))],
+                    prescribed=[sf.Prescribed(crank, "theta", law)], name="driven mechanism",
+                    probes={"bar_end": lambda s, t, q, v: bar.point((0.3, 0.0)).position(s.coordinates(bar, q))})
+
+
+def run_both(scene_factory, t_end, dt, **kw):
+    """(compiled run, Python run) of fresh scenes; the compiled one must have gone through the loop, every
+    step of it (no step fell back to Python)."""
+    scene = scene_factory()
+    assert compiled_scene.eligible(scene, EnergyMomentum())
+    real, statuses = compiled_scene.run_chunk, []
+
+    def spy(*args, **kwargs):
+        out = real(*args, **kwargs)
+        statuses.append(out["status"])
+        return out
+    compiled_scene.run_chunk = spy
+    try:
+        a = sf.simulate(scene_factory(), t_end=t_end, dt=dt, compiled=True, **kw)
+    finally:
+        compiled_scene.run_chunk = real
+    assert statuses and all(s == compiled_scene.OK for s in statuses)
+    return a, sf.simulate(scene_factory(), t_end=t_end, dt=dt, compiled=False, **kw)
+
+
+def run_deviations(a, b):
+    """Largest deviations of the compiled run a from the Python run b, each relative to its scale."""
+    q_scale = np.abs(b.q).max()
+    v_scale = np.abs(b.v).max()
+    e_scale = np.abs(b.kinetic).max() + np.abs(b.potential).max() + np.abs(b.external_work).max()
+    p_scale = np.abs(b.linear_momentum).max() + 1e-300
+    L_scale = np.abs(b.angular_momentum).max() + p_scale * np.abs(b.q).max()
+    lam_scale = np.abs(b.lam).max() if b.lam.size else 1.0
+    out = dict(q=rel(a.q, b.q), v=rel(a.v, b.v))
+    out["lam"] = np.abs(a.lam - b.lam).max() / lam_scale if b.lam.size else 0.0
+    for k in ("kinetic", "potential", "total_energy", "external_work"):
+        out[k] = np.abs(getattr(a, k) - getattr(b, k)).max() / e_scale
+    out["linear_momentum"] = np.abs(a.linear_momentum - b.linear_momentum).max() / p_scale
+    out["angular_momentum"] = np.abs(a.angular_momentum - b.angular_momentum).max() / L_scale
+    # the residuals are round-off on both paths: compared on the scale of Φ (q) and of Φ_q v (v)
+    out["constraint_residual"] = np.abs(a.constraint_residual - b.constraint_residual).max() / q_scale
+    out["velocity_constraint_residual"] = (np.abs(a.velocity_constraint_residual - b.velocity_constraint_residual).max()
+                                           / v_scale)
+    out["prescribed_force"] = (np.abs(a.prescribed_force - b.prescribed_force).max()
+                               / np.abs(b.prescribed_force).max() if b.prescribed_force.size else 0.0)
+    out["reactions"] = max([rel(a.reactions[k], b.reactions[k]) for k in b.reactions] or [0.0])
+    out["probes"] = max([rel(a.probes[k], b.probes[k]) for k in b.probes] or [0.0])
+    out["energy_balance"] = np.abs(a.total_energy - a.total_energy[0] - a.external_work).max() / e_scale
+    out["energy_balance_python"] = np.abs(b.total_energy - b.total_energy[0] - b.external_work).max() / e_scale
+    return out
+
+
+#: allowed deviations (relative; see run_deviations)
+RUN_TOL = dict(q=1e-10, v=1e-10, lam=1e-9, kinetic=1e-9, potential=1e-9, total_energy=1e-9, external_work=1e-9,
+               linear_momentum=1e-9, angular_momentum=1e-9, constraint_residual=1e-9,
+               velocity_constraint_residual=1e-9, prescribed_force=1e-9, reactions=1e-9, probes=1e-9,
+               energy_balance=1e-10)
+
+
+def assert_same_run(a, b):
+    np.testing.assert_array_equal(a.t, b.t)
+    assert a.steps == b.steps and a.halvings == b.halvings
+    assert a.completed and b.completed
+    assert set(a.reactions) == set(b.reactions) and set(a.probes) == set(b.probes)
+    dev = run_deviations(a, b)
+    for k, tol in RUN_TOL.items():
+        assert dev[k] <= tol, (k, dev[k])
+    # a step decided at the round-off floor may take one Newton iteration more or less on either path
+    total_a, total_b = a.newton_iterations.sum(), b.newton_iterations.sum()
+    assert abs(total_a - total_b) <= 0.05 * total_b + 0.3 * a.t.size
+    return dev
+
+
+@pytest.mark.parametrize("name, dt", [("pendulum", None), ("flexible_pendulum", 2e-3), ("double_pendulum", 2e-3)])
+def test_catalogue_mechanisms_compiled_equal_python(name, dt):
+    factory = sf.scenes.get(name)
+    scene = factory()
+    assert compiled_scene.eligible(scene, EnergyMomentum())
+    assert not compiled_scene.eligible(scene, Trapezoidal())
+    a, b = run_both(factory, t_end=0.3, dt=factory.defaults["dt"] if dt is None else dt)
+    assert_same_run(a, b)
+    assert a.lam.shape == (a.t.size, scene.n_constraints) and np.abs(a.lam).max() > 0
+
+
+def test_rigid_pendulum_compiled_equals_python():
+    a, b = run_both(rigid_pendulum, t_end=0.5, dt=1e-2)
+    assert_same_run(a, b)
+    # a fixed pin does no work (−λ̄·ΔΦ is round-off) and the energy is conserved
+    e_scale = np.abs(a.kinetic).max() + np.abs(a.potential).max()
+    assert np.abs(a.external_work).max() <= 1e-12 * e_scale
+    assert np.abs(a.total_energy - a.total_energy[0]).max() <= 1e-10 * e_scale
+
+
+def test_prescribed_coordinate_with_joints_compiled_equals_python():
+    """No catalogue scene has a prescribed coordinate together with joints: a driven rigid mechanism."""
+    a, b = run_both(driven_rigid_mechanism, t_end=0.4, dt=1e-2)
+    dev = assert_same_run(a, b)
+    assert np.abs(a.prescribed_force).max() > 0 and np.abs(a.external_work).max() > 0
+    assert dev["prescribed_force"] <= 1e-9
+
+
+# ==================================================================== 3. eligibility
+def _bar():
+    return sf.RigidBody.bar(1.0, 1.0, start=(0.0, 0.0), angle=0.0, name="bar")
+
+
+def _ineligible_scenes():
+    """Scenes with one part that has no compiled form (and the same scene with a Pin, which is eligible)."""
+    scenes = {"spring_mass": (sf.scenes.get("spring_mass")(), None)}
+    bar = _bar()
+    scenes["weld"] = (sf.Scene([bar], constraints=[sf.Weld(bar.point((-0.5, 0.0)))], forces=[sf.Gravity()]),
+                      sf.Scene([bar], constraints=[sf.Pin(bar.point((-0.5, 0.0)))], forces=[sf.Gravity()]))
+    m = sf.PointMass(1.0, [1.0, 0.0])
+    scenes["slider"] = (sf.Scene([m], constraints=[sf.Slider(m.point(), direction=(1.0, 1.0))], forces=[sf.Gravity()]),
+                        sf.Scene([m], constraints=[sf.Distance(m, (0.0, 0.0), 1.0)], forces=[sf.Gravity()]))
+    m2 = sf.PointMass(1.0, [1.0, 0.0])
+    user = sf.UserConstraint([m2], lambda q, t: np.array([0.5 * (q @ q - 1.0)]), lambda q, t: q[None, :])
+    scenes["user constraint"] = (sf.Scene([m2], constraints=[user], forces=[sf.Gravity()]), None)
+    b1, b2 = _bar(), sf.RigidBody.bar(1.0, 1.0, start=(1.0, 0.0), angle=0.0, name="bar 2")
+    spring = sf.LinearSpring(b1.point((0.5, 0.0)), b2.point((0.5, 0.0)), 100.0)
+    scenes["linear spring"] = (sf.Scene([b1, b2], constraints=[sf.Pin(b1.point((-0.5, 0.0)))], forces=[spring]),
+                               None)
+    return scenes
+
+
+def test_parts_without_compiled_form_are_not_eligible():
+    em = EnergyMomentum()
+    for name, (scene, counterpart) in _ineligible_scenes().items():
+        assert not compiled_scene.eligible(scene, em), name
+        assert compiled_scene.pack(scene) is None, name
+        if counterpart is not None:
+            assert compiled_scene.eligible(counterpart, em), name
+
+    class Custom(EnergyMomentum):
+        pass
+    assert not compiled_scene.eligible(sf.scenes.get("pendulum")(), Custom())
+
+
+def _boom(*args, **kwargs):
+    raise AssertionError("compiled_scene.run_chunk was called")
+
+
+def test_compiled_false_and_ineligible_scenes_never_call_the_loop(monkeypatch):
+    monkeypatch.setattr(compiled_scene, "run_chunk", _boom)
+    # the spy works: an eligible scene with compiled=True reaches it
+    with pytest.raises(AssertionError, match="run_chunk was called"):
+        sf.simulate(sf.scenes.get("pendulum")(), t_end=0.05, dt=1e-2, compiled=True)
+    res = sf.simulate(sf.scenes.get("pendulum")(), t_end=0.05, dt=1e-2, compiled=False)
+    assert res.completed and res.steps == 5
+    sf.simulate(rigid_pendulum(), t_end=0.05, dt=1e-2, integrator="trapezoidal")
+    for name, (scene, _) in _ineligible_scenes().items():
+        if name != "spring_mass":       # the others start at rest on their constraints
+            sf.simulate(scene, t_end=0.02, dt=1e-2)
+    sf.simulate(sf.scenes.get("spring_mass")(), t_end=0.1, dt=0.05)
+    monkeypatch.setenv("SKFEM_FLEX_COMPILED", "0")
+    sf.simulate(sf.scenes.get("pendulum")(), t_end=0.05, dt=1e-2)
+
+
+# ==================================================================== 4. fallback
+def _spy_run_chunk(monkeypatch):
+    """Wrap run_chunk; the list of statuses it returned."""
+    statuses = []
+    real = compiled_scene.run_chunk
+
+    def spy(*args, **kwargs):
+        out = real(*args, **kwargs)
+        statuses.append(out["status"])
+        return out
+    monkeypatch.setattr(compiled_scene, "run_chunk", spy)
+    return statuses
+
+
+@pytest.mark.parametrize("omega, dt, t_end, newton", [(12.0, 0.3, 1.5, None),                       # steps too large
+                                                     (2.0, 1e-2, 0.4, NewtonSettings(max_iterations=2))])
+def test_failing_steps_are_halved_as_on_the_python_path(monkeypatch, omega, dt, t_end, newton):
+    """Steps the compiled loop cannot finish (too large, or too few Newton iterations allowed) leave it and are
+    halved by the Python path: the same halvings and the same trajectory as the pure-Python run."""
+    statuses = _spy_run_chunk(monkeypatch)
+    a = sf.simulate(rigid_pendulum(omega), t_end=t_end, dt=dt, max_halvings=8, newton=newton, compiled=True)
+    assert statuses and any(s != compiled_scene.OK for s in statuses)
+    b = sf.simulate(rigid_pendulum(omega), t_end=t_end, dt=dt, max_halvings=8, newton=newton, compiled=False)
+    assert a.halvings == b.halvings > 0
+    assert_same_run(a, b)
+
+
+@pytest.mark.parametrize("newton, dt, max_halvings", [(NewtonSettings(max_iterations=1), 1e-2, 2),
+                                                      (None, 0.3, 0)])
+def test_convergence_error_is_the_python_paths(monkeypatch, newton, dt, max_halvings):
+    """A step that fails on the Python path too raises the same ConvergenceError with the same partial result."""
+    statuses = _spy_run_chunk(monkeypatch)
+    errors = []
+    for c in (True, False):
+        with pytest.raises(ConvergenceError) as info:
+            sf.simulate(rigid_pendulum(12.0), t_end=2.0, dt=dt, newton=newton, max_halvings=max_halvings,
+                        compiled=c)
+        errors.append(info.value)
+    assert statuses and statuses[-1] != compiled_scene.OK
+    assert type(errors[0]) is type(errors[1])
+    assert str(errors[0]) == str(errors[1])
+    ra, rb = errors[0].result, errors[1].result
+    assert ra.steps == rb.steps and ra.halvings == rb.halvings
+    np.testing.assert_array_equal(ra.t, rb.t)
+    np.testing.assert_allclose(ra.q, rb.q, rtol=0, atol=1e-10 * np.abs(rb.q).max())
