@@ -43,6 +43,7 @@ from collections import namedtuple
 import numpy as np
 import numba
 
+from ..rotations import dsinc, sinc
 from .modal_kernel import quartic_discrete_gradient, quartic_energy
 
 __all__ = ["FloatingKernelData", "pack", "energy_momentum_terms", "momentum", "potential_energy", "sinc_half"]
@@ -145,13 +146,10 @@ def _matvec(ptr, idx, dat, x, off):
 
 @numba.njit(cache=True)
 def sinc_half(d):
-    """σ = sin(d/2)/(d/2) and dσ/dd (series near 0); also used by the numpy methods of FloatingBeam."""
+    """σ = sinc(d/2) and dσ/dd = ½ dsinc(d/2) (:mod:`skfem_flex.rotations`); also used by the numpy
+    methods of floating-frame bodies."""
     h = 0.5 * d
-    if abs(h) < 1e-3:
-        h2 = h * h
-        return 1.0 - h2 / 6.0 + h2 * h2 / 120.0, 0.5 * (-h / 3.0 + h * h2 / 30.0)
-    s, c = math.sin(h), math.cos(h)
-    return s / h, 0.5 * (h * c - s) / (h * h)
+    return sinc(h), 0.5 * dsinc(h)
 
 
 @numba.njit(cache=True)
