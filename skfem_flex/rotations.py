@@ -39,7 +39,7 @@ MAX_INCREMENT = 0.9 * np.pi
 _SERIES = 1e-2
 
 
-@numba.vectorize(["float64(float64)", "complex128(complex128)"], cache=True)
+@numba.vectorize(cache=True)         # compiled per argument type on first use, not at import
 def sinc(x):
     """sin(x)/x, 1 at 0 (unnormalised; a ufunc: arrays and complex arguments allowed). The package's one
     sinc: the rotation identity A(θ₁) − A(θ₀) = sinc(Δθ/2) Δθ A(θ_m) E of every exact discrete

@@ -1,0 +1,80 @@
+"""Where a step of the compiled mechanism loop spends its time (``skfem_flex.compiled_scene``).
+
+Times, in compiled loops, one residual evaluation (with its Newton matrix), one dense solve of that
+matrix and one evaluation of the constraint terms for a catalogue scene at its initial state, and
+the average Newton iterations per step of a short run. Usage::
+
+    python examples/profile_compiled_scene.py [SCENE] [--n-elements 16] [--dt 1e-3]
+"""
+import argparse
+import inspect
+import time
+
+import numba
+import numpy as np
+
+import skfem_flex as sf
+from skfem_flex import compiled_scene as cs
+
+
+@numba.njit
+def _evaluations(system, x, n):
+    s = 0.0
+    for _ in range(n):
+        s += cs._evaluate(system, x)
+    return s
+
+
+@numba.njit
+def _solves(system, n):
+    for _ in range(n):
+        cs._solve(system)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("scene", nargs="?", default="flexible_pendulum")
+    ap.add_argument("--n-elements", type=int, default=16, help="for scenes with a beam")
+    ap.add_argument("--dt", type=float, default=1e-3)
+    ap.add_argument("--repeat", type=int, default=5000)
+    args = ap.parse_args(argv)
+    factory = sf.scenes.get(args.scene)
+    kw = {"n_elements": args.n_elements} if "n_elements" in inspect.signature(factory).parameters else {}
+    scene = factory(**kw)
+    if not cs.eligible(scene, sf.EnergyMomentum()):
+        raise SystemExit(f"{args.scene} does not run on the compiled mechanism loop")
+    packed = cs.pack(scene)
+    mass, frames, frame_off, maps, gravity, constraints, _ = packed
+    n, m = scene.n, scene.n_constraints
+    free = scene.free_index.astype(np.int64)
+    q0 = np.concatenate([np.asarray(b.q0, dtype=float) for b in scene.bodies])
+    v0 = np.concatenate([np.asarray(b.v0, dtype=float) for b in scene.bodies]) + 0.01
+    p0 = cs._scene_momentum(mass, frames, frame_off, q0, v0)
+    h = args.dt
+    system = (mass, frames, frame_off, maps, gravity, constraints, q0, v0, p0, np.zeros(n), free,
+              cs._free_positions(scene), h, 1.0, 1.0, 1e-12, 1e-12, 1e-14, np.zeros(free.size + m),
+              np.zeros((free.size + m, free.size + m)), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
+              np.zeros(n))
+    x = np.concatenate([h * v0[free], np.zeros(m)])
+    _evaluations(system, x, 1)
+    _solves(system, 1)
+    start = time.perf_counter()
+    _evaluations(system, x, args.repeat)
+    t_eval = (time.perf_counter() - start) / args.repeat
+    _evaluations(system, x, 1)
+    start = time.perf_counter()
+    _solves(system, args.repeat)
+    t_solve = (time.perf_counter() - start) / args.repeat
+    sf.simulate(scene, 5 * h, h)
+    res = sf.simulate(scene, 200 * h, h, record_every=10 ** 6)
+    res_all = sf.simulate(scene, 200 * h, h)
+    print(f"{args.scene}: {n} coordinates, {m} multipliers, Newton matrix {free.size + m} × {free.size + m}")
+    print(f"one residual evaluation with its Newton matrix: {1e6 * t_eval:.1f} µs")
+    print(f"one dense solve of the Newton matrix:           {1e6 * t_solve:.1f} µs")
+    print(f"Newton iterations per step:                     {res_all.newton_iterations[1:].mean():.2f}")
+    print(f"per step, nothing recorded:                     {1e6 * res.wall_time / res.steps:.1f} µs")
+    print(f"per step, every step recorded:                  {1e6 * res_all.wall_time / res_all.steps:.1f} µs")
+
+
+if __name__ == "__main__":
+    main()
