@@ -46,7 +46,8 @@ from .newton import (CONVERGED, EVALUATE, NONFINITE_RESIDUAL, all_finite, max_ab
                      newton_start, roundoff_floor)
 from .scene import Scene
 
-__all__ = ["eligible", "run_chunk", "chunk_steps", "chunk_schedule", "record_count", "jit_cache_cold", "COMPILE_NOTICE", "OK"]
+__all__ = ["eligible", "run_chunk", "chunk_steps", "chunk_schedule", "record_count", "record_buffers", "jit_cache_cold",
+           "COMPILE_NOTICE", "OK"]
 
 #: the line ``simulate(..., progress=True)`` prints on stderr before a first run compiles the kernels
 COMPILE_NOTICE = ("skfem-flex: compiling the Numba kernels (the Newton core; with floating-frame bodies also "
@@ -266,12 +267,7 @@ def _run(kd, q, v, t, hs, qp, pres, free, target, mat_size, kl, ku, rtol, etol, 
          first_step, record_every, n_steps):
     n, ns, npr = q.size, hs.size, pres.size
     n_rec = record_count(first_step, ns, record_every, n_steps)
-    rec_t = np.empty(n_rec)
-    rec_q = np.empty((n_rec, n))
-    rec_v = np.empty((n_rec, n))
-    rec_work = np.empty(n_rec)
-    rec_its = np.empty(n_rec, dtype=np.int64)
-    rec_reac = np.empty((n_rec, npr))
+    rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac = record_buffers(n_rec, n, npr)
     # T, V, p_R (2) and L about the origin of the recorded states, as the body's kinetic_energy,
     # potential_energy, linear_momentum and angular_momentum (R × p_R + p_θ) give them
     rec_derived = np.empty((n_rec, 5))
@@ -343,6 +339,13 @@ def record_count(first_step, n_chunk, record_every, n_steps):
     return n_rec
 
 
+@numba.njit(cache=True)
+def record_buffers(n_rec, n, npr):
+    """Arrays for the recorded steps of a chunk: t, q, v, work, Newton iterations, prescribed reactions."""
+    return (np.empty(n_rec), np.empty((n_rec, n)), np.empty((n_rec, n)), np.empty(n_rec),
+            np.empty(n_rec, dtype=np.int64), np.empty((n_rec, npr)))
+
+
 def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, record_every, work):
     """Run steps ``first_step … first_step + n_chunk − 1`` of a run through the compiled loop.
 
@@ -372,9 +375,10 @@ def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, rec
         (steps completed), ``t, q, v, reaction`` (state after them; ``reaction`` is the mean
         generalized force of the prescribed laws over the last step), ``work`` (accumulated),
         ``iterations`` (Newton iterations summed over the completed steps) and ``records``, a
-        list of (t, q, v, work, iterations, reaction, derived) of the recorded steps, ``derived`` =
-        (kinetic energy J, strain energy J, linear momentum (2) kg m/s, angular momentum about the
-        origin kg m²/s), computed in the loop.
+        list of (t, q, v, work, iterations, reaction, derived, λ, probes) of the recorded steps,
+        ``derived`` = (kinetic energy J, strain energy J, linear momentum (2) kg m/s, angular momentum
+        about the origin kg m²/s, ‖Φ‖∞, ‖Φ_q v‖∞), computed in the loop; λ empty and ``probes`` {}
+        (the form :func:`skfem_flex.compiled_scene.run_chunk` shares).
     """
     body = scene.bodies[0]
     s = scheme.newton
@@ -387,8 +391,11 @@ def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, rec
                int(first_step), int(record_every), int(n_steps))
     (status, done, t, q, v, _, reaction, work, its_total, n_rec, rec_t, rec_q, rec_v, rec_work, rec_its,
      rec_reac, rec_derived) = out
+    # the records of both compiled loops have one form: no constraints here (‖Φ‖ = ‖Φ_q v‖ = 0, no λ)
+    # and no probe evaluated in the loop
+    no_lam = np.zeros(0)
     records = [(float(rec_t[i]), rec_q[i], rec_v[i], float(rec_work[i]), int(rec_its[i]), rec_reac[i],
-                rec_derived[i])
+                np.concatenate([rec_derived[i], [0.0, 0.0]]), no_lam, {})
                for i in range(n_rec)]
-    return dict(status=int(status), done=int(done), t=float(t), q=q, v=v, reaction=reaction, work=float(work),
-                iterations=int(its_total), records=records)
+    return dict(status=int(status), done=int(done), t=float(t), q=q, v=v, lam=no_lam, reaction=reaction,
+                work=float(work), iterations=int(its_total), records=records)

@@ -38,7 +38,7 @@ import numpy as np
 import scipy.sparse as sps
 
 from .bodies.floating_kernel import energy_momentum_terms, momentum, potential_energy, sinc_half
-from .compiled_loop import chunk_schedule, record_count
+from .compiled_loop import chunk_schedule, record_buffers, record_count
 from .integrators import EnergyMomentum
 from .newton import (CONVERGED, EVALUATE, NONFINITE_RESIDUAL, all_finite, max_abs, newton_evaluated, newton_solved,
                      newton_start, roundoff_floor)
@@ -63,6 +63,21 @@ POINTS, DISTANCE = 0, 1
 # q_f = q[3:], Y (2 × (nb − 3)) stored row-major at yptr[k].
 
 @numba.njit(cache=True)
+def _frame_offset(maps, k, qa, qb):
+    """(s_x, s_y) = y0 + Y (qa_f + qb_f)/2 of FRAME map k: the point in the body frame at the mean of two
+    states (qa = qb: at that state; 0.5 (a + a) = a exactly)."""
+    nb, y0, ydat, yptr = maps[2], maps[5], maps[8], maps[9]
+    ne = nb[k] - 3
+    y = yptr[k]
+    sx, sy = y0[k, 0], y0[k, 1]
+    for j in range(ne):
+        qm = 0.5 * (qa[3 + j] + qb[3 + j])
+        sx += ydat[y + j] * qm
+        sy += ydat[y + ne + j] * qm
+    return sx, sy
+
+
+@numba.njit(cache=True)
 def map_position(maps, k, q):
     """r(q) of map k (2,), m; ``q`` is the body's block."""
     kind, off, nb, m_r, c, y0, gdat, gptr, ydat, yptr = maps
@@ -75,12 +90,7 @@ def map_position(maps, k, q):
                 s += gdat[g0 + a * nb[k] + j] * q[j]
             r[a] = s
         return r
-    ne = nb[k] - 3
-    y = yptr[k]
-    sx, sy = y0[k, 0], y0[k, 1]
-    for j in range(ne):
-        sx += ydat[y + j] * q[3 + j]
-        sy += ydat[y + ne + j] * q[3 + j]
+    sx, sy = _frame_offset(maps, k, q, q)
     C, S = np.cos(q[2]), np.sin(q[2])
     r[0] = m_r[k] * q[0] + C * sx - S * sy
     r[1] = m_r[k] * q[1] + S * sx + C * sy
@@ -100,10 +110,7 @@ def map_jacobian(maps, k, q):
         return jac
     ne = n - 3
     y = yptr[k]
-    sx, sy = y0[k, 0], y0[k, 1]
-    for j in range(ne):
-        sx += ydat[y + j] * q[3 + j]
-        sy += ydat[y + ne + j] * q[3 + j]
+    sx, sy = _frame_offset(maps, k, q, q)
     C, S = np.cos(q[2]), np.sin(q[2])
     jac[0, 0] = jac[1, 1] = m_r[k]
     jac[0, 2] = -S * sx - C * sy            # A E s, E = [[0, −1], [1, 0]]
@@ -130,11 +137,7 @@ def map_dgrad(maps, k, q0, q1):
     tm = q0[2] + half
     C, S = np.cos(tm), np.sin(tm)
     sig, kap = sinc_half(q1[2] - q0[2])[0], np.cos(half)
-    sx, sy = y0[k, 0], y0[k, 1]
-    for j in range(ne):
-        qm = 0.5 * (q0[3 + j] + q1[3 + j])
-        sx += ydat[y + j] * qm
-        sy += ydat[y + ne + j] * qm
+    sx, sy = _frame_offset(maps, k, q0, q1)
     d = np.zeros((2, n))
     d[0, 0] = d[1, 1] = m_r[k]
     d[0, 2] = sig * (-S * sx - C * sy)
@@ -159,11 +162,7 @@ def _dgrad_jacobian_parts(maps, k, q0, q1, f):
     C, S = np.cos(tm), np.sin(tm)
     sig, dsig = sinc_half(q1[2] - q0[2])          # σ and dσ/dΔθ
     kap, sn = np.cos(half), np.sin(half)
-    sx, sy = y0[k, 0], y0[k, 1]
-    for j in range(ne):
-        qm = 0.5 * (q0[3 + j] + q1[3 + j])
-        sx += ydat[y + j] * qm
-        sy += ydat[y + ne + j] * qm
+    sx, sy = _frame_offset(maps, k, q0, q1)
     fax = f[0] * C + f[1] * S              # fA = Aᵀ(θ_m) f
     fay = -f[0] * S + f[1] * C
     # fA·(E s) and fA·s; E s = (−sy, sx)
@@ -283,7 +282,6 @@ def _call(obj, method):
 
 
 _PACKS = weakref.WeakKeyDictionary()
-_PROBE_NAMES = weakref.WeakKeyDictionary()
 
 
 def pack(scene):
@@ -295,17 +293,20 @@ def pack(scene):
         (mass, frames, frame_off, maps, gravity, constraints, bodies) — see the source; built
         once per scene.
     """
+    return _packed(scene)[0]
+
+
+def _packed(scene):
+    """(packed scene or None, names of the probes the loop records), built once per scene."""
     hit = _PACKS.get(scene)
-    if hit is not None:
-        return hit[0]
-    packed = _pack(scene)
-    _PACKS[scene] = (packed,)
-    return packed
+    if hit is None:
+        hit = _PACKS[scene] = _pack(scene)
+    return hit
 
 
 def _pack(scene):
     if type(scene) is not Scene or not scene.dense or len(getattr(scene, "cayley_index", ())):
-        return None
+        return None, ()
     n = scene.n
     store = {k: [] for k in ("kind", "off", "nb", "m_r", "c", "y0", "g", "gptr", "y", "yptr")}
     mass = np.zeros((n, n))
@@ -319,7 +320,7 @@ def _pack(scene):
         if kd is not None:
             moment = _call(b, "mass_moment_map")
             if moment is None:
-                return None
+                return None, ()
             frames.append(kd)
             frame_off.append(off)
             first_moment[id(b)] = ("frame", moment[0], moment[1], moment[2])
@@ -327,21 +328,21 @@ def _pack(scene):
             try:
                 gam, c = b.mass_moment()
             except NotImplementedError:
-                return None
+                return None, ()
             mass[sl, sl] = np.asarray(b.mass_matrix(np.asarray(b.q0, dtype=float)), dtype=float)
             first_moment[id(b)] = ("linear", gam, c)
         else:
-            return None
+            return None, ()
         # the loop's momenta: p_lin = p[R], L = R × p[R] + p[θ] (R = q[0:2], θ = q[2] where present);
         # a body that defines them otherwise runs in Python
         if not _momentum_convention_holds(b, kd, rng):
-            return None
+            return None, ()
         body_layout.append((off, nb))
     grav_maps, grav_g = [], []
     for f in scene.forces:
         form = _call(f, "compiled_form")
         if form is None or form[0] != "gravity":
-            return None
+            return None, ()
         for b in (f.bodies if f.bodies is not None else scene.bodies):
             sl = scene.slice(b)
             grav_maps.append(_map_of(first_moment[id(b)], sl.start, sl.stop - sl.start, store))
@@ -351,7 +352,7 @@ def _pack(scene):
     for c, (idx, rows) in zip(scene.constraints, scene.constraint_layout):
         form = _call(c, "compiled_form")
         if form is None:
-            return None
+            return None, ()
         con_row.append(int(rows[0]))
         con_t0.append(len(term_map))
         if form[0] == "points":
@@ -362,7 +363,7 @@ def _pack(scene):
             for point, sign in terms:
                 cm = _call(point, "compiled_map")
                 if cm is None:
-                    return None
+                    return None, ()
                 sl = scene.slice(point.body)
                 term_map.append(_map_of(cm, sl.start, sl.stop - sl.start, store))
                 term_sign.append(float(sign))
@@ -370,7 +371,7 @@ def _pack(scene):
             _, point, anchor, length = form
             cm = _call(point, "compiled_map")
             if cm is None or cm[0] != "linear":
-                return None
+                return None, ()
             sl = scene.slice(point.body)
             con_kind.append(DISTANCE)
             con_c.append(np.asarray(anchor, dtype=float).reshape(2))
@@ -378,7 +379,7 @@ def _pack(scene):
             term_map.append(_map_of(cm, sl.start, sl.stop - sl.start, store))
             term_sign.append(1.0)
         else:
-            return None
+            return None, ()
     con_t0.append(len(term_map))
     nc = len(con_kind)
     # probes with a position map are recorded by the loop; the others are called in Python
@@ -398,13 +399,12 @@ def _pack(scene):
                    np.asarray(term_sign, dtype=float), np.asarray(con_c, dtype=float).reshape(nc, 2),
                    np.asarray(con_len, dtype=float), int(scene.n_constraints), float(scene.length_scale))
     bodies = np.asarray(body_layout, dtype=np.int64).reshape(len(body_layout), 2)
-    _PROBE_NAMES[scene] = tuple(probe_names)
     bodies = (bodies, np.asarray(probe_maps, dtype=np.int64))
     mass = sps.csr_matrix(mass)
     mass.sort_indices()
     mass = (mass.indptr.astype(np.int64), mass.indices.astype(np.int64), mass.data.astype(float))
     return (mass, tuple(frames) if frames else None, np.asarray(frame_off, dtype=np.int64), maps, gravity,
-            constraints, bodies)
+            constraints, bodies), tuple(probe_names)
 
 
 def _momentum_convention_holds(body, kd, rng):
@@ -468,8 +468,9 @@ def _scene_momentum(mass, frames, frame_off, q, v):
 
 
 @numba.njit(cache=True)
-def _constraint_terms(maps, constraints, q0, q1, mu, n, with_dgrad, mat, fpos):
-    """Φ(q1) (m), Φ_q(q1) (m × n) and, if ``with_dgrad``, D (m × n), adding ∂(Dᵀμ)/∂q1 to ``mat``."""
+def _constraint_terms(maps, constraints, q0, q1, mu, n, with_tangent, mat, fpos):
+    """Φ(q1) (m), Φ_q(q1) (m × n) and D (m × n); if ``with_tangent``, ∂(Dᵀμ)/∂q1 is added to ``mat``
+    (the Newton matrix; after a step only D is needed, for the work)."""
     kind, row, t0, term_map, term_sign, const, length, m, _ = constraints
     nb_, off_ = maps[2], maps[1]
     phi = np.zeros(m)
@@ -491,13 +492,13 @@ def _constraint_terms(maps, constraints, q0, q1, mu, n, with_dgrad, mat, fpos):
                     phi[r0 + a] += s * r[a]
                     for j in range(nb):
                         cq[r0 + a, o + j] += s * jac[a, j]
-                if with_dgrad:
-                    qb0 = q0[o:o + nb]
-                    dk = map_dgrad(maps, k, qb0, qb1)
-                    for a in range(2):
-                        f[a] = s * mu[r0 + a]
-                        for j in range(nb):
-                            d[r0 + a, o + j] += s * dk[a, j]
+                qb0 = q0[o:o + nb]
+                dk = map_dgrad(maps, k, qb0, qb1)
+                for a in range(2):
+                    f[a] = s * mu[r0 + a]
+                    for j in range(nb):
+                        d[r0 + a, o + j] += s * dk[a, j]
+                if with_tangent:
                     _add_dgrad_jacobian(maps, k, qb0, qb1, f, 1.0, mat, fpos, np.zeros(0))
         else:                                   # DISTANCE on a linear map: Φ = ½(|r − a|² − l²)
             k = term_map[t0[i]]
@@ -509,13 +510,12 @@ def _constraint_terms(maps, constraints, q0, q1, mu, n, with_dgrad, mat, fpos):
             phi[r0] = 0.5 * (dx * dx + dy * dy - length[i] * length[i])
             for j in range(nb):
                 cq[r0, o + j] = dx * jac[0, j] + dy * jac[1, j]
-            if with_dgrad:
-                r0m = map_position(maps, k, q0[o:o + nb])
-                mx = 0.5 * (r0m[0] + r1[0]) - const[i, 0]
-                my = 0.5 * (r0m[1] + r1[1]) - const[i, 1]
-                for j in range(nb):
-                    d[r0, o + j] = mx * jac[0, j] + my * jac[1, j]
-                # ∂(μ Jᵀ(r̄ − a))/∂q1 = ½ μ JᵀJ (J constant)
+            r0m = map_position(maps, k, q0[o:o + nb])
+            mx = 0.5 * (r0m[0] + r1[0]) - const[i, 0]
+            my = 0.5 * (r0m[1] + r1[1]) - const[i, 1]
+            for j in range(nb):
+                d[r0, o + j] = mx * jac[0, j] + my * jac[1, j]
+            if with_tangent:                    # ∂(μ Jᵀ(r̄ − a))/∂q1 = ½ μ JᵀJ (J constant)
                 for a in range(nb):
                     ia = fpos[o + a]
                     if ia < 0:
@@ -664,11 +664,14 @@ def _solve(system):
 
 
 @numba.njit(cache=True)
-def _step(packed, q0, v0, p0, h, qp1, pres, free, fpos, lam0, rtol, ctol, etol, max_iterations,
+def _step(packed, work_arrays, q0, v0, p0, h, qp1, pres, free, fpos, lam0, rtol, ctol, etol, max_iterations,
           line_search):
+    """One energy-momentum step; (status, iterations, μ, Δq, q1, v1, p1, r). ``work_arrays`` (the Newton
+    residual and matrix, Δq_base, Δq, q1, v1, p1, r) are allocated once per chunk and overwritten here."""
     mass, frames, frame_off, maps, gravity, constraints, bodies = packed
     n, nf, m = q0.size, free.size, constraints[7]
-    dq_base = np.zeros(n)
+    res, mat, dq_base, dq, q1, v1, p1, r = work_arrays
+    dq_base[:] = 0.0
     for i in range(pres.size):
         dq_base[pres[i]] = qp1[i] - q0[pres[i]]
     x = np.empty(nf + m)
@@ -678,10 +681,8 @@ def _step(packed, q0, v0, p0, h, qp1, pres, free, fpos, lam0, rtol, ctol, etol, 
         x_scale = max(x_scale, abs(q0[free[i]]))
     for i in range(m):
         x[nf + i] = h * lam0[i]
-    dq, q1, v1, p1, r = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
     system = (mass, frames, frame_off, maps, gravity, constraints, q0, v0, p0, dq_base, free, fpos, h, max_abs(p0),
-              abs(0.5 * np.dot(v0, p0)), rtol, ctol, etol, np.zeros(nf + m), np.zeros((nf + m, nf + m)), dq, q1,
-              v1, p1, r)
+              abs(0.5 * np.dot(v0, p0)), rtol, ctol, etol, res, mat, dq, q1, v1, p1, r)
     state = newton_start(x, x_scale, max_iterations, line_search)
     action = EVALUATE
     while action < 0:                  # do what the Newton core asks; its rules are all in the core
@@ -723,24 +724,22 @@ def _run(packed, q, v, t, hs, qp, pres, free, fpos, lam, reaction, rtol, ctol, e
     mass, frames, frame_off, maps, gravity, constraints, bodies = packed
     n, ns, npr, m = q.size, hs.size, pres.size, constraints[7]
     n_rec = record_count(first_step, ns, record_every, n_steps)
-    rec_t = np.empty(n_rec)
-    rec_q = np.empty((n_rec, n))
-    rec_v = np.empty((n_rec, n))
-    rec_work = np.empty(n_rec)
-    rec_its = np.empty(n_rec, dtype=np.int64)
-    rec_reac = np.empty((n_rec, npr))
+    rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac = record_buffers(n_rec, n, npr)
     rec_lam = np.empty((n_rec, m))
     # T, V, p (2), L, ‖Φ‖∞, ‖Φ_q v‖∞
     rec_derived = np.empty((n_rec, 7))
     probe_maps = bodies[1]
     rec_probe = np.empty((n_rec, probe_maps.size, 2))
     its_total = 0
-    scratch = np.zeros((free.size + m, free.size + m))      # takes the unused tangent terms
+    nx = free.size + m
+    work_arrays = (np.zeros(nx), np.zeros((nx, nx)), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
+                   np.zeros(n), np.zeros(n))
+    no_tangent = np.zeros((0, 0))
     p = _scene_momentum(mass, frames, frame_off, q, v)
     i_rec = 0
     for k in range(ns):
         h = hs[k]
-        status, its, mu, dq, q1, v1, p1, r = _step(packed, q, v, p, h, qp[k], pres, free, fpos,
+        status, its, mu, dq, q1, v1, p1, r = _step(packed, work_arrays, q, v, p, h, qp[k], pres, free, fpos,
                                                    lam, rtol, ctol, etol, max_iterations, line_search)
         if status == OK and not (all_finite(q1) and all_finite(v1)):
             status = NONFINITE_RESIDUAL
@@ -752,7 +751,7 @@ def _run(packed, q, v, t, hs, qp, pres, free, fpos, lam, reaction, rtol, ctol, e
         for i in range(npr):
             reaction[i] = r[pres[i]] / h
             w += dq[pres[i]] * reaction[i]
-        phi, cq, d = _constraint_terms(maps, constraints, q, q1, mu, n, m > 0, scratch, fpos)
+        phi, cq, d = _constraint_terms(maps, constraints, q, q1, mu, n, False, no_tangent, fpos)
         if m:
             w -= np.dot(mu, d @ dq) / h          # μ = Δt λ̄: the work is −λ̄·ΔΦ
         work += w
@@ -777,9 +776,9 @@ def _run(packed, q, v, t, hs, qp, pres, free, fpos, lam, reaction, rtol, ctol, e
             rec_derived[i_rec, 5] = max_abs(phi)
             rec_derived[i_rec, 6] = max_abs(cq @ v) if m else 0.0
             for j in range(probe_maps.size):
-                k = probe_maps[j]
-                o = maps[1][k]
-                rec_probe[i_rec, j] = map_position(maps, k, q[o:o + maps[2][k]])
+                kp = probe_maps[j]
+                o = maps[1][kp]
+                rec_probe[i_rec, j] = map_position(maps, kp, q[o:o + maps[2][kp]])
             i_rec += 1
     return (OK, ns, t, q, v, lam, reaction, work, its_total, i_rec, rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac,
             rec_lam, rec_derived, rec_probe)
@@ -820,7 +819,7 @@ def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, rec
                int(first_step), int(record_every), int(n_steps))
     (status, done, t, q, v, lam, reaction, work, its_total, n_rec, rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac,
      rec_lam, rec_derived, rec_probe) = out
-    names = _PROBE_NAMES[scene]
+    names = _packed(scene)[1]
     records = [(float(rec_t[i]), rec_q[i], rec_v[i], float(rec_work[i]), int(rec_its[i]), rec_reac[i],
                 rec_derived[i], rec_lam[i], dict(zip(names, rec_probe[i]))) for i in range(n_rec)]
     return dict(status=int(status), done=int(done), t=float(t), q=q, v=v, lam=lam, reaction=reaction,

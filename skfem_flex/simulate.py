@@ -52,7 +52,7 @@ class _Recorder:
                 self.reaction_rows[k] = list(prior.reactions[k])
 
     def record(self, state, work, iterations, vres, derived=None, probes=None):
-        """Append one state. ``derived`` = (T, V, p_x, p_y, L[, ‖Φ‖∞, ‖Φ_q v‖∞]), when the caller computed
+        """Append one state. ``derived`` = (T, V, p_x, p_y, L, ‖Φ‖∞, ‖Φ_q v‖∞), when the caller computed
         them already (the compiled loops), replaces the scene's energy, momenta and constraint calls;
         ``probes`` {name: value} the probes they recorded."""
         s = self.scene
@@ -65,7 +65,7 @@ class _Recorder:
         r["kinetic"].append(s.kinetic_energy(q, v) if derived is None else float(derived[0]))
         r["potential"].append(s.potential_energy(q) if derived is None else float(derived[1]))
         r["external_work"].append(work)
-        if derived is not None and len(derived) > 5:
+        if derived is not None:
             r["constraint_residual"].append(float(derived[5]))
         else:
             r["constraint_residual"].append(float(np.max(np.abs(s.constraint_value(q, t)))) if s.n_constraints else 0.0)
@@ -322,11 +322,10 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
             if use_compiled:
                 chunk = min(1 if first and cold else loop.chunk_steps(scene), n_steps - step)
                 out = loop.run_chunk(scene, scheme, state, dt, t_end, step + 1, chunk, n_steps, record_every, work)
-                for i, (t_r, q_r, v_r, w_r, its_r, reac_r, derived, *more) in enumerate(out["records"]):
-                    s_r = State(t_r, q_r, v_r, lam=more[0] if more else np.zeros(0), prescribed_force=reac_r)
+                for i, (t_r, q_r, v_r, w_r, its_r, reac_r, derived, lam_r, probes_r) in enumerate(out["records"]):
+                    s_r = State(t_r, q_r, v_r, lam=lam_r, prescribed_force=reac_r)
                     try:
-                        recorded(s_r, w_r, its_r, float(derived[6]) if len(derived) > 6 else 0.0, derived,
-                                 more[1] if more else None)
+                        recorded(s_r, w_r, its_r, float(derived[6]), derived, probes_r)
                     except OutputError:
                         if record_every == 1 and i:   # the result ends at the last step recorded
                             state, work, step = prev, out["records"][i - 1][3], step + i
@@ -335,8 +334,7 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
                         raise
                     prev = s_r
                 if out["done"]:
-                    state = State(out["t"], out["q"], out["v"], lam=out.get("lam", np.zeros(0)),
-                                  prescribed_force=out["reaction"])
+                    state = State(out["t"], out["q"], out["v"], lam=out["lam"], prescribed_force=out["reaction"])
                     work = out["work"]
                     step += out["done"]
                     advanced(out["done"], out["iterations"])
