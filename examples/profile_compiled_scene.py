@@ -43,19 +43,12 @@ def main(argv=None):
     scene = factory(**kw)
     if not cs.eligible(scene, sf.EnergyMomentum()):
         raise SystemExit(f"{args.scene} does not run on the compiled mechanism loop")
-    packed = cs.pack(scene)
-    mass, frames, frame_off, maps, gravity, constraints, _ = packed
     n, m = scene.n, scene.n_constraints
-    free = scene.free_index.astype(np.int64)
+    free = scene.free_index
     q0 = np.concatenate([np.asarray(b.q0, dtype=float) for b in scene.bodies])
     v0 = np.concatenate([np.asarray(b.v0, dtype=float) for b in scene.bodies]) + 0.01
-    p0 = cs._scene_momentum(mass, frames, frame_off, q0, v0)
     h = args.dt
-    system = (mass, frames, frame_off, maps, gravity, constraints, q0, v0, p0, np.zeros(n), free,
-              cs._free_positions(scene), h, 1.0, 1.0, 1e-12, 1e-12, 1e-14, np.zeros(free.size + m),
-              np.zeros((free.size + m, free.size + m)), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
-              np.zeros(n))
-    x = np.concatenate([h * v0[free], np.zeros(m)])
+    system, x = cs.newton_system(scene, q0, v0, h)
     _evaluations(system, x, 1)
     _solves(system, 1)
     start = time.perf_counter()

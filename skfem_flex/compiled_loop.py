@@ -374,11 +374,12 @@ def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, rec
         ``status`` (OK or the failure code of the step after the completed ones), ``done``
         (steps completed), ``t, q, v, reaction`` (state after them; ``reaction`` is the mean
         generalized force of the prescribed laws over the last step), ``work`` (accumulated),
-        ``iterations`` (Newton iterations summed over the completed steps) and ``records``, a
-        list of (t, q, v, work, iterations, reaction, derived, λ, probes) of the recorded steps,
-        ``derived`` = (kinetic energy J, strain energy J, linear momentum (2) kg m/s, angular momentum
-        about the origin kg m²/s, ‖Φ‖∞, ‖Φ_q v‖∞), computed in the loop; λ empty and ``probes`` {}
-        (the form :func:`skfem_flex.compiled_scene.run_chunk` shares).
+        ``iterations`` (Newton iterations summed over the completed steps) and ``records``, the
+        recorded steps as arrays with one row per record: dict(t, q, v, work, iterations, reaction,
+        derived, lam, probes), ``derived`` = (kinetic energy J, strain energy J, linear momentum (2)
+        kg m/s, angular momentum about the origin kg m²/s, ‖Φ‖∞, ‖Φ_q v‖∞), computed in the loop;
+        λ with no columns and ``probes`` {} (the form :func:`skfem_flex.compiled_scene.run_chunk`
+        shares).
     """
     body = scene.bodies[0]
     s = scheme.newton
@@ -394,8 +395,10 @@ def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, rec
     # the records of both compiled loops have one form: no constraints here (‖Φ‖ = ‖Φ_q v‖ = 0, no λ)
     # and no probe evaluated in the loop
     no_lam = np.zeros(0)
-    records = [(float(rec_t[i]), rec_q[i], rec_v[i], float(rec_work[i]), int(rec_its[i]), rec_reac[i],
-                np.concatenate([rec_derived[i], [0.0, 0.0]]), no_lam, {})
-               for i in range(n_rec)]
+    derived = np.zeros((n_rec, 7))
+    derived[:, :5] = rec_derived[:n_rec]
+    records = dict(t=rec_t[:n_rec], q=rec_q[:n_rec], v=rec_v[:n_rec], work=rec_work[:n_rec],
+                   iterations=rec_its[:n_rec], reaction=rec_reac[:n_rec], derived=derived,
+                   lam=np.zeros((n_rec, 0)), probes={})
     return dict(status=int(status), done=int(done), t=float(t), q=q, v=v, lam=no_lam, reaction=reaction,
                 work=float(work), iterations=int(its_total), records=records)

@@ -44,16 +44,17 @@ from .newton import (CONVERGED, EVALUATE, NONFINITE_RESIDUAL, all_finite, max_ab
                      newton_start, roundoff_floor)
 from .scene import Scene
 
-__all__ = ["run_loop", "eligible", "run_chunk", "chunk_steps", "pack", "pack_maps", "map_position", "map_jacobian", "map_dgrad",
-           "map_dgrad_jacobian", "LINEAR", "FRAME", "POINTS", "DISTANCE", "OK"]
+__all__ = ["run_loop", "eligible", "run_chunk", "chunk_steps", "pack", "pack_maps", "time_table", "newton_system", "map_position", "map_jacobian", "map_dgrad",
+           "map_dgrad_jacobian", "map_hessian_product", "LINEAR", "FRAME", "POINTS", "DISTANCE", "OK"]
 
 _TINY = 1e-300
 #: status of :func:`run_chunk` when every step was done
 OK = CONVERGED
 #: kinds of position maps
 LINEAR, FRAME = 0, 1
-#: kinds of constraints
-POINTS, DISTANCE = 0, 1
+#: kinds of constraint blocks: Σ sign r(point) − c (2 rows), its projection on a constant normal
+#: (1 row), g · q + c − x(t) (1 row), ½(|r − a|² − l²) (1 row)
+POINTS, PROJECTED, LINEAR_ROW, DISTANCE = 0, 1, 2, 3
 
 
 
@@ -194,6 +195,40 @@ def map_dgrad_jacobian(maps, k, q0, q1, f):
 
 
 @numba.njit(cache=True)
+def _add_hessian_product(maps, k, q, f, scale, mat, fpos):
+    """mat[F, F] += scale · ∂(Jᵀ f)/∂q of map k at the body block q (f fixed, (2,)); zero for LINEAR maps.
+
+    FRAME: the (θ, θ) entry −f · A s and the (θ, q_f) entries f · A E Y_j, symmetric."""
+    if maps[0][k] == LINEAR:
+        return
+    kind, off, nb, m_r, c, y0, gdat, gptr, ydat, yptr = maps
+    o, ne, y = off[k], nb[k] - 3, yptr[k]
+    sx, sy = _frame_offset(maps, k, q, q)
+    C, S = np.cos(q[2]), np.sin(q[2])
+    fax = f[0] * C + f[1] * S              # Aᵀ f
+    fay = -f[0] * S + f[1] * C
+    i2 = fpos[o + 2]
+    if i2 < 0:
+        return
+    mat[i2, i2] -= scale * (fax * sx + fay * sy)
+    for j in range(ne):
+        ij = fpos[o + 3 + j]
+        if ij >= 0:
+            val = scale * (fay * ydat[y + j] - fax * ydat[y + ne + j])   # (Aᵀf) · E Y_j
+            mat[i2, ij] += val
+            mat[ij, i2] += val
+
+
+@numba.njit(cache=True)
+def map_hessian_product(maps, k, q, f):
+    """∂(Jᵀ f)/∂q (nb, nb) of map k at a fixed vector f (2,), for a map on its own block (offset 0)."""
+    n = maps[2][k]
+    h = np.zeros((n, n))
+    _add_hessian_product(maps, k, q, f, 1.0, h, np.arange(n))
+    return h
+
+
+@numba.njit(cache=True)
 def _add_dgrad_jacobian(maps, k, q0, q1, f, scale, mat, fpos, floor):
     """mat[F, F] += scale · ∂(Dᵀ f)/∂q1 of map k, and, if ``floor`` is not empty, its round-off floor
     |scale ∂(Dᵀf)/∂q1| (|q0| + |q1|) added to floor[o:o + nb] (the body's block; q0, q1 are the block's)."""
@@ -297,7 +332,9 @@ def pack(scene):
 
 
 def _packed(scene):
-    """(packed scene or None, names of the probes the loop records), built once per scene."""
+    """(packed scene or None, names of the probes the loop records, the time table's columns), built once
+    per scene. A column is ("end" or "mid", function of time, component): evaluated at each step's end
+    time (motion laws of drivers: position and velocity) or mid time (loads)."""
     hit = _PACKS.get(scene)
     if hit is None:
         hit = _PACKS[scene] = _pack(scene)
@@ -306,7 +343,7 @@ def _packed(scene):
 
 def _pack(scene):
     if type(scene) is not Scene or not scene.dense or len(getattr(scene, "cayley_index", ())):
-        return None, ()
+        return None, (), ()
     n = scene.n
     store = {k: [] for k in ("kind", "off", "nb", "m_r", "c", "y0", "g", "gptr", "y", "yptr")}
     mass = np.zeros((n, n))
@@ -320,7 +357,7 @@ def _pack(scene):
         if kd is not None:
             moment = _call(b, "mass_moment_map")
             if moment is None:
-                return None, ()
+                return None, (), ()
             frames.append(kd)
             frame_off.append(off)
             first_moment[id(b)] = ("frame", moment[0], moment[1], moment[2])
@@ -328,59 +365,122 @@ def _pack(scene):
             try:
                 gam, c = b.mass_moment()
             except NotImplementedError:
-                return None, ()
+                return None, (), ()
             mass[sl, sl] = np.asarray(b.mass_matrix(np.asarray(b.q0, dtype=float)), dtype=float)
             first_moment[id(b)] = ("linear", gam, c)
         else:
-            return None, ()
+            return None, (), ()
         # the loop's momenta: p_lin = p[R], L = R × p[R] + p[θ] (R = q[0:2], θ = q[2] where present);
         # a body that defines them otherwise runs in Python
         if not _momentum_convention_holds(b, kd, rng):
-            return None, ()
+            return None, (), ()
         body_layout.append((off, nb))
+    # force elements; functions of time become columns of the chunk's time table
+    table = []
+    force_index = {id(f): i for f, i in scene.conservative_forces + scene.loads}
     grav_maps, grav_g = [], []
+    spr_idx, spr_k, spr_p = [], [], []
+    pf_map, pf_col = [], []
+    gf_ptr, gf_idx, gf_coef, gf_col = [0], [], [], []
     for f in scene.forces:
         form = _call(f, "compiled_form")
-        if form is None or form[0] != "gravity":
-            return None, ()
-        for b in (f.bodies if f.bodies is not None else scene.bodies):
-            sl = scene.slice(b)
-            grav_maps.append(_map_of(first_moment[id(b)], sl.start, sl.stop - sl.start, store))
-            grav_g.append(np.asarray(form[1], dtype=float))
+        if form is None:
+            return None, (), ()
+        idx = np.asarray(force_index[id(f)], dtype=np.int64)
+        if form[0] == "gravity":
+            for b in (f.bodies if f.bodies is not None else scene.bodies):
+                sl = scene.slice(b)
+                grav_maps.append(_map_of(first_moment[id(b)], sl.start, sl.stop - sl.start, store))
+                grav_g.append(np.asarray(form[1], dtype=float))
+        elif form[0] == "coordinate spring":
+            _, i, k, power = form
+            spr_idx.append(int(idx[i]))
+            spr_k.append(float(k))
+            spr_p.append(int(power))
+        elif form[0] == "point force":
+            _, point, fun = form
+            cm = _call(point, "compiled_map")
+            if cm is None:
+                return None, (), ()
+            sl = scene.slice(point.body)
+            pf_map.append(_map_of(cm, sl.start, sl.stop - sl.start, store))
+            pf_col.append(len(table))
+            table += [("mid", fun, 0), ("mid", fun, 1)]
+        elif form[0] == "generalized force":
+            _, grad, fun = form
+            grad = np.asarray(grad, dtype=float)
+            nz = np.flatnonzero(grad)
+            gf_idx.extend(idx[nz])
+            gf_coef.extend(grad[nz])
+            gf_ptr.append(len(gf_idx))
+            gf_col.append(len(table))
+            table.append(("mid", fun, 0))
+        else:
+            return None, (), ()
+    # constraints: blocks of rows (module docstring)
     con_kind, con_row, con_t0, term_map, term_sign, con_c, con_len = [], [], [], [], [], [], []
+    con_l0, lin_idx, lin_coef, con_nrm, con_law = [], [], [], [], []
     probe_names = []
+
+    def add_points(points_form):
+        _, terms, const = points_form
+        for point, sign in terms:
+            cm = _call(point, "compiled_map")
+            if cm is None:
+                return None
+            sl = scene.slice(point.body)
+            term_map.append(_map_of(cm, sl.start, sl.stop - sl.start, store))
+            term_sign.append(float(sign))
+        return np.asarray(const, dtype=float).reshape(2)
+
     for c, (idx, rows) in zip(scene.constraints, scene.constraint_layout):
         form = _call(c, "compiled_form")
         if form is None:
-            return None, ()
-        con_row.append(int(rows[0]))
-        con_t0.append(len(term_map))
-        if form[0] == "points":
-            _, terms, const = form
-            con_kind.append(POINTS)
-            con_c.append(np.asarray(const, dtype=float).reshape(2))
-            con_len.append(0.0)
-            for point, sign in terms:
+            return None, (), ()
+        blocks = form[1] if form[0] == "rows" else [(form, None)]
+        r = int(rows[0])
+        for term, law in blocks:
+            con_row.append(r)
+            con_t0.append(len(term_map))
+            con_l0.append(len(lin_idx))
+            nrm, const, length, col = np.zeros(2), np.zeros(2), 0.0, -1
+            if law is not None and term[0] != "linear":
+                return None, (), ()
+            if term[0] == "points":
+                kind, const = POINTS, add_points(term)
+            elif term[0] == "projected":
+                kind, nrm, const = PROJECTED, np.asarray(term[1], dtype=float).reshape(2), add_points(term[2])
+            elif term[0] == "linear":
+                kind = LINEAR_ROW
+                grad = np.asarray(term[1], dtype=float)
+                nz = np.flatnonzero(grad)
+                lin_idx.extend(np.asarray(idx)[nz])
+                lin_coef.extend(grad[nz])
+                const = np.array([float(term[2]), 0.0])
+                if law is not None:
+                    col = len(table)
+                    table += [("end", law.position, 0), ("end", law.velocity, 0)]
+            elif term[0] == "distance":
+                _, point, anchor, length = term
                 cm = _call(point, "compiled_map")
-                if cm is None:
-                    return None, ()
+                if cm is None or cm[0] != "linear":
+                    return None, (), ()
                 sl = scene.slice(point.body)
+                kind, const, length = DISTANCE, np.asarray(anchor, dtype=float).reshape(2), float(length)
                 term_map.append(_map_of(cm, sl.start, sl.stop - sl.start, store))
-                term_sign.append(float(sign))
-        elif form[0] == "distance":
-            _, point, anchor, length = form
-            cm = _call(point, "compiled_map")
-            if cm is None or cm[0] != "linear":
-                return None, ()
-            sl = scene.slice(point.body)
-            con_kind.append(DISTANCE)
-            con_c.append(np.asarray(anchor, dtype=float).reshape(2))
-            con_len.append(float(length))
-            term_map.append(_map_of(cm, sl.start, sl.stop - sl.start, store))
-            term_sign.append(1.0)
-        else:
-            return None, ()
+                term_sign.append(1.0)
+            else:
+                return None, (), ()
+            if const is None:
+                return None, (), ()
+            con_kind.append(kind)
+            con_c.append(const)
+            con_nrm.append(nrm)
+            con_len.append(length)
+            con_law.append(col)
+            r += 2 if kind == POINTS else 1
     con_t0.append(len(term_map))
+    con_l0.append(len(lin_idx))
     nc = len(con_kind)
     # probes with a position map are recorded by the loop; the others are called in Python
     probe_maps = []
@@ -397,14 +497,21 @@ def _pack(scene):
     constraints = (np.asarray(con_kind, dtype=np.int64), np.asarray(con_row, dtype=np.int64),
                    np.asarray(con_t0, dtype=np.int64), np.asarray(term_map, dtype=np.int64),
                    np.asarray(term_sign, dtype=float), np.asarray(con_c, dtype=float).reshape(nc, 2),
-                   np.asarray(con_len, dtype=float), int(scene.n_constraints), float(scene.length_scale))
+                   np.asarray(con_len, dtype=float), int(scene.n_constraints), float(scene.length_scale),
+                   np.asarray(con_l0, dtype=np.int64), np.asarray(lin_idx, dtype=np.int64),
+                   np.asarray(lin_coef, dtype=float), np.asarray(con_nrm, dtype=float).reshape(nc, 2),
+                   np.asarray(con_law, dtype=np.int64))
+    loads = (np.asarray(spr_idx, dtype=np.int64), np.asarray(spr_k, dtype=float), np.asarray(spr_p, dtype=np.int64),
+             np.asarray(pf_map, dtype=np.int64), np.asarray(pf_col, dtype=np.int64),
+             np.asarray(gf_ptr, dtype=np.int64), np.asarray(gf_idx, dtype=np.int64), np.asarray(gf_coef, dtype=float),
+             np.asarray(gf_col, dtype=np.int64))
     bodies = np.asarray(body_layout, dtype=np.int64).reshape(len(body_layout), 2)
     bodies = (bodies, np.asarray(probe_maps, dtype=np.int64))
     mass = sps.csr_matrix(mass)
     mass.sort_indices()
     mass = (mass.indptr.astype(np.int64), mass.indices.astype(np.int64), mass.data.astype(float))
     return (mass, tuple(frames) if frames else None, np.asarray(frame_off, dtype=np.int64), maps, gravity,
-            constraints, bodies), tuple(probe_names)
+            constraints, bodies, loads), tuple(probe_names), tuple(table)
 
 
 def _momentum_convention_holds(body, kd, rng):
@@ -468,38 +575,60 @@ def _scene_momentum(mass, frames, frame_off, q, v):
 
 
 @numba.njit(cache=True)
-def _constraint_terms(maps, constraints, q0, q1, mu, n, with_tangent, mat, fpos):
-    """Φ(q1) (m), Φ_q(q1) (m × n) and D (m × n); if ``with_tangent``, ∂(Dᵀμ)/∂q1 is added to ``mat``
-    (the Newton matrix; after a step only D is needed, for the work)."""
-    kind, row, t0, term_map, term_sign, const, length, m, _ = constraints
+def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, with_tangent, mat, fpos):
+    """Φ(q1, t1) (m), Φ_q(q1) (m × n), D (m × n) and Φ_t (m); if ``with_tangent``, ∂(Dᵀμ)/∂q1 is added
+    to ``mat`` (the Newton matrix; after a step only D is needed, for the work). ``trow`` is the
+    step's row of the time table (drivers' x(t1), ẋ(t1))."""
+    kind, row, t0, term_map, term_sign, const, length, m, _, l0, lin_idx, lin_coef, nrm, law = constraints
     nb_, off_ = maps[2], maps[1]
     phi = np.zeros(m)
+    phi_t = np.zeros(m)
     cq = np.zeros((m, n))
     d = np.zeros((m, n))
     f = np.empty(2)
+    acc = np.empty(2)
     for i in range(kind.size):
         r0 = row[i]
-        if kind[i] == POINTS:
-            for a in range(2):
-                phi[r0 + a] = -const[i, a]
+        if kind[i] == POINTS or kind[i] == PROJECTED:
+            proj = kind[i] == PROJECTED
+            acc[0], acc[1] = -const[i, 0], -const[i, 1]
             for t in range(t0[i], t0[i + 1]):
                 k, s = term_map[t], term_sign[t]
                 o, nb = off_[k], nb_[k]
                 qb1 = q1[o:o + nb]
                 r = map_position(maps, k, qb1)
                 jac = map_jacobian(maps, k, qb1)
-                for a in range(2):
-                    phi[r0 + a] += s * r[a]
-                    for j in range(nb):
-                        cq[r0 + a, o + j] += s * jac[a, j]
                 qb0 = q0[o:o + nb]
                 dk = map_dgrad(maps, k, qb0, qb1)
-                for a in range(2):
-                    f[a] = s * mu[r0 + a]
+                acc[0] += s * r[0]
+                acc[1] += s * r[1]
+                if proj:                    # one row: nrm · (Σ s r − c)
                     for j in range(nb):
-                        d[r0 + a, o + j] += s * dk[a, j]
+                        cq[r0, o + j] += s * (nrm[i, 0] * jac[0, j] + nrm[i, 1] * jac[1, j])
+                        d[r0, o + j] += s * (nrm[i, 0] * dk[0, j] + nrm[i, 1] * dk[1, j])
+                    f[0], f[1] = s * nrm[i, 0] * mu[r0], s * nrm[i, 1] * mu[r0]
+                else:
+                    for a in range(2):
+                        f[a] = s * mu[r0 + a]
+                        for j in range(nb):
+                            cq[r0 + a, o + j] += s * jac[a, j]
+                            d[r0 + a, o + j] += s * dk[a, j]
                 if with_tangent:
                     _add_dgrad_jacobian(maps, k, qb0, qb1, f, 1.0, mat, fpos, np.zeros(0))
+            if proj:
+                phi[r0] = nrm[i, 0] * acc[0] + nrm[i, 1] * acc[1]
+            else:
+                phi[r0], phi[r0 + 1] = acc[0], acc[1]
+        elif kind[i] == LINEAR_ROW:               # g · q + c − x(t1): D = Φ_q = g
+            val = const[i, 0]
+            for t in range(l0[i], l0[i + 1]):
+                val += lin_coef[t] * q1[lin_idx[t]]
+                cq[r0, lin_idx[t]] += lin_coef[t]
+                d[r0, lin_idx[t]] += lin_coef[t]
+            if law[i] >= 0:
+                val -= trow[law[i]]
+                phi_t[r0] = -trow[law[i] + 1]
+            phi[r0] = val
         else:                                   # DISTANCE on a linear map: Φ = ½(|r − a|² − l²)
             k = term_map[t0[i]]
             o, nb = off_[k], nb_[k]
@@ -524,7 +653,42 @@ def _constraint_terms(maps, constraints, q0, q1, mu, n, with_tangent, mat, fpos)
                         jb = fpos[o + j]
                         if jb >= 0:
                             mat[ia, jb] += 0.5 * mu[r0] * (jac[0, a] * jac[0, j] + jac[1, a] * jac[1, j])
-    return phi, cq, d
+    return phi, cq, d, phi_t
+
+
+@numba.njit(cache=True)
+def _add_loads(maps, loads, q0, q1, dq, trow, h, gp, ext, floor, mat, fpos):
+    """Coordinate springs (their discrete gradient into ``gp``, tangent and round-off floor) and the
+    loads at the mid-point (Q(q0 + Δq/2, t_m) into ``ext``, −(Δt/2) ∂Q/∂q into ``mat``)."""
+    spr_idx, spr_k, spr_p, pf_map, pf_col, gf_ptr, gf_idx, gf_coef, gf_col = loads
+    for j in range(spr_idx.size):           # V = ½ k u^p: exact divided difference, no cancellation
+        i, p = spr_idx[j], spr_p[j]
+        u0, u1 = q0[i], q1[i]
+        g, tan = 0.0, 0.0
+        for a in range(p):
+            g += u1 ** a * u0 ** (p - 1 - a)
+            if a >= 1:
+                tan += a * u1 ** (a - 1) * u0 ** (p - 1 - a)
+        gp[i] += 0.5 * spr_k[j] * g
+        tan *= 0.5 * spr_k[j] * h
+        ia = fpos[i]
+        if ia >= 0:
+            mat[ia, ia] += tan
+        floor[i] += abs(tan) * (abs(u0) + abs(u1))
+    f = np.empty(2)
+    for j in range(pf_map.size):
+        k = pf_map[j]
+        o, nb = maps[1][k], maps[2][k]
+        qm = q0[o:o + nb] + 0.5 * dq[o:o + nb]
+        jac = map_jacobian(maps, k, qm)
+        f[0], f[1] = trow[pf_col[j]], trow[pf_col[j] + 1]
+        for a in range(nb):
+            ext[o + a] += jac[0, a] * f[0] + jac[1, a] * f[1]
+        _add_hessian_product(maps, k, qm, f, -0.5 * h, mat, fpos)
+    for j in range(gf_col.size):
+        val = trow[gf_col[j]]
+        for t in range(gf_ptr[j], gf_ptr[j + 1]):
+            ext[gf_idx[t]] += gf_coef[t] * val
 
 
 @numba.njit(cache=True)
@@ -570,7 +734,7 @@ def _evaluate(system, x):
     """``evaluate`` of the Newton core: EnergyMomentum.step's residual on the packed scene, its Newton
     matrix [[J_FF, D_Fᵀ], [Φ_q,F, 0]] assembled in place."""
     (mass, frames, frame_off, maps, gravity, constraints, q0, v0, p0, dq_base, free, fpos, h, p0_inf, e_scale0,
-     rtol, ctol, etol, res, mat, dq, q1, v1, p1, r) = system
+     rtol, ctol, etol, res, mat, dq, q1, v1, p1, r, loads, trow, ext) = system
     n, nf = q0.size, free.size
     m = constraints[7]
     mu = x[nf:]
@@ -610,14 +774,16 @@ def _evaluate(system, x):
         for j in range(nb):
             gp[o + j] += f[0] * dk[0, j] + f[1] * dk[1, j]
         _add_dgrad_jacobian(maps, k, qb0, qb1, f, h, mat, fpos, floor)
+    ext[:] = 0.0
+    _add_loads(maps, loads, q0, q1, dq, trow, h, gp, ext, floor, mat, fpos)
     kin1 = 0.5 * np.dot(v1, p1)
     scale = max(max_abs(p1), p0_inf)
-    scale = max(scale, h * max_abs(gk), h * max_abs(gp))
+    scale = max(scale, h * max_abs(gk), h * max_abs(gp), h * max_abs(ext))
     for i in range(n):
-        r[i] = p1[i] - p0[i] + h * gp[i] - h * gk[i]
+        r[i] = p1[i] - p0[i] + h * gp[i] - h * gk[i] - h * ext[i]
     err_c = 0.0
     if m:
-        phi, cq, d = _constraint_terms(maps, constraints, q0, q1, mu, n, True, mat, fpos)
+        phi, cq, d, _ = _constraint_terms(maps, constraints, q0, q1, mu, trow, n, True, mat, fpos)
         dtmu = d.T @ mu
         r += dtmu
         scale = max(scale, max_abs(dtmu))
@@ -664,13 +830,14 @@ def _solve(system):
 
 
 @numba.njit(cache=True)
-def _step(packed, work_arrays, q0, v0, p0, h, qp1, pres, free, fpos, lam0, rtol, ctol, etol, max_iterations,
+def _step(packed, work_arrays, q0, v0, p0, h, qp1, trow, pres, free, fpos, lam0, rtol, ctol, etol, max_iterations,
           line_search):
-    """One energy-momentum step; (status, iterations, μ, Δq, q1, v1, p1, r). ``work_arrays`` (the Newton
-    residual and matrix, Δq_base, Δq, q1, v1, p1, r) are allocated once per chunk and overwritten here."""
-    mass, frames, frame_off, maps, gravity, constraints, bodies = packed
+    """One energy-momentum step; (status, iterations, μ, Δq, q1, v1, p1, r, Q). ``work_arrays`` (the Newton
+    residual and matrix, Δq_base, Δq, q1, v1, p1, r, Q) are allocated once per chunk and overwritten here;
+    ``trow`` is the step's row of the time table."""
+    mass, frames, frame_off, maps, gravity, constraints, bodies, loads = packed
     n, nf, m = q0.size, free.size, constraints[7]
-    res, mat, dq_base, dq, q1, v1, p1, r = work_arrays
+    res, mat, dq_base, dq, q1, v1, p1, r, ext = work_arrays
     dq_base[:] = 0.0
     for i in range(pres.size):
         dq_base[pres[i]] = qp1[i] - q0[pres[i]]
@@ -682,7 +849,7 @@ def _step(packed, work_arrays, q0, v0, p0, h, qp1, pres, free, fpos, lam0, rtol,
     for i in range(m):
         x[nf + i] = h * lam0[i]
     system = (mass, frames, frame_off, maps, gravity, constraints, q0, v0, p0, dq_base, free, fpos, h, max_abs(p0),
-              abs(0.5 * np.dot(v0, p0)), rtol, ctol, etol, res, mat, dq, q1, v1, p1, r)
+              abs(0.5 * np.dot(v0, p0)), rtol, ctol, etol, res, mat, dq, q1, v1, p1, r, loads, trow, ext)
     state = newton_start(x, x_scale, max_iterations, line_search)
     action = EVALUATE
     while action < 0:                  # do what the Newton core asks; its rules are all in the core
@@ -691,14 +858,17 @@ def _step(packed, work_arrays, q0, v0, p0, h, qp1, pres, free, fpos, lam0, rtol,
         else:
             y, regular = _solve(system)
             action = newton_solved(state, y, regular)
-    return action, state[4][0], state[0][nf:].copy(), dq, q1, v1, p1, r
+    return action, state[4][0], state[0][nf:].copy(), dq, q1, v1, p1, r, ext
 
 
 @numba.njit(cache=True)
 def _derived(packed, q, v, p):
     """(T, V, p_x, p_y, L about the origin) of the scene at (q, v) with momentum p."""
-    mass, frames, frame_off, maps, gravity, constraints, bodies = packed
+    mass, frames, frame_off, maps, gravity, constraints, bodies, loads = packed
     pot = _frame_strain_energy(frames, frame_off, q)
+    spr_idx, spr_k, spr_p = loads[0], loads[1], loads[2]
+    for j in range(spr_idx.size):
+        pot += 0.5 * spr_k[j] * q[spr_idx[j]] ** spr_p[j]
     gmaps, gvec = gravity
     for i in range(gmaps.size):
         k = gmaps[i]
@@ -719,9 +889,9 @@ def _derived(packed, q, v, p):
 
 
 @numba.njit(cache=True)
-def _run(packed, q, v, t, hs, qp, pres, free, fpos, lam, reaction, rtol, ctol, etol, max_iterations,
+def _run(packed, q, v, t, hs, qp, table, pres, free, fpos, lam, reaction, rtol, ctol, etol, max_iterations,
          line_search, work, first_step, record_every, n_steps):
-    mass, frames, frame_off, maps, gravity, constraints, bodies = packed
+    mass, frames, frame_off, maps, gravity, constraints, bodies, loads = packed
     n, ns, npr, m = q.size, hs.size, pres.size, constraints[7]
     n_rec = record_count(first_step, ns, record_every, n_steps)
     rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac = record_buffers(n_rec, n, npr)
@@ -733,25 +903,25 @@ def _run(packed, q, v, t, hs, qp, pres, free, fpos, lam, reaction, rtol, ctol, e
     its_total = 0
     nx = free.size + m
     work_arrays = (np.zeros(nx), np.zeros((nx, nx)), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
-                   np.zeros(n), np.zeros(n))
+                   np.zeros(n), np.zeros(n), np.zeros(n))
     no_tangent = np.zeros((0, 0))
     p = _scene_momentum(mass, frames, frame_off, q, v)
     i_rec = 0
     for k in range(ns):
         h = hs[k]
-        status, its, mu, dq, q1, v1, p1, r = _step(packed, work_arrays, q, v, p, h, qp[k], pres, free, fpos,
-                                                   lam, rtol, ctol, etol, max_iterations, line_search)
+        status, its, mu, dq, q1, v1, p1, r, ext = _step(packed, work_arrays, q, v, p, h, qp[k], table[k], pres, free,
+                                                        fpos, lam, rtol, ctol, etol, max_iterations, line_search)
         if status == OK and not (all_finite(q1) and all_finite(v1)):
             status = NONFINITE_RESIDUAL
         if status != OK:
             return (status, k, t, q, v, lam, reaction, work, its_total, i_rec, rec_t, rec_q, rec_v, rec_work, rec_its,
                     rec_reac, rec_lam, rec_derived, rec_probe)
-        w = 0.0
+        w = np.dot(dq, ext)
         reaction = np.empty(npr)
         for i in range(npr):
             reaction[i] = r[pres[i]] / h
             w += dq[pres[i]] * reaction[i]
-        phi, cq, d = _constraint_terms(maps, constraints, q, q1, mu, n, False, no_tangent, fpos)
+        phi, cq, d, phi_t = _constraint_terms(maps, constraints, q, q1, mu, table[k], n, False, no_tangent, fpos)
         if m:
             w -= np.dot(mu, d @ dq) / h          # μ = Δt λ̄: the work is −λ̄·ΔΦ
         work += w
@@ -774,7 +944,7 @@ def _run(packed, q, v, t, hs, qp, pres, free, fpos, lam, reaction, rtol, ctol, e
             rec_derived[i_rec, 3] = py
             rec_derived[i_rec, 4] = ang
             rec_derived[i_rec, 5] = max_abs(phi)
-            rec_derived[i_rec, 6] = max_abs(cq @ v) if m else 0.0
+            rec_derived[i_rec, 6] = max_abs(cq @ v + phi_t) if m else 0.0
             for j in range(probe_maps.size):
                 kp = probe_maps[j]
                 o = maps[1][kp]
@@ -784,11 +954,63 @@ def _run(packed, q, v, t, hs, qp, pres, free, fpos, lam, reaction, rtol, ctol, e
             rec_lam, rec_derived, rec_probe)
 
 
+def time_table(columns, t, hs):
+    """The functions of time the loop needs, evaluated in Python for a chunk of steps from time ``t`` (s)
+    with sizes ``hs``: row k, column c is ``fun(t_k+1)[comp]`` ("end": drivers' motion laws, as the
+    Python step evaluates Φ(q1, t1)) or ``fun(t_k + h_k/2)[comp]`` ("mid": loads at the mid-point)."""
+    table = np.zeros((hs.size, max(len(columns), 1)))
+    if not columns:
+        return table
+    for k in range(hs.size):
+        t1 = t + hs[k]
+        tm = t + 0.5 * hs[k]
+        cache = {}
+        for c, (when, fun, comp) in enumerate(columns):
+            key = (id(fun), when)
+            if key not in cache:
+                cache[key] = np.atleast_1d(np.asarray(fun(t1 if when == "end" else tm), dtype=float))
+            table[k, c] = cache[key][comp]
+        t = t1
+    return table
+
+
 def _free_positions(scene):
     """fpos[i] = position of coordinate i among the free ones, −1 for a prescribed one."""
     fpos = -np.ones(scene.n, dtype=np.int64)
     fpos[scene.free_index] = np.arange(scene.free_index.size)
     return fpos
+
+
+def newton_system(scene, q0, v0, h, t=0.0, lam=None):
+    """The Newton system of one step from (q0, v0) at time ``t`` (s) with step ``h`` (s), as the loop's
+    ``_evaluate`` and ``_solve`` take it (for profiling and tests of the linear solve); the Newton
+    unknowns start at (h v0 on the free coordinates, h λ).
+
+    Returns
+    -------
+    system : tuple
+        ``system[18]`` is the residual and ``system[19]`` the bordered Newton matrix after an evaluation.
+    x0 : ndarray
+        The start of the Newton iteration.
+    """
+    packed = pack(scene)
+    if packed is None:
+        raise ValueError(f"scene {scene.name!r} has a part without a compiled form (see compiled_scene.eligible)")
+    mass, frames, frame_off, maps, gravity, constraints, bodies, loads = packed
+    n, m = scene.n, scene.n_constraints
+    q0, v0 = np.asarray(q0, dtype=float), np.asarray(v0, dtype=float)
+    free = scene.free_index.astype(np.int64)
+    p0 = _scene_momentum(mass, frames, frame_off, q0, v0)
+    trow = time_table(_packed(scene)[2], float(t), np.array([float(h)]))[0]
+    dq_base = np.zeros(n)
+    if scene.prescribed_index.size:
+        dq_base[scene.prescribed_index] = scene.prescribed_state(t + h)[0] - q0[scene.prescribed_index]
+    nx = free.size + m
+    system = (mass, frames, frame_off, maps, gravity, constraints, q0, v0, p0, dq_base, free, _free_positions(scene),
+              float(h), max_abs(p0), abs(0.5 * float(v0 @ p0)), 1e-12, 1e-12, 1e-14, np.zeros(nx), np.zeros((nx, nx)),
+              np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), loads, trow, np.zeros(n))
+    lam = np.zeros(m) if lam is None else np.asarray(lam, dtype=float)
+    return system, np.concatenate([h * v0[free], h * lam])
 
 
 #: the compiled loop itself (what a cold cache compiles first)
@@ -798,21 +1020,23 @@ run_loop = _run
 def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, record_every, work):
     """Run steps ``first_step … first_step + n_chunk − 1`` through the compiled loop.
 
-    As :func:`skfem_flex.compiled_loop.run_chunk`; the records are (t, q, v, work, iterations,
-    reaction, derived, λ, probes), ``derived`` = (T, V, p_x, p_y, L, ‖Φ‖∞, ‖Φ_q v‖∞), ``probes`` the
-    values of the probes with a position map ({name: (2,)}), and the result also holds ``lam``
+    As :func:`skfem_flex.compiled_loop.run_chunk`; the records are arrays, one row per recorded
+    step: dict(t, q, v, work, iterations, reaction, derived, lam, probes), ``derived`` = (T, V, p_x,
+    p_y, L, ‖Φ‖∞, ‖Φ_q v + Φ_t‖∞), ``lam`` the multipliers (mean over each step), ``probes`` the
+    values of the probes with a position map ({name: (n_rec, 2)}); the result also holds ``lam``
     (the multipliers, mean over the last step).
     """
     s = scheme.newton
     packed = pack(scene)
     hs, qp = chunk_schedule(scene, state.t, dt, t_end, first_step, n_chunk, n_steps)
+    table = time_table(_packed(scene)[2], float(state.t), hs)
     m = scene.n_constraints
     lam = np.asarray(state.lam, dtype=float) if np.size(state.lam) == m else np.zeros(m)
     npr = scene.prescribed_index.size
     reaction = (np.asarray(state.prescribed_force, dtype=float) if np.size(state.prescribed_force) == npr
                 else np.zeros(npr))
     out = _run(packed, np.ascontiguousarray(state.q, dtype=float),
-               np.ascontiguousarray(state.v, dtype=float), float(state.t), hs, qp,
+               np.ascontiguousarray(state.v, dtype=float), float(state.t), hs, qp, table,
                scene.prescribed_index.astype(np.int64), scene.free_index.astype(np.int64), _free_positions(scene),
                lam, reaction,
                float(s.rtol), float(s.ctol), float(s.etol), int(s.max_iterations), bool(s.line_search), float(work),
@@ -820,7 +1044,8 @@ def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, rec
     (status, done, t, q, v, lam, reaction, work, its_total, n_rec, rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac,
      rec_lam, rec_derived, rec_probe) = out
     names = _packed(scene)[1]
-    records = [(float(rec_t[i]), rec_q[i], rec_v[i], float(rec_work[i]), int(rec_its[i]), rec_reac[i],
-                rec_derived[i], rec_lam[i], dict(zip(names, rec_probe[i]))) for i in range(n_rec)]
+    records = dict(t=rec_t[:n_rec], q=rec_q[:n_rec], v=rec_v[:n_rec], work=rec_work[:n_rec], iterations=rec_its[:n_rec],
+                   reaction=rec_reac[:n_rec], derived=rec_derived[:n_rec], lam=rec_lam[:n_rec],
+                   probes={name: rec_probe[:n_rec, j] for j, name in enumerate(names)})
     return dict(status=int(status), done=int(done), t=float(t), q=q, v=v, lam=lam, reaction=reaction,
                 work=float(work), iterations=int(its_total), records=records)

@@ -117,9 +117,13 @@ class Constraint:
         return 0.5 * self.hessian_product(0.5 * (q0 + q1), mu, t)
 
     def compiled_form(self):
-        """How the compiled mechanism loop (:mod:`skfem_flex.compiled_scene`) evaluates this constraint:
-        ``("points", [(point, sign), ...], c)`` for Φ = Σ sign · r(point) − c, ``("distance", point, a, l)``
-        for Φ = ½(|r − a|² − l²), or None (the default: the scene runs on the Python path)."""
+        """How the compiled mechanism loop (:mod:`skfem_flex.compiled_scene`) evaluates this constraint,
+        or None (the default: the scene runs on the Python path).
+
+        ``("rows", [(term, law), ...])``: the equations in order, each block the ``compiled_form()`` of a
+        :class:`~skfem_flex.point_terms.Term` minus a motion law x(t) (``law`` None: no time term);
+        ``("distance", point, a, l)`` for Φ = ½(|r − a|² − l²).
+        """
         return None
 
     def reaction(self, q, lam):
@@ -130,6 +134,26 @@ class Constraint:
         it with forces (N) and moments (N m) in the global frame.
         """
         return -np.asarray(lam, dtype=float)
+
+    def reaction_history(self, q, lam):
+        """:meth:`reaction` at many states at once (the recorded steps of a compiled loop).
+
+        Parameters
+        ----------
+        q : ndarray (N, n_local)
+        lam : ndarray (N, n_equations)
+
+        Returns
+        -------
+        ndarray (N, k)
+            Row i is ``reaction(q[i], lam[i])``: −λ, vectorized, when the class keeps the base
+            :meth:`reaction`; otherwise row by row, unless the class vectorizes it too.
+        """
+        lam = np.asarray(lam, dtype=float)
+        if type(self).reaction is Constraint.reaction:
+            return -lam
+        rows = [np.atleast_1d(np.asarray(self.reaction(qi, li), dtype=float)) for qi, li in zip(q, lam)]
+        return np.array(rows).reshape(lam.shape[0], -1)
 
 
 class _TermConstraint(Constraint):
@@ -178,6 +202,12 @@ class _TermConstraint(Constraint):
                 out = out + term.dgrad_jacobian(q0, q1, mu[r])
         return out
 
+    def compiled_form(self):
+        forms = [term.compiled_form() for term in self._terms]
+        if any(f is None or f[0] == "constant" for f in forms):
+            return None
+        return "rows", [(f, None) for f in forms]
+
 
 def _point_position0(point):
     return np.asarray(point.position(np.asarray(point.body.q0, dtype=float)), dtype=float)
@@ -222,11 +252,6 @@ class Pin(_TermConstraint):
         self._set_terms(layout, [Difference(n, point, layout.slices[0], anchor=self.anchor)])
         self.name = name
 
-    def compiled_form(self):
-        return "points", [(self.point, 1.0)], self.anchor
-
-    def reaction(self, q, lam):
-        return -np.asarray(lam, dtype=float)
 
 
 class Revolute(_TermConstraint):
@@ -255,11 +280,6 @@ class Revolute(_TermConstraint):
         self._set_terms(layout, [Difference(n, point_a, layout.slices[0], point_b, layout.slices[1])])
         self.name = name
 
-    def compiled_form(self):
-        return "points", [(self.points[0], 1.0), (self.points[1], -1.0)], np.zeros(2)
-
-    def reaction(self, q, lam):
-        return -np.asarray(lam, dtype=float)
 
 
 class Weld(_TermConstraint):
@@ -306,8 +326,6 @@ class Weld(_TermConstraint):
         self._set_terms(layout, [pos, ang_term])
         self.name = name
 
-    def reaction(self, q, lam):
-        return -np.asarray(lam, dtype=float)
 
 
 class Slider(_TermConstraint):
@@ -378,6 +396,13 @@ class Slider(_TermConstraint):
 
     def reaction(self, q, lam):
         return -float(lam[0]) * self.normal(q)
+
+    def reaction_history(self, q, lam):
+        lam = np.asarray(lam, dtype=float)
+        if self.on is not None:                 # the normal turns with the guiding body
+            return super().reaction_history(q, lam)
+        f = -lam[:, :1] * self.normal(None)[None, :]          # a ground line's constant normal
+        return f if lam.shape[1] == 1 else np.column_stack([f, -lam[:, 1]])
 
 
 class Prismatic(Slider):
@@ -470,14 +495,16 @@ class Driver(_TermConstraint):
     def time_derivative(self, q, t):
         return np.array([-float(self.law.velocity(t))])
 
+    def compiled_form(self):
+        form = self._s.compiled_form()
+        return "rows", [(form, self.law)]
+
     def time_terms(self, q, v, t):
         return np.array([-float(self.law.acceleration(t))])
 
     def acceleration_rhs(self, q, v, t):
         return np.array([float(self.law.acceleration(t))])
 
-    def reaction(self, q, lam):
-        return -np.asarray(lam, dtype=float)
 
 
 # ============================================================ point masses
@@ -531,6 +558,9 @@ class Distance(Constraint):
 
     def reaction(self, q, lam):
         return -float(lam[0]) * (np.asarray(q, dtype=float) - self.anchor)
+
+    def reaction_history(self, q, lam):
+        return -np.asarray(lam, dtype=float)[:, :1] * (np.asarray(q, dtype=float) - self.anchor[None, :])
 
 
 class UserConstraint(Constraint):

@@ -52,8 +52,13 @@ class ForceElement:
         raise NotImplementedError
 
     def compiled_form(self):
-        """How the compiled mechanism loop (:mod:`skfem_flex.compiled_scene`) evaluates this element:
-        ``("gravity", g)``, or None (the default: the scene runs on the Python path)."""
+        """How the compiled mechanism loop (:mod:`skfem_flex.compiled_scene`) evaluates this element,
+        or None (the default: the scene runs on the Python path).
+
+        ``("gravity", g)``; ``("coordinate spring", i, k, p)`` for V = ½ k q_i^p (i over the element's
+        own coordinates); ``("point force", point, F)`` for Q = r_qᵀ F(t) (F in the global frame);
+        ``("generalized force", g, M)`` for Q = g M(t) (g constant, over the element's coordinates).
+        """
         return None
 
     # non-conservative elements
@@ -226,6 +231,9 @@ class NonlinearSpring(ForceElement):
             j = np.arange(1, p)
             h[self.index, self.index] = 0.5 * self.k * np.sum(j * u1 ** (j - 1) * u0 ** (p - 1 - j))
         return g, h
+
+    def compiled_form(self):
+        return "coordinate spring", self.index, self.k, self.power
 
 
 # ============================================================ point elements
@@ -584,6 +592,9 @@ class PointForce(ForceElement):
             fq = fq + np.outer(jac.T @ (E_MATRIX @ f), self._angle.grad)
         return jac.T @ f, fq, None
 
+    def compiled_form(self):
+        return None if self.follower else ("point force", self.point, self.force)
+
 
 class PointMoment(ForceElement):
     """A moment M(t) (N m, counter-clockwise) acting at a body point (on its frame angle ϑ).
@@ -613,3 +624,6 @@ class PointMoment(ForceElement):
 
     def generalized_force(self, q, v, t):
         return float(self.moment(t)[0]) * self._angle.grad, None, None
+
+    def compiled_form(self):
+        return "generalized force", self._angle.grad.copy(), self.moment

@@ -167,6 +167,16 @@ class Term:
         """½ (s(q0) + s(q1)), the mean of the end values the product rule needs."""
         return 0.5 * (self.value(q0) + self.value(q1))
 
+    def compiled_form(self):
+        """How the compiled mechanism loop (:mod:`skfem_flex.compiled_scene`) evaluates this term,
+        or None (the default: a constraint with such a term runs on the Python path).
+
+        ``("constant", c)``; ``("points", [(point, sign), ...], c)`` for Σ sign · r(point) − c;
+        ``("linear", g, c)`` for g · q + c (g over the local coordinates);
+        ``("projected", nrm, points)`` for nrm · (a ``"points"`` form), a constant normal.
+        """
+        return None
+
     def _zero(self):
         return zero_matrix(self.n)
 
@@ -203,6 +213,9 @@ class Constant(Term):
 
     def dgrad_jacobian(self, q0, q1, f):
         return self._zero()
+
+    def compiled_form(self):
+        return "constant", self.c.copy()
 
 
 class Position(Term):
@@ -304,6 +317,11 @@ class Difference(Term):
                               -1.0, out)
         return out
 
+    def compiled_form(self):
+        if self.pb is None:
+            return "points", [(self.pa, 1.0)], self.anchor.copy()
+        return "points", [(self.pa, 1.0), (self.pb, -1.0)], np.zeros(2)
+
 
 class Linear(Term):
     """A scalar affine in q: a point's angle, a coordinate or a combination of them.
@@ -345,6 +363,10 @@ class Linear(Term):
 
     def dgrad_jacobian(self, q0, q1, f):
         return self._zero()
+
+    def compiled_form(self):
+        # affine: s(q) = g · q + s(0)
+        return "linear", self.grad.copy(), float(self.fun(np.zeros(self.n)))
 
 
 def angle_term(n, point, sl):
@@ -509,3 +531,11 @@ class Dot(Term):
         out = self.v.dgrad_jacobian(q0, q1, ub) + self.u.dgrad_jacobian(q0, q1, vb)
         out += 0.5 * (self.v.dgrad(q0, q1).T @ self.u.jacobian(q1) + self.u.dgrad(q0, q1).T @ self.v.jacobian(q1))
         return f[0] * out
+
+    def compiled_form(self):
+        # a constant normal on a point difference (a slider on a ground line); others run in Python
+        for a, b in ((self.u, self.v), (self.v, self.u)):
+            fa, fb = a.compiled_form(), b.compiled_form()
+            if fa is not None and fb is not None and fa[0] == "constant" and fb[0] == "points" and fa[1].size == 2:
+                return "projected", fa[1], fb
+        return None

@@ -51,10 +51,8 @@ class _Recorder:
             if k in prior.reactions:
                 self.reaction_rows[k] = list(prior.reactions[k])
 
-    def record(self, state, work, iterations, vres, derived=None, probes=None):
-        """Append one state. ``derived`` = (T, V, p_x, p_y, L, ‖Φ‖∞, ‖Φ_q v‖∞), when the caller computed
-        them already (the compiled loops), replaces the scene's energy, momenta and constraint calls;
-        ``probes`` {name: value} the probes they recorded."""
+    def record(self, state, work, iterations, vres):
+        """Append one state of the Python path (energies, momenta, constraints and probes from the scene)."""
         s = self.scene
         q, v, t = state.q, state.v, state.t
         r = self.rows
@@ -62,35 +60,57 @@ class _Recorder:
         r["q"].append(q.copy())
         r["v"].append(v.copy())
         r["lam"].append(np.array(state.lam, dtype=float))
-        r["kinetic"].append(s.kinetic_energy(q, v) if derived is None else float(derived[0]))
-        r["potential"].append(s.potential_energy(q) if derived is None else float(derived[1]))
+        r["kinetic"].append(s.kinetic_energy(q, v))
+        r["potential"].append(s.potential_energy(q))
         r["external_work"].append(work)
-        if derived is not None:
-            r["constraint_residual"].append(float(derived[5]))
-        else:
-            r["constraint_residual"].append(float(np.max(np.abs(s.constraint_value(q, t)))) if s.n_constraints else 0.0)
+        r["constraint_residual"].append(float(np.max(np.abs(s.constraint_value(q, t)))) if s.n_constraints else 0.0)
         r["velocity_constraint_residual"].append(vres)
         r["newton_iterations"].append(iterations)
         r["prescribed_force"].append(np.array(state.prescribed_force, dtype=float))
         if self.with_momentum is None:
             self.with_momentum = s.linear_momentum(q, v) is not None
         if self.with_momentum:
-            if derived is None:
-                r["linear_momentum"].append(s.linear_momentum(q, v))
-                r["angular_momentum"].append(s.angular_momentum(q, v))
-            else:
-                r["linear_momentum"].append(np.array(derived[2:4], dtype=float))
-                r["angular_momentum"].append(float(derived[4]))
-        if probes:                               # values the compiled loop recorded; the others here
-            for k, fn in s.probes.items():
-                self.probes[k].append(probes[k] if k in probes else np.asarray(fn(s, t, q, v), dtype=float))
-        else:
-            for k, val in s.evaluate_probes(t, q, v).items():
-                self.probes[k].append(val)
+            r["linear_momentum"].append(s.linear_momentum(q, v))
+            r["angular_momentum"].append(s.angular_momentum(q, v))
+        for k, val in s.evaluate_probes(t, q, v).items():
+            self.probes[k].append(val)
         if self.reactions:
             lam = np.asarray(state.lam, dtype=float)
             for k, fn in self.reactions:
                 self.reaction_rows[k].append(fn(q, lam))
+
+    def record_block(self, recs):
+        """Append the recorded steps of a compiled chunk at once (``recs``: the ``records`` arrays of
+        :func:`skfem_flex.compiled_loop.run_chunk`, one row per step)."""
+        s, r = self.scene, self.rows
+        n_rec = recs["t"].size
+        if n_rec == 0:
+            return
+        q, v, lam, derived = recs["q"], recs["v"], recs["lam"], recs["derived"]
+        r["t"].extend(recs["t"].tolist())
+        r["q"].extend(q)
+        r["v"].extend(v)
+        r["lam"].extend(lam)
+        r["kinetic"].extend(derived[:, 0].tolist())
+        r["potential"].extend(derived[:, 1].tolist())
+        r["external_work"].extend(recs["work"].tolist())
+        r["constraint_residual"].extend(derived[:, 5].tolist())
+        r["velocity_constraint_residual"].extend(derived[:, 6].tolist())
+        r["newton_iterations"].extend(recs["iterations"].tolist())
+        r["prescribed_force"].extend(recs["reaction"])
+        if self.with_momentum is None:
+            self.with_momentum = s.linear_momentum(q[0], v[0]) is not None
+        if self.with_momentum:
+            r["linear_momentum"].extend(derived[:, 2:4])
+            r["angular_momentum"].extend(derived[:, 4].tolist())
+        for k, fn in s.probes.items():
+            if k in recs["probes"]:
+                self.probes[k].extend(recs["probes"][k])
+            else:
+                self.probes[k].extend(np.asarray(fn(s, t, qi, vi), dtype=float) for t, qi, vi in zip(recs["t"], q, v))
+        if self.reactions:
+            for (k, _), c, (idx, rows) in zip(self.reactions, s.constraints, s.constraint_layout):
+                self.reaction_rows[k].extend(c.reaction_history(q[:, idx], lam[:, rows]))
 
     def result(self, **meta):
         r = {k: np.asarray(val, dtype=float) for k, val in self.rows.items()}
@@ -288,11 +308,11 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
     last_checkpoint = start
     checkpoint_wait = checkpoint_every          # grows with the time a save takes (CHECKPOINT_COST)
 
-    def recorded(state, work, its, vres, derived=None, probes=None):
+    def recorded(state, work, its, vres):
         # the sinks first: a step whose output failed is not in the histories either, so that
         # the histories and the final state of the result stay those of one step
         _write_sinks(sinks, scene, state)
-        rec.record(state, work, its, vres, derived, probes)
+        rec.record(state, work, its, vres)
         guard.check_energy(state.t)
 
     def advanced(n, its):
@@ -322,17 +342,26 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
             if use_compiled:
                 chunk = min(1 if first and cold else loop.chunk_steps(scene), n_steps - step)
                 out = loop.run_chunk(scene, scheme, state, dt, t_end, step + 1, chunk, n_steps, record_every, work)
-                for i, (t_r, q_r, v_r, w_r, its_r, reac_r, derived, lam_r, probes_r) in enumerate(out["records"]):
-                    s_r = State(t_r, q_r, v_r, lam=lam_r, prescribed_force=reac_r)
-                    try:
-                        recorded(s_r, w_r, its_r, float(derived[6]), derived, probes_r)
-                    except OutputError:
-                        if record_every == 1 and i:   # the result ends at the last step recorded
-                            state, work, step = prev, out["records"][i - 1][3], step + i
-                        elif record_every != 1:
-                            resumable = False
-                        raise
-                    prev = s_r
+                recs = out["records"]
+                if sinks:                        # each state to the sinks first, then to the histories
+                    for i in range(recs["t"].size):
+                        s_r = State(float(recs["t"][i]), recs["q"][i], recs["v"][i], lam=recs["lam"][i],
+                                    prescribed_force=recs["reaction"][i])
+                        try:
+                            _write_sinks(sinks, scene, s_r)
+                        except OutputError:
+                            if record_every == 1 and i:   # the result ends at the last step recorded
+                                state, work, step = prev, float(recs["work"][i - 1]), step + i
+                            elif record_every != 1:
+                                resumable = False
+                            raise
+                        rec.record_block({k: (val[i:i + 1] if k != "probes" else {p: a[i:i + 1] for p, a in val.items()})
+                                          for k, val in recs.items()})
+                        guard.check_energy(s_r.t)
+                        prev = s_r
+                else:
+                    rec.record_block(recs)
+                    guard.check_energy_block(recs["t"], recs["derived"][:, 0], recs["derived"][:, 1], recs["work"])
                 if out["done"]:
                     state = State(out["t"], out["q"], out["v"], lam=out["lam"], prescribed_force=out["reaction"])
                     work = out["work"]
@@ -535,12 +564,34 @@ class _DivergenceGuard:
             raise DivergenceError(f"diverged at t = {state.t:.6g} s: a coordinate reached {big:.3g}, more than "
                                   f"{DIVERGENCE_FACTOR:.0e} times the scene's size ({self.q_bound / DIVERGENCE_FACTOR:.3g})")
 
+    def check_energy_block(self, t, kinetic, potential, work):
+        """:meth:`check_energy` for a block of records just appended (times ``t``, energies and work)."""
+        first = len(self.rec.rows["kinetic"]) - t.size            # index of the block's first record
+        n_early = min(t.size, max(0, _SCALE_RECORDS - first))    # these still set the scale: in order
+        for i in range(n_early):
+            self._check(t[i], kinetic[i], potential[i], work[i], first + i)
+        if n_early == t.size:
+            return
+        w_max = np.maximum.accumulate(np.maximum(np.abs(work[n_early:]), self.w_max))
+        energy = kinetic[n_early:] + potential[n_early:]
+        scale = self.e_scale + w_max
+        bad = ~np.isfinite(energy) | ((scale > 0) & (np.abs(energy) > DIVERGENCE_FACTOR * scale))
+        if bad.any():
+            i = int(np.argmax(bad))
+            self.w_max = float(w_max[i])
+            self._check(t[n_early + i], kinetic[n_early + i], potential[n_early + i], work[n_early + i], _SCALE_RECORDS)
+        self.w_max = float(w_max[-1])
+
     def check_energy(self, t):
         r = self.rec.rows
-        self.w_max = max(self.w_max, abs(r["external_work"][-1]))
-        energy = r["kinetic"][-1] + r["potential"][-1]
-        if len(r["kinetic"]) <= _SCALE_RECORDS:
-            self.e_scale = max(self.e_scale, abs(r["kinetic"][-1]) + abs(r["potential"][-1]))
+        self._check(t, r["kinetic"][-1], r["potential"][-1], r["external_work"][-1], len(r["kinetic"]) - 1)
+
+    def _check(self, t, kinetic, potential, work, index):
+        """The energy rule at one record (number ``index`` of the run)."""
+        self.w_max = max(self.w_max, abs(work))
+        energy = kinetic + potential
+        if index < _SCALE_RECORDS:
+            self.e_scale = max(self.e_scale, abs(kinetic) + abs(potential))
         scale = self.e_scale + self.w_max
         if not math.isfinite(energy) or (scale > 0 and abs(energy) > DIVERGENCE_FACTOR * scale):
             raise DivergenceError(f"diverged at t = {t:.6g} s: energy {energy:.3g} J against an initial energy "

@@ -93,6 +93,20 @@ def test_jacobian_hessian_and_discrete_gradient_jacobian_match_finite_difference
         np.testing.assert_allclose(con.discrete_gradient_jacobian(q0, q1, mu, t), gfd, atol=1e-7)
 
 
+@pytest.mark.parametrize("con", all_constraints() + [UserConstraint([sf.PointMass(1.0, [1.0, 0.0])],
+                                                                   lambda q, t: np.array([0.5 * (q @ q - 1.0)]),
+                                                                   lambda q, t: q[None, :])], ids=ids)
+def test_reaction_history_is_the_reaction_row_by_row(con):
+    """The batch form the recorder uses for compiled chunks equals :meth:`reaction` at each state."""
+    rng = np.random.default_rng(3)
+    q0 = con.layout.initial() if hasattr(con, "layout") else np.concatenate([b.q0 for b in con.bodies])
+    q = q0[None, :] + 0.3 * rng.normal(size=(5, q0.size))
+    lam = rng.normal(size=(5, con.n_equations))
+    hist = con.reaction_history(q, lam)
+    rows = np.array([np.atleast_1d(con.reaction(qi, li)) for qi, li in zip(q, lam)])
+    np.testing.assert_allclose(hist, rows, rtol=1e-15, atol=1e-15)
+
+
 def test_driver_time_derivatives():
     a = RigidBody(1.0, 1.0)
     law = MotionLaw(lambda t: t ** 3, lambda t: 3 * t ** 2, lambda t: 6 * t)

@@ -441,3 +441,19 @@ def test_fast_spinning_free_beam_keeps_energy_and_momenta():
     assert np.max(np.abs(h - h[0])) <= 1e-10 * abs(h[0])
     assert np.max(np.abs(p - p[0])) <= 1e-10 * np.abs(p[0]).max()
     assert p[0][0] == pytest.approx(0.7 * body.total_mass)
+
+
+def test_cayley_functions_stay_real_after_a_complex_call():
+    """In a fresh process, a complex-step call first must not turn later real results complex."""
+    import subprocess
+    import sys
+    code = ("import numpy as np\n"
+            "from skfem_flex.rotations import cayley_ratio, cayley_divided_difference\n"
+            "cayley_divided_difference(np.array([0.3 + 1e-20j]), np.array([0.1]))\n"
+            "cayley_ratio(np.array([0.2 + 1e-20j]))\n"
+            "r = cayley_ratio(np.array([0.3]))\n"
+            "d = cayley_divided_difference(np.array([0.3]), np.array([0.1]))\n"
+            "assert r.dtype == np.float64 and d.dtype == np.float64, (r.dtype, d.dtype)\n"
+            "assert abs(r[0] - 0.3 / (2 * np.tan(0.15))) < 1e-15\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr
