@@ -37,11 +37,14 @@ import numba
 import numpy as np
 import scipy.sparse as sps
 
+from .bodies import exact_kernel
+from .bodies.base import to_dense
 from .bodies.floating_kernel import energy_momentum_terms, momentum, potential_energy, sinc_half
 from .compiled_loop import chunk_schedule, record_buffers, record_count
 from .integrators import EnergyMomentum
 from .newton import (CONVERGED, EVALUATE, NONFINITE_RESIDUAL, all_finite, max_abs, newton_evaluated, newton_solved,
                      newton_start, roundoff_floor)
+from .rotations import SERIES_BELOW, sinc
 from .scene import Scene
 
 __all__ = ["run_loop", "eligible", "run_chunk", "chunk_steps", "pack", "pack_maps", "time_table", "newton_system", "map_position", "map_jacobian", "map_dgrad",
@@ -79,58 +82,56 @@ def _frame_offset(maps, k, qa, qb):
 
 
 @numba.njit(cache=True)
-def map_position(maps, k, q):
-    """r(q) of map k (2,), m; ``q`` is the body's block."""
+def _position_into(maps, k, q, out):
+    """out[0:2] = r(q) of map k, m; ``q`` is the body's block."""
     kind, off, nb, m_r, c, y0, gdat, gptr, ydat, yptr = maps
-    r = np.zeros(2)
     if kind[k] == LINEAR:
         g0 = gptr[k]
         for a in range(2):
             s = c[k, a]
             for j in range(nb[k]):
                 s += gdat[g0 + a * nb[k] + j] * q[j]
-            r[a] = s
-        return r
+            out[a] = s
+        return
     sx, sy = _frame_offset(maps, k, q, q)
     C, S = np.cos(q[2]), np.sin(q[2])
-    r[0] = m_r[k] * q[0] + C * sx - S * sy
-    r[1] = m_r[k] * q[1] + S * sx + C * sy
-    return r
+    out[0] = m_r[k] * q[0] + C * sx - S * sy
+    out[1] = m_r[k] * q[1] + S * sx + C * sy
 
 
 @numba.njit(cache=True)
-def map_jacobian(maps, k, q):
-    """∂r/∂q of map k (2, nb)."""
+def _jacobian_into(maps, k, q, out):
+    """out[:, :nb] = ∂r/∂q of map k."""
     kind, off, nb, m_r, c, y0, gdat, gptr, ydat, yptr = maps
     n = nb[k]
-    jac = np.zeros((2, n))
     if kind[k] == LINEAR:
         for a in range(2):
             for j in range(n):
-                jac[a, j] = gdat[gptr[k] + a * n + j]
-        return jac
+                out[a, j] = gdat[gptr[k] + a * n + j]
+        return
     ne = n - 3
     y = yptr[k]
     sx, sy = _frame_offset(maps, k, q, q)
     C, S = np.cos(q[2]), np.sin(q[2])
-    jac[0, 0] = jac[1, 1] = m_r[k]
-    jac[0, 2] = -S * sx - C * sy            # A E s, E = [[0, −1], [1, 0]]
-    jac[1, 2] = C * sx - S * sy
+    out[0, 0] = out[1, 1] = m_r[k]
+    out[0, 1] = out[1, 0] = 0.0
+    out[0, 2] = -S * sx - C * sy            # A E s, E = [[0, −1], [1, 0]]
+    out[1, 2] = C * sx - S * sy
     for j in range(ne):
         yx, yy = ydat[y + j], ydat[y + ne + j]
-        jac[0, 3 + j] = C * yx - S * yy
-        jac[1, 3 + j] = S * yx + C * yy
-    return jac
+        out[0, 3 + j] = C * yx - S * yy
+        out[1, 3 + j] = S * yx + C * yy
 
 
 @numba.njit(cache=True)
-def map_dgrad(maps, k, q0, q1):
-    """Exact discrete gradient D (2, nb) of map k: D (q1 − q0) = r(q1) − r(q0).
+def _dgrad_into(maps, k, q0, q1, out):
+    """out[:, :nb] = the exact discrete gradient D of map k: D (q1 − q0) = r(q1) − r(q0).
 
     FRAME: D = [mR I, sinc(Δθ/2) A(θ_m) E s_m, cos(Δθ/2) A(θ_m) Y] with s_m = y0 + Y (q0_f + q1_f)/2."""
     kind, off, nb, m_r, c, y0, gdat, gptr, ydat, yptr = maps
     if kind[k] == LINEAR:
-        return map_jacobian(maps, k, q0)
+        _jacobian_into(maps, k, q0, out)
+        return
     n = nb[k]
     ne = n - 3
     y = yptr[k]
@@ -139,14 +140,37 @@ def map_dgrad(maps, k, q0, q1):
     C, S = np.cos(tm), np.sin(tm)
     sig, kap = sinc_half(q1[2] - q0[2])[0], np.cos(half)
     sx, sy = _frame_offset(maps, k, q0, q1)
-    d = np.zeros((2, n))
-    d[0, 0] = d[1, 1] = m_r[k]
-    d[0, 2] = sig * (-S * sx - C * sy)
-    d[1, 2] = sig * (C * sx - S * sy)
+    out[0, 0] = out[1, 1] = m_r[k]
+    out[0, 1] = out[1, 0] = 0.0
+    out[0, 2] = sig * (-S * sx - C * sy)
+    out[1, 2] = sig * (C * sx - S * sy)
     for j in range(ne):
         yx, yy = ydat[y + j], ydat[y + ne + j]
-        d[0, 3 + j] = kap * (C * yx - S * yy)
-        d[1, 3 + j] = kap * (S * yx + C * yy)
+        out[0, 3 + j] = kap * (C * yx - S * yy)
+        out[1, 3 + j] = kap * (S * yx + C * yy)
+
+
+@numba.njit(cache=True)
+def map_position(maps, k, q):
+    """r(q) of map k (2,), m; ``q`` is the body's block."""
+    r = np.empty(2)
+    _position_into(maps, k, q, r)
+    return r
+
+
+@numba.njit(cache=True)
+def map_jacobian(maps, k, q):
+    """∂r/∂q of map k (2, nb)."""
+    jac = np.empty((2, maps[2][k]))
+    _jacobian_into(maps, k, q, jac)
+    return jac
+
+
+@numba.njit(cache=True)
+def map_dgrad(maps, k, q0, q1):
+    """Exact discrete gradient D (2, nb) of map k: D (q1 − q0) = r(q1) − r(q0) (see :func:`_dgrad_into`)."""
+    d = np.empty((2, maps[2][k]))
+    _dgrad_into(maps, k, q0, q1, d)
     return d
 
 
@@ -342,12 +366,14 @@ def _packed(scene):
 
 
 def _pack(scene):
-    if type(scene) is not Scene or not scene.dense or len(getattr(scene, "cayley_index", ())):
+    if type(scene) is not Scene or not scene.dense:
         return None, (), ()
     n = scene.n
     store = {k: [] for k in ("kind", "off", "nb", "m_r", "c", "y0", "g", "gptr", "y", "yptr")}
     mass = np.zeros((n, n))
-    frames, frame_off, body_layout = [], [], []
+    frames, frame_off = [], []
+    momentum = tuple([] for _ in range(7))
+    strains, strain_off = [], []
     first_moment = {}
     rng = np.random.default_rng(0)
     for b in scene.bodies:
@@ -361,20 +387,23 @@ def _pack(scene):
             frames.append(kd)
             frame_off.append(off)
             first_moment[id(b)] = ("frame", moment[0], moment[1], moment[2])
-        elif b.constant_mass and not b.has_potential:
+        elif b.constant_mass and (not b.has_potential or _call(b, "compiled_strain_data") is not None):
             try:
                 gam, c = b.mass_moment()
             except NotImplementedError:
                 return None, (), ()
-            mass[sl, sl] = np.asarray(b.mass_matrix(np.asarray(b.q0, dtype=float)), dtype=float)
+            mass[sl, sl] = to_dense(b.mass_matrix(np.asarray(b.q0, dtype=float)))
             first_moment[id(b)] = ("linear", gam, c)
+            if b.has_potential:
+                strains.append(b.compiled_strain_data())
+                strain_off.append(off)
         else:
             return None, (), ()
-        # the loop's momenta: p_lin = p[R], L = R × p[R] + p[θ] (R = q[0:2], θ = q[2] where present);
-        # a body that defines them otherwise runs in Python
-        if not _momentum_convention_holds(b, kd, rng):
+        layout = _momentum_layout(b, kd, rng)
+        if layout is None:
             return None, (), ()
-        body_layout.append((off, nb))
+        for store_k, a in zip(momentum, layout):
+            store_k.append(a + off if a.dtype == np.int64 else a)
     # force elements; functions of time become columns of the chunk's time table
     table = []
     force_index = {id(f): i for f, i in scene.conservative_forces + scene.loads}
@@ -406,15 +435,16 @@ def _pack(scene):
             pf_map.append(_map_of(cm, sl.start, sl.stop - sl.start, store))
             pf_col.append(len(table))
             table += [("mid", fun, 0), ("mid", fun, 1)]
-        elif form[0] == "generalized force":
-            _, grad, fun = form
-            grad = np.asarray(grad, dtype=float)
-            nz = np.flatnonzero(grad)
-            gf_idx.extend(idx[nz])
-            gf_coef.extend(grad[nz])
-            gf_ptr.append(len(gf_idx))
-            gf_col.append(len(table))
-            table.append(("mid", fun, 0))
+        elif form[0] == "generalized force":       # Q = Gᵀ F(t): one table column per row of G
+            _, gmat, fun = form
+            gmat = np.atleast_2d(np.asarray(gmat, dtype=float))
+            for comp, grad in enumerate(gmat):
+                nz = np.flatnonzero(grad)
+                gf_idx.extend(idx[nz])
+                gf_coef.extend(grad[nz])
+                gf_ptr.append(len(gf_idx))
+                gf_col.append(len(table))
+                table.append(("mid", fun, comp))
         else:
             return None, (), ()
     # constraints: blocks of rows (module docstring)
@@ -505,35 +535,55 @@ def _pack(scene):
              np.asarray(pf_map, dtype=np.int64), np.asarray(pf_col, dtype=np.int64),
              np.asarray(gf_ptr, dtype=np.int64), np.asarray(gf_idx, dtype=np.int64), np.asarray(gf_coef, dtype=float),
              np.asarray(gf_col, dtype=np.int64))
-    bodies = np.asarray(body_layout, dtype=np.int64).reshape(len(body_layout), 2)
-    bodies = (bodies, np.asarray(probe_maps, dtype=np.int64))
+    # momenta (module docstring of _momentum_layout) and the probes the loop records
+    bodies = tuple(np.concatenate(parts) if parts else np.zeros(0) for parts in momentum) + \
+        (np.asarray(probe_maps, dtype=np.int64),)
     mass = sps.csr_matrix(mass)
     mass.sort_indices()
     mass = (mass.indptr.astype(np.int64), mass.indices.astype(np.int64), mass.data.astype(float))
+    strain = (tuple(strains) if strains else None, np.asarray(strain_off, dtype=np.int64),
+              np.asarray(scene.cayley_index, dtype=np.int64))
     return (mass, tuple(frames) if frames else None, np.asarray(frame_off, dtype=np.int64), maps, gravity,
-            constraints, bodies, loads), tuple(probe_names), tuple(table)
+            constraints, bodies, loads, strain), tuple(probe_names), tuple(table)
 
 
-def _momentum_convention_holds(body, kd, rng):
-    """True if the body's linear and angular momenta are p[R] and R × p[R] + p[θ] (checked at two states)."""
+def _momentum_layout(body, kd, rng):
+    """(l_x, l_y, i_x, i_y, X, Y, i_angle) of the body's block: linear momentum (Σ p[l_x], Σ p[l_y]) and
+    L = Σ (X + q[i_x]) p[i_y] − (Y + q[i_y]) p[i_x] + Σ p[i_angle], p = M v. From the body's
+    ``momentum_layout()`` (i_x, i_y, X, Y, i_angle; l = i), or by default R = q[0:2] and θ = q[2] where
+    present (point masses, rigid and floating-frame bodies; a one-coordinate body: p[0] along x).
+    None if that does not give the body's own momenta (checked at two states): the scene then runs
+    in Python."""
     nb = body.n_dofs
+    none, zero = np.zeros(0, dtype=np.int64), np.zeros(1)
+    layout = _call(body, "momentum_layout")
+    if layout is not None:
+        ix, iy, X, Y, ia = (np.asarray(a) for a in layout)
+        lx, ly = ix, iy
+    elif nb == 1:
+        lx, ly, ix, iy, X, Y, ia = np.array([0]), none, none, none, np.zeros(0), np.zeros(0), none
+    else:
+        ix, iy = np.array([0]), np.array([1])
+        lx, ly, X, Y, ia = ix, iy, zero, zero, (np.array([2]) if nb >= 3 else none)
     for _ in range(2):
         q = np.asarray(body.q0, dtype=float) + 0.1 * rng.standard_normal(nb)
         v = rng.standard_normal(nb)
-        p = body.momentum(q, v) if kd is not None else body.mass_matrix(q) @ v
-        lin = np.zeros(2)
-        lin[:min(nb, 2)] = p[:min(nb, 2)]
-        ang = (q[0] * p[1] - q[1] * p[0] if nb >= 2 else 0.0) + (p[2] if nb >= 3 else 0.0)
+        p = body.momentum(q, v) if kd is not None else to_dense(body.mass_matrix(q)) @ v
+        lin = np.array([p[lx].sum(), p[ly].sum()])
+        ang = ((X + q[ix]) * p[iy]).sum() - ((Y + q[iy]) * p[ix]).sum() + p[ia].sum()
         try:
             ref_lin, ref_ang = body.linear_momentum(q, v), body.angular_momentum(q, v)
         except NotImplementedError:
-            return False
+            return None
         if ref_lin is None or ref_ang is None:
-            return False
-        scale = max(np.abs(p).max(), 1.0) * max(np.abs(q).max(), 1.0)
-        if np.abs(np.asarray(ref_lin) - lin).max() > 1e-12 * scale or abs(float(ref_ang) - ang) > 1e-12 * scale:
-            return False
-    return True
+            return None
+        ref = np.zeros(2)
+        ref[:np.size(ref_lin)] = np.ravel(ref_lin)[:2]
+        scale = max(np.abs(p).max(), 1.0) * max(np.abs(q).max() + np.abs(np.concatenate([X, Y, zero])).max(), 1.0)
+        if np.abs(ref - lin).max() > 1e-12 * scale or abs(float(ref_ang) - ang) > 1e-12 * scale:
+            return None
+    return tuple(np.asarray(a, dtype=np.int64) for a in (lx, ly, ix, iy)) + (np.asarray(X, float), np.asarray(Y, float),
+                                                                             np.asarray(ia, dtype=np.int64))
 
 
 def eligible(scene, scheme):
@@ -575,18 +625,31 @@ def _scene_momentum(mass, frames, frame_off, q, v):
 
 
 @numba.njit(cache=True)
-def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, with_tangent, mat, fpos):
-    """Φ(q1, t1) (m), Φ_q(q1) (m × n), D (m × n) and Φ_t (m); if ``with_tangent``, ∂(Dᵀμ)/∂q1 is added
-    to ``mat`` (the Newton matrix; after a step only D is needed, for the work). ``trow`` is the
+def _workspace(n, m, nx, nbmax):
+    """The arrays one step works in, allocated once per chunk (the loop allocates nothing per step but
+    the Newton core's state): res, mat (the Newton system), Δq_base, Δq, q1, v1, p1, r, Q, g_kin, g_V,
+    floor, Φ, Φ_t, Φ_q, D, Dᵀμ, μ, three 2-vectors, two (2, nb) map blocks and the rates: z (Δq with
+    the Cayley parameter 2 tan(Δψ/2) on Cayley coordinates), Δψ/w, d(Δψ/w)/dΔψ, dz/dΔq."""
+    return (np.zeros(nx), np.zeros((nx, nx)), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
+            np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(m), np.zeros(m),
+            np.zeros((m, n)), np.zeros((m, n)), np.zeros(n), np.zeros(m), np.zeros(2), np.zeros(2), np.zeros(2),
+            np.zeros((2, nbmax)), np.zeros((2, nbmax)), np.zeros(n), np.ones(n), np.zeros(n), np.ones(n))
+
+
+@numba.njit(cache=True)
+def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, with_tangent, mat, fpos, ws):
+    """Φ(q1, t1), Φ_t, Φ_q(q1) and D into the workspace (ws[12:16]); if ``with_tangent``, ∂(Dᵀμ)/∂q1 is
+    added to ``mat`` (the Newton matrix; after a step only D is needed, for the work). ``trow`` is the
     step's row of the time table (drivers' x(t1), ẋ(t1))."""
     kind, row, t0, term_map, term_sign, const, length, m, _, l0, lin_idx, lin_coef, nrm, law = constraints
+    phi, phi_t, cq, d = ws[12], ws[13], ws[14], ws[15]
+    f, acc, rv, jac, dk = ws[18], ws[19], ws[20], ws[21], ws[22]
     nb_, off_ = maps[2], maps[1]
-    phi = np.zeros(m)
-    phi_t = np.zeros(m)
-    cq = np.zeros((m, n))
-    d = np.zeros((m, n))
-    f = np.empty(2)
-    acc = np.empty(2)
+    phi[:] = 0.0
+    phi_t[:] = 0.0
+    cq[:, :] = 0.0
+    d[:, :] = 0.0
+    no_floor = ws[0][:0]
     for i in range(kind.size):
         r0 = row[i]
         if kind[i] == POINTS or kind[i] == PROJECTED:
@@ -595,13 +658,12 @@ def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, with_tangent, mat,
             for t in range(t0[i], t0[i + 1]):
                 k, s = term_map[t], term_sign[t]
                 o, nb = off_[k], nb_[k]
-                qb1 = q1[o:o + nb]
-                r = map_position(maps, k, qb1)
-                jac = map_jacobian(maps, k, qb1)
-                qb0 = q0[o:o + nb]
-                dk = map_dgrad(maps, k, qb0, qb1)
-                acc[0] += s * r[0]
-                acc[1] += s * r[1]
+                qb0, qb1 = q0[o:o + nb], q1[o:o + nb]
+                _position_into(maps, k, qb1, rv)
+                _jacobian_into(maps, k, qb1, jac)
+                _dgrad_into(maps, k, qb0, qb1, dk)
+                acc[0] += s * rv[0]
+                acc[1] += s * rv[1]
                 if proj:                    # one row: nrm · (Σ s r − c)
                     for j in range(nb):
                         cq[r0, o + j] += s * (nrm[i, 0] * jac[0, j] + nrm[i, 1] * jac[1, j])
@@ -614,7 +676,7 @@ def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, with_tangent, mat,
                             cq[r0 + a, o + j] += s * jac[a, j]
                             d[r0 + a, o + j] += s * dk[a, j]
                 if with_tangent:
-                    _add_dgrad_jacobian(maps, k, qb0, qb1, f, 1.0, mat, fpos, np.zeros(0))
+                    _add_dgrad_jacobian(maps, k, qb0, qb1, f, 1.0, mat, fpos, no_floor)
             if proj:
                 phi[r0] = nrm[i, 0] * acc[0] + nrm[i, 1] * acc[1]
             else:
@@ -633,15 +695,15 @@ def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, with_tangent, mat,
             k = term_map[t0[i]]
             o, nb = off_[k], nb_[k]
             qb1 = q1[o:o + nb]
-            r1 = map_position(maps, k, qb1)
-            jac = map_jacobian(maps, k, qb1)
-            dx, dy = r1[0] - const[i, 0], r1[1] - const[i, 1]
+            _position_into(maps, k, qb1, rv)
+            _jacobian_into(maps, k, qb1, jac)
+            dx, dy = rv[0] - const[i, 0], rv[1] - const[i, 1]
             phi[r0] = 0.5 * (dx * dx + dy * dy - length[i] * length[i])
             for j in range(nb):
                 cq[r0, o + j] = dx * jac[0, j] + dy * jac[1, j]
-            r0m = map_position(maps, k, q0[o:o + nb])
-            mx = 0.5 * (r0m[0] + r1[0]) - const[i, 0]
-            my = 0.5 * (r0m[1] + r1[1]) - const[i, 1]
+            _position_into(maps, k, q0[o:o + nb], acc)
+            mx = 0.5 * (acc[0] + rv[0]) - const[i, 0]
+            my = 0.5 * (acc[1] + rv[1]) - const[i, 1]
             for j in range(nb):
                 d[r0, o + j] = mx * jac[0, j] + my * jac[1, j]
             if with_tangent:                    # ∂(μ Jᵀ(r̄ − a))/∂q1 = ½ μ JᵀJ (J constant)
@@ -653,15 +715,14 @@ def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, with_tangent, mat,
                         jb = fpos[o + j]
                         if jb >= 0:
                             mat[ia, jb] += 0.5 * mu[r0] * (jac[0, a] * jac[0, j] + jac[1, a] * jac[1, j])
-    return phi, cq, d, phi_t
 
 
 @numba.njit(cache=True)
-def _add_loads(maps, loads, q0, q1, dq, trow, h, gp, ext, floor, mat, fpos):
-    """Coordinate springs (their discrete gradient into ``gp``, tangent and round-off floor) and the
-    loads at the mid-point (Q(q0 + Δq/2, t_m) into ``ext``, −(Δt/2) ∂Q/∂q into ``mat``)."""
-    spr_idx, spr_k, spr_p, pf_map, pf_col, gf_ptr, gf_idx, gf_coef, gf_col = loads
-    for j in range(spr_idx.size):           # V = ½ k u^p: exact divided difference, no cancellation
+def _add_springs(loads, q0, q1, h, gp, floor, mat, fpos):
+    """Coordinate springs V = ½ k u^p: their exact divided difference (no cancellation) into ``gp``,
+    tangent and round-off floor."""
+    spr_idx, spr_k, spr_p = loads[0], loads[1], loads[2]
+    for j in range(spr_idx.size):
         i, p = spr_idx[j], spr_p[j]
         u0, u1 = q0[i], q1[i]
         g, tan = 0.0, 0.0
@@ -675,6 +736,12 @@ def _add_loads(maps, loads, q0, q1, dq, trow, h, gp, ext, floor, mat, fpos):
         if ia >= 0:
             mat[ia, ia] += tan
         floor[i] += abs(tan) * (abs(u0) + abs(u1))
+
+
+@numba.njit(cache=True)
+def _add_loads(maps, loads, q0, dq, trow, h, ext, mat, fpos):
+    """The loads at the mid-point: Q(q0 + Δq/2, t_m) into ``ext``, −(Δt/2) ∂Q/∂q into ``mat``."""
+    pf_map, pf_col, gf_ptr, gf_idx, gf_coef, gf_col = loads[3], loads[4], loads[5], loads[6], loads[7], loads[8]
     f = np.empty(2)
     for j in range(pf_map.size):
         k = pf_map[j]
@@ -718,6 +785,61 @@ def _add_frame_terms(frames, frame_off, q0, q1, v0, v1, h, p1, gk, gp, floor, ma
 
 
 @numba.njit(cache=True)
+def _add_strain_terms(strains, strain_off, q0, q1, h, gp, floor, mat, fpos):
+    """Add the exact beams' discrete strain gradients (:mod:`skfem_flex.bodies.exact_kernel`), their
+    tangent Δt ∂g/∂q1 and round-off floor; False if a step folds an element or turns a section by
+    MAX_INCREMENT or more (the loop then hands the step to Python, which raises the proper error)."""
+    if strains is None:
+        return True
+    for i in range(len(strains)):
+        kd = strains[i]
+        o, nb = strain_off[i], kd.n
+        g = np.empty(nb)
+        data = np.empty(kd.pat_idx.size)
+        fl = np.empty(nb)
+        if exact_kernel.potential_discrete_gradient(kd, q0[o:o + nb], q1[o:o + nb], g, data, fl) != exact_kernel.OK:
+            return False
+        for a in range(nb):
+            gp[o + a] += g[a]
+            floor[o + a] += h * fl[a]
+            ia = fpos[o + a]
+            if ia < 0:
+                continue
+            for t in range(kd.pat_ptr[a], kd.pat_ptr[a + 1]):
+                jb = fpos[o + kd.pat_idx[t]]
+                if jb >= 0:
+                    mat[ia, jb] += h * data[t]
+    return True
+
+
+@numba.njit(cache=True)
+def _strain_energy(strains, strain_off, q):
+    if strains is None:
+        return 0.0
+    pot = 0.0
+    for i in range(len(strains)):
+        kd = strains[i]
+        o = strain_off[i]
+        pot += exact_kernel.potential_energy(kd, q[o:o + kd.n])
+    return pot
+
+
+@numba.njit(cache=True)
+def cayley_terms(dpsi):
+    """(z, Δψ/w, d(Δψ/w)/dΔψ, dz/dΔψ) of an increment Δψ (rad), z = w = 2 tan(Δψ/2): the formulas of
+    :func:`~skfem_flex.rotations.cayley`, ``cayley_ratio``, ``cayley_ratio_derivative`` and
+    ``cayley_derivative`` for the compiled step (``tests/test_compiled_scene.py`` holds them to those)."""
+    h = 0.5 * dpsi
+    c = np.cos(h)
+    if abs(dpsi) < SERIES_BELOW:
+        dratio = -dpsi / 6.0 - dpsi ** 3 / 180.0
+    else:
+        sh = np.sin(h)
+        dratio = (np.sin(dpsi) - dpsi) / (4.0 * sh * sh)
+    return 2.0 * np.tan(h), c / sinc(h), dratio, 1.0 / (c * c)
+
+
+@numba.njit(cache=True)
 def _frame_strain_energy(frames, frame_off, q):
     if frames is None:
         return 0.0
@@ -730,11 +852,28 @@ def _frame_strain_energy(frames, frame_off, q):
 
 
 @numba.njit(cache=True)
+def _dot(a, b):
+    s = 0.0
+    for i in range(a.size):
+        s += a[i] * b[i]
+    return s
+
+
+@numba.njit(cache=True)
 def _evaluate(system, x):
     """``evaluate`` of the Newton core: EnergyMomentum.step's residual on the packed scene, its Newton
-    matrix [[J_FF, D_Fᵀ], [Φ_q,F, 0]] assembled in place."""
-    (mass, frames, frame_off, maps, gravity, constraints, q0, v0, p0, dq_base, free, fpos, h, p0_inf, e_scale0,
-     rtol, ctol, etol, res, mat, dq, q1, v1, p1, r, loads, trow, ext) = system
+    matrix [[J_FF, D_Fᵀ], [Φ_q,F, 0]] assembled in place (``system`` = (packed, step data, workspace)).
+
+    With Cayley coordinates (exact beams) the rates are z = 2 tan(Δψ/2) there: v1 = 2z/Δt − v0, the
+    force rows (discrete gradients, constraint forces) are scaled by Δψ/w and the Jacobian is
+    (2/Δt) M diag(dz/dΔq) + diag(Δψ/w) J_forces + diag(g d(Δψ/w)/dΔψ), as in the Python step."""
+    packed, step, ws = system
+    mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain = packed
+    q0, v0, p0, free, fpos, h, p0_inf, e_scale0, rtol, ctol, etol, trow = step
+    res, mat, dq_base, dq, q1, v1, p1, r, ext, gk, gp, floor = ws[:12]
+    phi, cq, d, dtmu, f = ws[12], ws[14], ws[15], ws[16], ws[18]
+    z, ratio, dratio, dz = ws[23], ws[24], ws[25], ws[26]
+    strains, strain_off, cay = strain
     n, nf = q0.size, free.size
     m = constraints[7]
     mu = x[nf:]
@@ -743,24 +882,27 @@ def _evaluate(system, x):
         dq[free[i]] = x[i]
     for i in range(n):
         q1[i] = q0[i] + dq[i]
-        v1[i] = (2.0 / h) * dq[i] - v0[i]
+        z[i] = dq[i]
+    for c in cay:
+        z[c], ratio[c], dratio[c], dz[c] = cayley_terms(dq[c])
+    for i in range(n):
+        v1[i] = (2.0 / h) * z[i] - v0[i]
     mat[:, :] = 0.0
     ptr, idx, dat = mass
-    for i in range(n):                  # p1 = M v1 and (2/Δt) M of the constant-mass bodies
+    for i in range(n):                  # p1 = M v1 of the constant-mass bodies
         s = 0.0
-        ia = fpos[i]
         for t in range(ptr[i], ptr[i + 1]):
             s += dat[t] * v1[idx[t]]
-            jb = fpos[idx[t]]
-            if ia >= 0 and jb >= 0:
-                mat[ia, jb] += (2.0 / h) * dat[t]
         p1[i] = s
-    gk = np.zeros(n)
-    gp = np.zeros(n)
-    floor = np.zeros(n)
+    gk[:] = 0.0
+    gp[:] = 0.0
+    floor[:] = 0.0
     _add_frame_terms(frames, frame_off, q0, q1, v0, v1, h, p1, gk, gp, floor, mat, fpos)
+    _add_springs(loads, q0, q1, h, gp, floor, mat, fpos)
+    if not _add_strain_terms(strains, strain_off, q0, q1, h, gp, floor, mat, fpos):
+        return np.nan
     gmaps, gvec = gravity
-    f = np.empty(2)
+    dk = ws[22]
     for i in range(gmaps.size):
         k = gmaps[i]
         o, nb = maps[1][k], maps[2][k]
@@ -769,24 +911,47 @@ def _evaluate(system, x):
                 gp[o + j] -= gvec[i, 0] * maps[6][maps[7][k] + j] + gvec[i, 1] * maps[6][maps[7][k] + nb + j]
             continue
         qb0, qb1 = q0[o:o + nb], q1[o:o + nb]
-        dk = map_dgrad(maps, k, qb0, qb1)
+        _dgrad_into(maps, k, qb0, qb1, dk)
         f[0], f[1] = -gvec[i, 0], -gvec[i, 1]
         for j in range(nb):
             gp[o + j] += f[0] * dk[0, j] + f[1] * dk[1, j]
         _add_dgrad_jacobian(maps, k, qb0, qb1, f, h, mat, fpos, floor)
-    ext[:] = 0.0
-    _add_loads(maps, loads, q0, q1, dq, trow, h, gp, ext, floor, mat, fpos)
-    kin1 = 0.5 * np.dot(v1, p1)
+    for i in range(n):                  # the discrete-gradient forces (Dᵀμ added below)
+        r[i] = h * gp[i] - h * gk[i]
     scale = max(max_abs(p1), p0_inf)
-    scale = max(scale, h * max_abs(gk), h * max_abs(gp), h * max_abs(ext))
-    for i in range(n):
-        r[i] = p1[i] - p0[i] + h * gp[i] - h * gk[i] - h * ext[i]
+    scale = max(scale, h * max_abs(gk), h * max_abs(gp))
     err_c = 0.0
     if m:
-        phi, cq, d, _ = _constraint_terms(maps, constraints, q0, q1, mu, trow, n, True, mat, fpos)
-        dtmu = d.T @ mu
-        r += dtmu
+        _constraint_terms(maps, constraints, q0, q1, mu, trow, n, True, mat, fpos, ws)
+        for j in range(n):
+            s = 0.0
+            for i in range(m):
+                s += d[i, j] * mu[i]
+            dtmu[j] = s
+            r[j] += s
         scale = max(scale, max_abs(dtmu))
+    for c in cay:                       # forces conjugate to Δq → to the Cayley rate z
+        ic = fpos[c]
+        if ic >= 0:
+            for j in range(nf):
+                mat[ic, j] *= ratio[c]
+            mat[ic, ic] += r[c] * dratio[c]
+        r[c] *= ratio[c]
+        floor[c] *= ratio[c]
+    for i in range(n):                  # (2/Δt) M dz/dΔq of the constant-mass bodies
+        ia = fpos[i]
+        if ia < 0:
+            continue
+        for t in range(ptr[i], ptr[i + 1]):
+            jb = fpos[idx[t]]
+            if jb >= 0:
+                mat[ia, jb] += (2.0 / h) * dat[t] * dz[idx[t]]
+    ext[:] = 0.0
+    _add_loads(maps, loads, q0, dq, trow, h, ext, mat, fpos)
+    scale = max(scale, h * max_abs(ext))
+    for i in range(n):
+        r[i] = (p1[i] - p0[i]) + r[i] - h * ext[i]
+    if m:
         cqq, cq_inf = 0.0, 0.0
         for i in range(m):
             s, sa = 0.0, 0.0
@@ -800,20 +965,23 @@ def _evaluate(system, x):
         err_c = max_abs(phi) / (ctol * c_scale)
         for i in range(m):
             for j in range(nf):
-                mat[j, nf + i] = d[i, free[j]]
+                mat[j, nf + i] = d[i, free[j]] * ratio[free[j]]
                 mat[nf + i, j] = cq[i, free[j]]
             res[nf + i] = phi[i]
     vr, fl_inf, vfl = 0.0, 0.0, 0.0
     for i in range(nf):
         a = free[i]
         res[i] = r[a]
-        vb = dq[a] / h
+        vb = z[a] / h
         vr += vb * r[a]
         fl_inf = max(fl_inf, abs(floor[a]))
         vfl += abs(vb) * floor[a]
     vr = abs(vr)
     r_inf = max_abs(res[:nf])
-    e_scale = max(e_scale0, abs(kin1), abs(np.dot(dq, gp)), _TINY)
+    zg = 0.0
+    for i in range(n):
+        zg += z[i] * ratio[i] * gp[i]
+    e_scale = max(e_scale0, abs(0.5 * _dot(v1, p1)), abs(zg), _TINY)
     err = max(r_inf / (rtol * max(scale, _TINY)), err_c, vr / (etol * e_scale))
     err = roundoff_floor(err, err_c, r_inf, fl_inf, vr, vfl)
     return err if all_finite(res) else np.nan
@@ -822,7 +990,7 @@ def _evaluate(system, x):
 @numba.njit(cache=True)
 def _solve(system):
     """``solve`` of the Newton core: the bordered Newton matrix by LAPACK gesv."""
-    res, mat = system[18], system[19]
+    res, mat = system[2][0], system[2][1]
     try:
         return np.linalg.solve(mat, res), True
     except Exception:                  # singular: numba raises LinAlgError
@@ -830,26 +998,30 @@ def _solve(system):
 
 
 @numba.njit(cache=True)
-def _step(packed, work_arrays, q0, v0, p0, h, qp1, trow, pres, free, fpos, lam0, rtol, ctol, etol, max_iterations,
+def _step(packed, ws, q0, v0, p0, h, qp1, trow, pres, free, fpos, lam0, rtol, ctol, etol, max_iterations,
           line_search):
-    """One energy-momentum step; (status, iterations, μ, Δq, q1, v1, p1, r, Q). ``work_arrays`` (the Newton
-    residual and matrix, Δq_base, Δq, q1, v1, p1, r, Q) are allocated once per chunk and overwritten here;
-    ``trow`` is the step's row of the time table."""
-    mass, frames, frame_off, maps, gravity, constraints, bodies, loads = packed
+    """One energy-momentum step: (status, Newton iterations); the new state is left in the workspace
+    ``ws`` (allocated once per chunk: Δq, q1, v1, p1, r, Q, D, Φ, μ = Δt λ̄ ...); ``trow`` is the step's
+    row of the time table."""
+    constraints = packed[5]
     n, nf, m = q0.size, free.size, constraints[7]
-    res, mat, dq_base, dq, q1, v1, p1, r, ext = work_arrays
+    dq_base, mu = ws[2], ws[17]
     dq_base[:] = 0.0
     for i in range(pres.size):
         dq_base[pres[i]] = qp1[i] - q0[pres[i]]
     x = np.empty(nf + m)
     x_scale = 0.0
+    cay = packed[8][2]
     for i in range(nf):
         x[i] = h * v0[free[i]]
         x_scale = max(x_scale, abs(q0[free[i]]))
+    for c in cay:                       # the Cayley rate of the last step, continued: Δψ = 2 atan(Δt ω0/2)
+        if fpos[c] >= 0:
+            x[fpos[c]] = 2.0 * np.arctan(0.5 * x[fpos[c]])
     for i in range(m):
         x[nf + i] = h * lam0[i]
-    system = (mass, frames, frame_off, maps, gravity, constraints, q0, v0, p0, dq_base, free, fpos, h, max_abs(p0),
-              abs(0.5 * np.dot(v0, p0)), rtol, ctol, etol, res, mat, dq, q1, v1, p1, r, loads, trow, ext)
+    step = (q0, v0, p0, free, fpos, h, max_abs(p0), abs(0.5 * _dot(v0, p0)), rtol, ctol, etol, trow)
+    system = (packed, step, ws)
     state = newton_start(x, x_scale, max_iterations, line_search)
     action = EVALUATE
     while action < 0:                  # do what the Newton core asks; its rules are all in the core
@@ -858,14 +1030,16 @@ def _step(packed, work_arrays, q0, v0, p0, h, qp1, trow, pres, free, fpos, lam0,
         else:
             y, regular = _solve(system)
             action = newton_solved(state, y, regular)
-    return action, state[4][0], state[0][nf:].copy(), dq, q1, v1, p1, r, ext
+    mu[:] = state[0][nf:]
+    return action, state[4][0]
 
 
 @numba.njit(cache=True)
-def _derived(packed, q, v, p):
-    """(T, V, p_x, p_y, L about the origin) of the scene at (q, v) with momentum p."""
-    mass, frames, frame_off, maps, gravity, constraints, bodies, loads = packed
-    pot = _frame_strain_energy(frames, frame_off, q)
+def _derived(packed, q, v, p, rv):
+    """(T, V, p_x, p_y, L about the origin) of the scene at (q, v) with momentum p (``rv``: a 2-vector to
+    work in)."""
+    mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain = packed
+    pot = _frame_strain_energy(frames, frame_off, q) + _strain_energy(strain[0], strain[1], q)
     spr_idx, spr_k, spr_p = loads[0], loads[1], loads[2]
     for j in range(spr_idx.size):
         pot += 0.5 * spr_k[j] * q[spr_idx[j]] ** spr_p[j]
@@ -873,60 +1047,78 @@ def _derived(packed, q, v, p):
     for i in range(gmaps.size):
         k = gmaps[i]
         o, nb = maps[1][k], maps[2][k]
-        rk = map_position(maps, k, q[o:o + nb])
-        pot -= gvec[i, 0] * rk[0] + gvec[i, 1] * rk[1]
+        _position_into(maps, k, q[o:o + nb], rv)
+        pot -= gvec[i, 0] * rv[0] + gvec[i, 1] * rv[1]
+    lx, ly, ix, iy, X, Y, ia = bodies[:7]
     px, py, ang = 0.0, 0.0, 0.0
-    bodies = bodies[0]
-    for b in range(bodies.shape[0]):
-        o, nb = bodies[b, 0], bodies[b, 1]
-        px += p[o]
-        if nb >= 2:
-            py += p[o + 1]
-            ang += q[o] * p[o + 1] - q[o + 1] * p[o]
-        if nb >= 3:
-            ang += p[o + 2]
-    return 0.5 * np.dot(v, p), pot, px, py, ang
+    for i in lx:
+        px += p[i]
+    for i in ly:
+        py += p[i]
+    for j in range(ix.size):
+        ang += (X[j] + q[ix[j]]) * p[iy[j]] - (Y[j] + q[iy[j]]) * p[ix[j]]
+    for i in ia:
+        ang += p[i]
+    return 0.5 * _dot(v, p), pot, px, py, ang
 
 
 @numba.njit(cache=True)
-def _run(packed, q, v, t, hs, qp, table, pres, free, fpos, lam, reaction, rtol, ctol, etol, max_iterations,
-         line_search, work, first_step, record_every, n_steps):
-    mass, frames, frame_off, maps, gravity, constraints, bodies, loads = packed
-    n, ns, npr, m = q.size, hs.size, pres.size, constraints[7]
+def _new_workspace(packed, n, nx):
+    maps, m = packed[3], packed[5][7]
+    nbmax = 1
+    for k in range(maps[2].size):
+        nbmax = max(nbmax, maps[2][k])
+    return _workspace(n, m, nx, nbmax)
+
+
+@numba.njit(cache=True)
+def _run(packed, q_start, v_start, t, hs, qp, table, pres, free, fpos, lam_start, reaction_start, rtol, ctol, etol,
+         max_iterations, line_search, work, first_step, record_every, n_steps):
+    mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain = packed
+    n, ns, npr, m = q_start.size, hs.size, pres.size, constraints[7]
     n_rec = record_count(first_step, ns, record_every, n_steps)
     rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac = record_buffers(n_rec, n, npr)
     rec_lam = np.empty((n_rec, m))
-    # T, V, p (2), L, ‖Φ‖∞, ‖Φ_q v‖∞
+    # T, V, p (2), L, ‖Φ‖∞, ‖Φ_q v + Φ_t‖∞
     rec_derived = np.empty((n_rec, 7))
-    probe_maps = bodies[1]
+    probe_maps = bodies[7]
     rec_probe = np.empty((n_rec, probe_maps.size, 2))
     its_total = 0
-    nx = free.size + m
-    work_arrays = (np.zeros(nx), np.zeros((nx, nx)), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
-                   np.zeros(n), np.zeros(n), np.zeros(n))
-    no_tangent = np.zeros((0, 0))
+    ws = _new_workspace(packed, n, free.size + m)
+    dq, q1, v1, p1, r, ext = ws[3], ws[4], ws[5], ws[6], ws[7], ws[8]
+    phi, phi_t, cq, d, mu, rv = ws[12], ws[13], ws[14], ws[15], ws[17], ws[20]
+    z, ratio = ws[23], ws[24]
+    # the state, updated in place after each step (the caller's arrays are not touched)
+    q, v, lam, reaction = q_start.copy(), v_start.copy(), lam_start.copy(), reaction_start.copy()
     p = _scene_momentum(mass, frames, frame_off, q, v)
     i_rec = 0
     for k in range(ns):
         h = hs[k]
-        status, its, mu, dq, q1, v1, p1, r, ext = _step(packed, work_arrays, q, v, p, h, qp[k], table[k], pres, free,
-                                                        fpos, lam, rtol, ctol, etol, max_iterations, line_search)
+        status, its = _step(packed, ws, q, v, p, h, qp[k], table[k], pres, free, fpos, lam, rtol, ctol, etol,
+                            max_iterations, line_search)
         if status == OK and not (all_finite(q1) and all_finite(v1)):
             status = NONFINITE_RESIDUAL
         if status != OK:
             return (status, k, t, q, v, lam, reaction, work, its_total, i_rec, rec_t, rec_q, rec_v, rec_work, rec_its,
                     rec_reac, rec_lam, rec_derived, rec_probe)
-        w = np.dot(dq, ext)
-        reaction = np.empty(npr)
+        w = _dot(z, ext)
         for i in range(npr):
             reaction[i] = r[pres[i]] / h
-            w += dq[pres[i]] * reaction[i]
-        phi, cq, d, phi_t = _constraint_terms(maps, constraints, q, q1, mu, table[k], n, False, no_tangent, fpos)
+            w += z[pres[i]] * reaction[i]
         if m:
-            w -= np.dot(mu, d @ dq) / h          # μ = Δt λ̄: the work is −λ̄·ΔΦ
+            _constraint_terms(maps, constraints, q, q1, mu, table[k], n, False, ws[1], fpos, ws)
+            dphi = 0.0                          # D diag(Δψ/w) z = D Δq = ΔΦ + Δx
+            for i in range(m):
+                for j in range(n):
+                    dphi += mu[i] * d[i, j] * ratio[j] * z[j]
+            w -= dphi / h                       # μ = Δt λ̄: the work is −λ̄·ΔΦ
         work += w
         t = t + h
-        q, v, p, lam = q1.copy(), v1.copy(), p1.copy(), mu / h
+        q[:] = q1
+        v[:] = v1
+        p[:] = p1
+        for i in range(m):
+            lam[i] = mu[i] / h
         its_total += its
         s = first_step + k
         if s % record_every == 0 or s == n_steps:
@@ -937,18 +1129,23 @@ def _run(packed, q, v, t, hs, qp, table, pres, free, fpos, lam, reaction, rtol, 
             rec_its[i_rec] = its
             rec_reac[i_rec] = reaction
             rec_lam[i_rec] = lam
-            tk, vk, px, py, ang = _derived(packed, q, v, p)
+            tk, vk, px, py, ang = _derived(packed, q, v, p, rv)
             rec_derived[i_rec, 0] = tk
             rec_derived[i_rec, 1] = vk
             rec_derived[i_rec, 2] = px
             rec_derived[i_rec, 3] = py
             rec_derived[i_rec, 4] = ang
+            vres = 0.0
+            for i in range(m):
+                vres = max(vres, abs(_dot(cq[i], v) + phi_t[i]))
             rec_derived[i_rec, 5] = max_abs(phi)
-            rec_derived[i_rec, 6] = max_abs(cq @ v + phi_t) if m else 0.0
+            rec_derived[i_rec, 6] = vres
             for j in range(probe_maps.size):
                 kp = probe_maps[j]
                 o = maps[1][kp]
-                rec_probe[i_rec, j] = map_position(maps, kp, q[o:o + maps[2][kp]])
+                _position_into(maps, kp, q[o:o + maps[2][kp]], rv)
+                rec_probe[i_rec, j, 0] = rv[0]
+                rec_probe[i_rec, j, 1] = rv[1]
             i_rec += 1
     return (OK, ns, t, q, v, lam, reaction, work, its_total, i_rec, rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac,
             rec_lam, rec_derived, rec_probe)
@@ -989,28 +1186,26 @@ def newton_system(scene, q0, v0, h, t=0.0, lam=None):
     Returns
     -------
     system : tuple
-        ``system[18]`` is the residual and ``system[19]`` the bordered Newton matrix after an evaluation.
+        (packed scene, step data, workspace); after an evaluation ``system[2][0]`` is the residual and
+        ``system[2][1]`` the bordered Newton matrix.
     x0 : ndarray
         The start of the Newton iteration.
     """
     packed = pack(scene)
     if packed is None:
         raise ValueError(f"scene {scene.name!r} has a part without a compiled form (see compiled_scene.eligible)")
-    mass, frames, frame_off, maps, gravity, constraints, bodies, loads = packed
     n, m = scene.n, scene.n_constraints
     q0, v0 = np.asarray(q0, dtype=float), np.asarray(v0, dtype=float)
     free = scene.free_index.astype(np.int64)
-    p0 = _scene_momentum(mass, frames, frame_off, q0, v0)
+    p0 = _scene_momentum(packed[0], packed[1], packed[2], q0, v0)
     trow = time_table(_packed(scene)[2], float(t), np.array([float(h)]))[0]
-    dq_base = np.zeros(n)
+    ws = _new_workspace(packed, n, free.size + m)
     if scene.prescribed_index.size:
-        dq_base[scene.prescribed_index] = scene.prescribed_state(t + h)[0] - q0[scene.prescribed_index]
-    nx = free.size + m
-    system = (mass, frames, frame_off, maps, gravity, constraints, q0, v0, p0, dq_base, free, _free_positions(scene),
-              float(h), max_abs(p0), abs(0.5 * float(v0 @ p0)), 1e-12, 1e-12, 1e-14, np.zeros(nx), np.zeros((nx, nx)),
-              np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), loads, trow, np.zeros(n))
+        ws[2][scene.prescribed_index] = scene.prescribed_state(t + h)[0] - q0[scene.prescribed_index]
+    step = (q0, v0, p0, free, _free_positions(scene), float(h), max_abs(p0), abs(0.5 * float(v0 @ p0)), 1e-12, 1e-12,
+            1e-14, trow)
     lam = np.zeros(m) if lam is None else np.asarray(lam, dtype=float)
-    return system, np.concatenate([h * v0[free], h * lam])
+    return (packed, step, ws), np.concatenate([h * v0[free], h * lam])
 
 
 #: the compiled loop itself (what a cold cache compiles first)

@@ -57,7 +57,8 @@ class ForceElement:
 
         ``("gravity", g)``; ``("coordinate spring", i, k, p)`` for V = ½ k q_i^p (i over the element's
         own coordinates); ``("point force", point, F)`` for Q = r_qᵀ F(t) (F in the global frame);
-        ``("generalized force", g, M)`` for Q = g M(t) (g constant, over the element's coordinates).
+        ``("generalized force", G, F)`` for Q = Gᵀ F(t) (G constant, (k, the element's coordinates),
+        F(t) of k values).
         """
         return None
 
@@ -626,4 +627,4 @@ class PointMoment(ForceElement):
         return float(self.moment(t)[0]) * self._angle.grad, None, None
 
     def compiled_form(self):
-        return "generalized force", self._angle.grad.copy(), self.moment
+        return "generalized force", self._angle.grad.reshape(1, -1).copy(), self.moment

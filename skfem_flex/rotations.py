@@ -36,7 +36,7 @@ __all__ = ["MAX_INCREMENT", "cayley", "cayley_derivative", "cayley_ratio", "cayl
 #: largest incremental rotation per step the Cayley update accepts, rad (W has a pole at π)
 MAX_INCREMENT = 0.9 * np.pi
 #: below this |Δφ| the closed forms of the ratio's derivative cancel; its Taylor series is exact there
-_SERIES = 1e-2
+SERIES_BELOW = 1e-2
 
 
 @numba.vectorize(cache=True)         # compiled per argument type on first use, not at import
@@ -91,7 +91,7 @@ def cayley_ratio(dphi):
 def cayley_ratio_derivative(dphi):
     """d(Δφ/w)/dΔφ = (sin Δφ − Δφ)/(4 sin²(Δφ/2)), by its Taylor series −Δφ/6 − Δφ³/180 near 0."""
     x = np.asarray(dphi, dtype=float)
-    small = np.abs(x) < _SERIES
+    small = np.abs(x) < SERIES_BELOW
     safe = np.where(small, 1.0, x)
     s = np.sin(0.5 * safe)
     exact = (np.sin(safe) - safe) / (4.0 * s * s)

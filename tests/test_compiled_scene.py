@@ -285,9 +285,11 @@ def assert_same_run(a, b, tol=None):
 
 @pytest.mark.parametrize("name, dt, t_end", [("pendulum", None, 0.3), ("flexible_pendulum", 2e-3, 0.3),
                                              ("double_pendulum", 2e-3, 0.3), ("spin_up_pinned", None, 0.3),
-                                             ("slider_crank", 5e-4, 0.05), ("free_beam", None, 0.3)])
+                                             ("slider_crank", 5e-4, 0.05), ("free_beam", None, 0.3),
+                                             ("very_flexible_pendulum", None, 0.05), ("flying_beam", None, 1.0)])
 def test_catalogue_mechanisms_compiled_equal_python(name, dt, t_end):
-    """Joints, drivers (motion laws through the time table), ground sliders, loads in time."""
+    """Joints, drivers (motion laws through the time table), ground sliders, loads in time, exact beams
+    (Cayley rates)."""
     factory = sf.scenes.get(name)
     scene = factory()
     assert compiled_scene.eligible(scene, EnergyMomentum())
@@ -298,8 +300,19 @@ def test_catalogue_mechanisms_compiled_equal_python(name, dt, t_end):
     assert_same_run(a, b, tol=dict(v=3e-9) if name == "free_beam" else None)
     if scene.n_constraints:
         assert a.lam.shape == (a.t.size, scene.n_constraints) and np.abs(a.lam).max() > 0
-    else:
-        assert np.abs(a.external_work).max() > 0          # the pulse did work
+    if name in ("free_beam", "flying_beam"):
+        assert np.abs(a.external_work).max() > 0          # the load in time did work
+
+
+def test_cayley_terms_are_the_rotations_formulas():
+    """The compiled step's Cayley rate terms against the numpy functions of skfem_flex.rotations."""
+    from skfem_flex import rotations
+    for x in np.concatenate([np.linspace(-2.8, 2.8, 57), [0.0, 1e-9, -3e-5, 0.0099, 0.0101, -0.0101]]):
+        z, ratio, dratio, dz = compiled_scene.cayley_terms(x)
+        assert z == pytest.approx(float(rotations.cayley(x)), rel=1e-15, abs=1e-300)
+        assert ratio == pytest.approx(float(rotations.cayley_ratio(np.array([x]))[0]), rel=1e-15)
+        assert dratio == pytest.approx(float(rotations.cayley_ratio_derivative(x)), rel=1e-14, abs=1e-300)
+        assert dz == pytest.approx(float(rotations.cayley_derivative(x)), rel=1e-15)
 
 
 def test_spring_mass_compiled_equals_python():
@@ -353,7 +366,9 @@ def _bar():
 
 def _ineligible_scenes():
     """Scenes with one part that has no compiled form (and the same scene with a Pin, which is eligible)."""
-    scenes = {"exact beam": (sf.scenes.get("very_flexible_pendulum")(), None)}
+    bar = _bar()
+    scenes = {"rotational spring": (sf.Scene([bar], constraints=[sf.Pin(bar.point((-0.5, 0.0)))],
+                                             forces=[sf.RotationalSpring(bar.point(), stiffness=10.0), sf.Gravity()]), None)}
     bar = _bar()
     guide = _bar()
     scenes["slider on a body"] = (
@@ -404,7 +419,7 @@ def test_compiled_false_and_ineligible_scenes_never_call_the_loop(monkeypatch):
     assert res.completed and res.steps == 5
     sf.simulate(rigid_pendulum(), t_end=0.05, dt=1e-2, integrator="trapezoidal")
     for name, (scene, _) in _ineligible_scenes().items():
-        sf.simulate(scene, t_end=0.02, dt=1e-3 if name == "exact beam" else 1e-2)
+        sf.simulate(scene, t_end=0.02, dt=1e-2)
     monkeypatch.setenv("SKFEM_FLEX_COMPILED", "0")
     sf.simulate(sf.scenes.get("pendulum")(), t_end=0.05, dt=1e-2)
 

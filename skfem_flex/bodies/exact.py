@@ -103,7 +103,7 @@ from ..forces import ForceElement
 from ..errors import ConvergenceError
 from ..rotations import MAX_INCREMENT as _MAX_INCREMENT, cayley_divided_difference, cayley_ratio
 from ..section import Section
-from .base import Body, BodyGeometry, BodyPoint, check_finite_vector
+from .base import Body, BodyGeometry, BodyPoint, check_finite_vector, to_dense
 
 __all__ = ["ExactBeam", "NodalLoad", "ExactDistributedLoad", "ElementInversionError"]
 
@@ -559,6 +559,20 @@ class ExactBeam(Body):
         k_el = np.transpose(g.imag, (0, 2, 1)) / h
         return self._scatter_vector(g_el), self._scatter_matrix(k_el)
 
+    def compiled_strain_data(self):
+        """The packed arrays of the compiled strain-energy kernels (:mod:`.exact_kernel`), built once.
+
+        An :class:`~skfem_flex.bodies.exact_kernel.ExactKernelData` (element DOF map, shape functions
+        and weights at the strain points, EA, kGA, EI, reference direction and angle, the tangent's
+        CSR pattern). The compiled mechanism loop (:mod:`skfem_flex.compiled_scene`) takes a
+        constant-mass body that provides it; the kernels do not depend on the rotation rate.
+        """
+        kd = getattr(self, "_kernel_data", None)
+        if kd is None:
+            from .exact_kernel import pack
+            kd = self._kernel_data = pack(self)
+        return kd
+
     # --------------------------------------------------------------- kinetic
     def mass_matrix(self, q):
         """Constant consistent mass ∫ ρA (δx x + δy y) + ρI δφ φ ds (kg, kg m²)."""
@@ -581,6 +595,14 @@ class ExactBeam(Body):
         nd = self.node_dofs
         r = self.nodal_positions(q)
         return float(r[:, 0] @ p[nd[:, 1]] - r[:, 1] @ p[nd[:, 0]] + p[nd[:, 2]].sum())
+
+    def momentum_layout(self):
+        """(i_x, i_y, X, Y, i_angle): L = Σ (X + q[i_x]) p[i_y] − (Y + q[i_y]) p[i_x] + Σ p[i_angle] and
+        linear momentum (Σ p[i_x], Σ p[i_y]) with p = M v (the nodes' positions and section angles;
+        how the compiled loop records the momenta)."""
+        nd = self.node_dofs
+        return nd[:, 0].copy(), nd[:, 1].copy(), self.reference_positions[:, 0].copy(), \
+            self.reference_positions[:, 1].copy(), nd[:, 2].copy()
 
     # ---------------------------------------------------------- body points
     def _shape_at(self, s):
@@ -772,6 +794,9 @@ class BeamPoint(BodyPoint):
     def angle_jacobian(self, q):
         return self.jphi
 
+    def compiled_map(self):
+        return "linear", to_dense(self.jr), self.reference_position.copy()
+
 
 def _time_function(fn):
     if fn is None:
@@ -847,6 +872,13 @@ class NodalLoad(ForceElement):
         cd, sd = np.cos(d), np.sin(d)
         return c * np.array([cd * self.force[0] - sd * self.force[1], sd * self.force[0] + cd * self.force[1]])
 
+    def compiled_form(self):
+        if self.follower:
+            return None
+        base = np.array([self.force[0], self.force[1], self.moment])
+        return ("generalized force", np.vstack([to_dense(self.point.jr), to_dense(self.point.jphi).reshape(1, -1)]),
+                lambda t: _factor(self.time_function, t) * base)
+
     def generalized_force(self, q, v, t):
         c = _factor(self.time_function, t)
         if not self.follower or c == 0.0:
@@ -886,3 +918,7 @@ class ExactDistributedLoad(ForceElement):
 
     def generalized_force(self, q, v, t):
         return _factor(self.time_function, t) * self.vector, None, None
+
+    def compiled_form(self):
+        return "generalized force", np.asarray(self.vector, dtype=float).reshape(1, -1), \
+            lambda t: np.array([_factor(self.time_function, t)])

@@ -1,0 +1,317 @@
+"""The bordered band solve of dense Newton matrices for compiled code (``linear_solver.bordered_band_solve``).
+
+1. Random bordered-band matrices (frame-like dense rows and columns, multipliers with a zero
+   diagonal, at the start and at the end; nonsymmetric; interiors that need row interchanges) are
+   solved as ``np.linalg.solve`` solves them, and :func:`dense_bordered_plan` finds their border.
+2. The Newton matrix of the compiled loop for the flexible pendulum (16 elements, 53 × 53): its
+   border is the beam's three frame coordinates and the pin's two multipliers.
+3. The solve reports failure (``ok`` False, no silent NaN) for a singular interior block, an entry
+   the plan did not know about and a non-finite matrix; the plan declines full and tiny matrices.
+4. The border rule is the sparse solver's (``_bordered_band_plan`` unchanged, same border for the
+   same threshold).
+"""
+import numpy as np
+import pytest
+import scipy.sparse as sps
+
+import skfem_flex as sf
+from skfem_flex import compiled_scene as cs
+from skfem_flex import linear_solver as ls
+
+from test_linear_solve import bordered_matrix
+
+
+def random_bordered(n_interior, lo, up, n_frame, n_mult, frame_first, seed, pivoting=True):
+    """(mat, pattern, border) of a nonsymmetric band with dense frame rows/columns and multipliers.
+
+    The frame coordinates are dense rows and columns; the multipliers have a zero diagonal and
+    couple to a frame coordinate and to interior coordinates far apart. With ``pivoting`` every
+    third interior diagonal entry is zero (kept in the pattern) or tiny, so the band LU must
+    interchange rows.
+    """
+    rng = np.random.default_rng(seed)
+    n = n_interior + n_frame + n_mult
+    k = n_frame + n_mult
+    if frame_first:            # frame at the start, multipliers at the end (the Newton matrices' layout)
+        frame, mult = np.arange(n_frame), np.arange(n - n_mult, n)
+    else:                      # multipliers first, frame at the end
+        mult, frame = np.arange(n_mult), np.arange(n - n_frame, n)
+    border = np.sort(np.concatenate([frame, mult]))
+    interior = np.setdiff1d(np.arange(n), border)
+    a = np.zeros((n, n))
+    pattern = np.zeros((n, n), dtype=bool)
+    for r in range(n_interior):
+        for c in range(max(0, r - lo), min(n_interior, r + up + 1)):
+            a[interior[r], interior[c]] = rng.normal()
+            pattern[interior[r], interior[c]] = True
+        a[interior[r], interior[r]] += (lo + up + 1) * np.sign(rng.normal())
+    for r in range(1, n_interior - 1, 3):
+        if pivoting:           # [[0, β], [β, d]] on the diagonal: regular, but no pivot in place
+            i, j = interior[r], interior[r + 1]
+            a[i, i] = 0.0 if r % 2 else 1e-6 * rng.normal()
+            a[j, i] = 2.0 * (lo + up + 1) * np.sign(rng.normal())
+            a[i, j] = 2.0 * (lo + up + 1) * np.sign(rng.normal())
+    for f in frame:
+        a[f, :] = rng.normal(size=n)
+        a[:, f] = rng.normal(size=n)
+        a[f, f] += 10.0 * n
+        pattern[f, :] = pattern[:, f] = True
+    for i, mu in enumerate(mult):
+        cols = [frame[i % n_frame], interior[(3 * i + 1) % n_interior], interior[-1 - 2 * i]]
+        a[mu, :] = a[:, mu] = 0.0
+        a[mu, cols] = rng.normal(size=3) + 1.0
+        a[cols, mu] = rng.normal(size=3) - 1.0
+        pattern[mu, :] = pattern[:, mu] = False
+        pattern[mu, cols] = pattern[cols, mu] = True
+    assert np.all(pattern | (a == 0.0))
+    return a, pattern, border
+
+
+def rel_error(x, ref):
+    return np.abs(x - ref).max() / np.abs(ref).max()
+
+
+CASES = [  # (interior size, lo, up, frame coordinates, multipliers, frame first)
+    (12, 2, 3, 3, 2, True),
+    (40, 4, 4, 3, 2, True),
+    (40, 3, 5, 3, 2, False),
+    (100, 5, 2, 3, 4, True),
+    (150, 4, 4, 6, 3, False),
+]
+
+
+@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("pivoting", [True, False])
+def test_random_bordered_band_matches_dense_solve(case, pivoting):
+    ni, lo, up, n_frame, n_mult, frame_first = case
+    for seed in range(3):
+        a, pattern, border = random_bordered(ni, lo, up, n_frame, n_mult, frame_first, seed, pivoting)
+        plan = ls.dense_bordered_plan(pattern)
+        assert plan is not None
+        interior, plan_border, plan_lo, plan_up = plan
+        np.testing.assert_array_equal(plan_border, border)
+        np.testing.assert_array_equal(interior, np.setdiff1d(np.arange(a.shape[0]), border))
+        assert (plan_lo, plan_up) == (lo, up)
+        assert interior.dtype == np.int64 and plan_border.dtype == np.int64
+        rhs = np.random.default_rng(100 + seed).normal(size=a.shape[0])
+        before = a.copy()
+        x, ok = ls.bordered_band_solve(a, rhs, *plan)
+        assert ok
+        np.testing.assert_array_equal(a, before)                 # mat is only read
+        ref = np.linalg.solve(a, rhs)
+        assert rel_error(x, ref) <= 1e-12          # cond(a) ≤ 1e7 here, cond(A_II) ≈ 4
+
+
+def test_interior_without_pivoting_would_fail():
+    """The random interiors really need row interchanges: an exactly zero diagonal entry in the band."""
+    a, pattern, border = random_bordered(40, 4, 4, 3, 2, True, seed=0, pivoting=True)
+    interior = np.setdiff1d(np.arange(a.shape[0]), border)
+    assert np.any(np.diagonal(a)[interior] == 0.0)
+    x, ok = ls.bordered_band_solve(a, np.ones(a.shape[0]), *ls.dense_bordered_plan(pattern))
+    assert ok and np.allclose(a @ x, 1.0, rtol=0, atol=1e-12)
+
+
+def test_border_columns_zero_on_the_interior_are_skipped():
+    """A border coordinate whose column vanishes on the interior, before others that do not."""
+    a, pattern, border = random_bordered(30, 3, 3, 3, 2, False, seed=4)   # multipliers 0, 1 first
+    a[np.ix_(np.setdiff1d(np.arange(a.shape[0]), border), [0, 1])] = 0.0
+    a[[0, 1], -1] = [1.0, -2.0]             # still regular: multipliers constrain frame coordinates only
+    a[-1, [0, 1]] = [0.5, 0.7]
+    a[[0, 1], -2] = [0.3, 1.1]
+    a[-2, [0, 1]] = [-0.4, 0.2]
+    plan = (np.setdiff1d(np.arange(a.shape[0]), border), border, 3, 3)
+    rhs = np.linspace(-1.0, 2.0, a.shape[0])
+    x, ok = ls.bordered_band_solve(a, rhs, *plan)
+    assert ok
+    assert rel_error(x, np.linalg.solve(a, rhs)) <= 1e-12
+
+
+def residual_and_matrix(system):
+    """The Newton residual and matrix in a system of ``compiled_scene.newton_system`` after ``_evaluate``.
+
+    Two layouts are known: a flat tuple (``system[18]``, ``system[19]``) and (packed scene, step
+    data, workspace) with both at the start of the workspace."""
+    if len(system) > 19:
+        return system[18], system[19]
+    return system[2][0], system[2][1]
+
+
+@pytest.fixture(scope="module")
+def pendulum_newton():
+    """Newton matrix and residual of the compiled loop for the flexible pendulum, and its pattern.
+
+    The pattern is the union over evaluations at the start of the Newton iteration and at random
+    perturbations of it: an entry that happens to be zero at one state is kept."""
+    scene = sf.scenes.get("flexible_pendulum")(n_elements=16)
+    q0 = np.concatenate([np.asarray(b.q0, dtype=float) for b in scene.bodies])
+    v0 = np.concatenate([np.asarray(b.v0, dtype=float) for b in scene.bodies]) + 0.01
+    system, x0 = cs.newton_system(scene, q0, v0, 1e-3)
+    cs._evaluate(system, x0)
+    res, mat = (v.copy() for v in residual_and_matrix(system))
+    pattern = mat != 0.0
+    rng = np.random.default_rng(0)
+    for _ in range(4):
+        cs._evaluate(system, x0 + 1e-3 * rng.normal(size=x0.size))
+        pattern |= residual_and_matrix(system)[1] != 0.0
+    return scene, mat, res, pattern
+
+
+def test_flexible_pendulum_newton_matrix(pendulum_newton):
+    scene, mat, res, pattern = pendulum_newton
+    n = mat.shape[0]
+    assert n == 53 and scene.n_constraints == 2
+    plan = ls.dense_bordered_plan(pattern)
+    assert plan is not None
+    interior, border, lo, up = plan
+    # the beam's frame coordinates (R_x, R_y, θ: couple to every elastic coordinate) and the pin's
+    # two multipliers (zero diagonal); the elastic coordinates form a band of three per node
+    np.testing.assert_array_equal(border, [0, 1, 2, n - 2, n - 1])
+    assert (lo, up) == (4, 4)
+    # the sparse solver's threshold gives the same border at this size
+    np.testing.assert_array_equal(ls.dense_bordered_plan(pattern, far=ls.MAX_BANDWIDTH // 2)[1], border)
+    x, ok = ls.bordered_band_solve(mat, res, *plan)
+    assert ok
+    ref = np.linalg.solve(mat, res)
+    assert rel_error(x, ref) <= 1e-12
+
+
+def test_singular_interior_block_reports_failure():
+    # two interior coordinates with the same row and column inside the band (A_II singular) that
+    # differ in their coupling to a frame coordinate: the whole matrix is regular
+    a, pattern, border = random_bordered(40, 3, 3, 3, 2, True, seed=1, pivoting=False)
+    interior = np.setdiff1d(np.arange(a.shape[0]), border)
+    i, j = interior[20], interior[21]
+    for c in (i, j):
+        a[c, interior] = 0.0
+        a[interior, c] = 0.0
+    a[i, i] = a[i, j] = a[j, i] = a[j, j] = 1.0
+    a[i, 0] = a[0, i] = 1.0
+    a[j, 0] = a[0, j] = 0.0
+    assert np.linalg.matrix_rank(a) == a.shape[0]
+    plan = ls.dense_bordered_plan(pattern)
+    x, ok = ls.bordered_band_solve(a, np.ones(a.shape[0]), *plan)
+    assert not ok
+    assert np.all(np.isfinite(np.linalg.solve(a, np.ones(a.shape[0]))))     # the caller's fallback
+
+
+def test_entry_outside_the_planned_band_reports_failure():
+    """A pattern from too few evaluations: the check with the dense matrix catches the missed entry."""
+    a, pattern, border = random_bordered(40, 3, 3, 3, 2, True, seed=2, pivoting=False)
+    plan = ls.dense_bordered_plan(pattern)
+    rhs = np.ones(a.shape[0])
+    assert ls.bordered_band_solve(a, rhs, *plan)[1]
+    interior = plan[0]
+    a[interior[5], interior[30]] = 1.0
+    x, ok = ls.bordered_band_solve(a, rhs, *plan)
+    assert not ok
+
+
+@pytest.mark.parametrize("where", ["interior", "border", "outside"])
+def test_non_finite_matrix_reports_failure(where):
+    a, pattern, border = random_bordered(40, 3, 3, 3, 2, True, seed=3, pivoting=False)
+    plan = ls.dense_bordered_plan(pattern)
+    interior = plan[0]
+    i, j = {"interior": (interior[4], interior[5]), "border": (border[0], interior[7]),
+            "outside": (interior[2], interior[35])}[where]
+    a[i, j] = np.nan
+    x, ok = ls.bordered_band_solve(a, np.ones(a.shape[0]), *plan)
+    assert not ok
+
+
+def test_plan_does_not_fit_raises():
+    a, pattern, border = random_bordered(20, 2, 2, 3, 2, True, seed=0)
+    interior, border, lo, up = ls.dense_bordered_plan(pattern)
+    with pytest.raises(ValueError):
+        ls.bordered_band_solve(a[:-1, :-1].copy(), np.ones(a.shape[0] - 1), interior, border, lo, up)
+    with pytest.raises(ValueError):
+        ls.bordered_band_solve(a, np.ones(a.shape[0]), interior + a.shape[0], border, lo, up)
+
+
+def test_plan_declines_dense_tiny_and_wide():
+    rng = np.random.default_rng(0)
+    assert ls.dense_bordered_plan(np.ones((60, 60), dtype=bool)) is None              # full
+    a, pattern, _ = random_bordered(6, 1, 1, 3, 2, True, seed=0)
+    assert pattern.shape[0] < ls.MIN_DENSE_BORDERED and ls.dense_bordered_plan(pattern) is None
+    sparse = rng.random((60, 60)) < 0.2                                                # no band structure
+    np.fill_diagonal(sparse, True)
+    assert ls.dense_bordered_plan(sparse) is None
+    with pytest.raises(ValueError):
+        ls.dense_bordered_plan(np.ones((3, 4), dtype=bool))
+
+
+def _reference_bordered_band_plan(a):
+    """``linear_solver._bordered_band_plan`` as it was before its border rule became ``_choose_border``."""
+    n = a.shape[0]
+    if a.shape[1] != n or n == 0:
+        return None
+    rows = np.repeat(np.arange(n), np.diff(a.indptr))
+    cols = a.indices
+    far = np.abs(rows - cols) > ls.MAX_BANDWIDTH // 2
+    fr, fc = rows[far], cols[far]
+    border = a.diagonal() == 0.0
+    while fr.size:
+        if border.sum() >= ls.MAX_BORDER:
+            return None
+        worst = int(np.argmax(np.bincount(fr, minlength=n) + np.bincount(fc, minlength=n)))
+        border[worst] = True
+        keep = (fr != worst) & (fc != worst)
+        fr, fc = fr[keep], fc[keep]
+    k = int(border.sum())
+    if k == 0 or k == n:
+        return None
+    interior = np.flatnonzero(~border)
+    bidx = np.flatnonzero(border)
+    pos = np.empty(n, dtype=np.int64)
+    pos[interior] = np.arange(interior.size)
+    pos[bidx] = np.arange(k)
+    r_in, c_in = ~border[rows], ~border[cols]
+    ii, ib, bi, bb = r_in & c_in, r_in & ~c_in, ~r_in & c_in, ~r_in & ~c_in
+    off = pos[cols[ii]] - pos[rows[ii]]
+    lo, up = int(max(0, -off.min(initial=0))), int(max(0, off.max(initial=0)))
+    if lo + up > ls.MAX_BANDWIDTH:
+        return None
+    ni = interior.size
+    band = (np.flatnonzero(ii), (up - off) * ni + pos[cols[ii]])
+    dense_ib = (np.flatnonzero(ib), pos[rows[ib]] * k + pos[cols[ib]])
+    dense_bb = (np.flatnonzero(bb), pos[rows[bb]] * k + pos[cols[bb]])
+    take_bi = np.flatnonzero(bi)
+    bi_ptr = np.concatenate([[0], np.cumsum(np.bincount(pos[rows[bi]], minlength=k))])
+    return lo, up, interior, bidx, band, dense_ib, dense_bb, (take_bi, pos[cols[bi]], bi_ptr), rows
+
+
+def _same(a, b):
+    if isinstance(a, tuple):
+        return isinstance(b, tuple) and len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
+    if isinstance(a, np.ndarray):
+        return isinstance(b, np.ndarray) and a.dtype == b.dtype and np.array_equal(a, b)
+    return type(a) is type(b) and a == b
+
+
+def _csr_examples():
+    yield bordered_matrix(200).tocsr()
+    yield bordered_matrix(1000, n_frame=6, n_mult=4, half_band=5, seed=3).tocsr()
+    rng = np.random.default_rng(7)
+    yield sps.random(300, 300, density=0.02, random_state=rng, format="csr") + sps.identity(300, format="csr")
+    yield sps.diags([np.ones(99), np.ones(100), np.ones(99)], [-1, 0, 1], format="csr")
+    many = sps.lil_matrix(bordered_matrix(400).tocsr())
+    for i in range(0, 400, 2):                                    # more far coordinates than MAX_BORDER
+        many[i, (i + 200) % 400] = 1.0
+    yield many.tocsr()
+
+
+def test_sparse_bordered_band_plan_unchanged():
+    for a in _csr_examples():
+        ref = _reference_bordered_band_plan(a)
+        new = ls._bordered_band_plan(a)
+        assert (ref is None) == (new is None)
+        if ref is not None:
+            assert _same(new, ref)
+
+
+def test_dense_plan_with_the_sparse_threshold_has_the_sparse_border():
+    a = bordered_matrix(200).tocsr()
+    sparse_plan = ls._bordered_band_plan(a)
+    dense_plan = ls.dense_bordered_plan(a.toarray() != 0.0, far=ls.MAX_BANDWIDTH // 2, max_border=ls.MAX_BORDER)
+    np.testing.assert_array_equal(dense_plan[1], sparse_plan[3])
+    np.testing.assert_array_equal(dense_plan[0], sparse_plan[2])
+    assert dense_plan[2:] == sparse_plan[:2]
