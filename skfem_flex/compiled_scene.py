@@ -42,6 +42,7 @@ from .bodies.base import to_dense
 from .bodies.floating_kernel import energy_momentum_terms, momentum, potential_energy, sinc_half
 from .compiled_loop import chunk_schedule, record_buffers, record_count
 from .integrators import EnergyMomentum
+from .linear_solver import MIN_DENSE_BORDERED, bordered_band_solve, dense_bordered_plan
 from .newton import (CONVERGED, EVALUATE, NONFINITE_RESIDUAL, all_finite, max_abs, newton_evaluated, newton_solved,
                      newton_start, roundoff_floor)
 from .rotations import SERIES_BELOW, sinc
@@ -541,10 +542,40 @@ def _pack(scene):
     mass = sps.csr_matrix(mass)
     mass.sort_indices()
     mass = (mass.indptr.astype(np.int64), mass.indices.astype(np.int64), mass.data.astype(float))
+    # whether each floating-frame body's tangent pattern is full and row-major (a block add)
+    frame_full = np.array([kd.pat_idx.size == kd.n ** 2 and np.array_equal(kd.pat_idx, np.tile(np.arange(kd.n), kd.n))
+                           for kd in frames], dtype=np.bool_)
     strain = (tuple(strains) if strains else None, np.asarray(strain_off, dtype=np.int64),
-              np.asarray(scene.cayley_index, dtype=np.int64))
-    return (mass, tuple(frames) if frames else None, np.asarray(frame_off, dtype=np.int64), maps, gravity,
-            constraints, bodies, loads, strain), tuple(probe_names), tuple(table)
+              np.asarray(scene.cayley_index, dtype=np.int64), frame_full)
+    dense = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), 0, 0)
+    packed = (mass, tuple(frames) if frames else None, np.asarray(frame_off, dtype=np.int64), maps, gravity,
+              constraints, bodies, loads, strain, dense)
+    nx = scene.free_index.size + scene.n_constraints
+    if nx >= MIN_DENSE_BORDERED:                # how the loop solves the Newton system: fixed by its pattern
+        plan = dense_bordered_plan(_newton_pattern(scene, packed, tuple(table)))
+        if plan is not None:
+            packed = packed[:9] + (plan,)
+    return packed, tuple(probe_names), tuple(table)
+
+
+def _newton_pattern(scene, packed, columns):
+    """Where the bordered Newton matrix (free coordinates, then multipliers) is nonzero: the union over
+    three evaluations at random states near the initial one (random states leave no entry zero by
+    symmetry). An entry missed here cannot give a wrong step: the bordered band solve checks its
+    backward error and the dense solve takes over."""
+    rng = np.random.default_rng(1)
+    q_ref, v_ref = scene.initial_state()
+    n, m = scene.n, scene.n_constraints
+    pat = None
+    for _ in range(3):
+        q = q_ref + 1e-3 * (1.0 + np.abs(q_ref)) * rng.standard_normal(n)
+        v = v_ref + rng.standard_normal(n)
+        system, x = _system(scene, packed, columns, q, v, 1e-3, 0.0, rng.standard_normal(m))
+        x = x + 1e-6 * rng.standard_normal(x.size)
+        _evaluate(system, x)
+        hit = system[2][1] != 0.0
+        pat = hit if pat is None else pat | hit
+    return pat
 
 
 def _momentum_layout(body, kd, rng):
@@ -637,10 +668,9 @@ def _workspace(n, m, nx, nbmax):
 
 
 @numba.njit(cache=True)
-def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, with_tangent, mat, fpos, ws):
-    """Φ(q1, t1), Φ_t, Φ_q(q1) and D into the workspace (ws[12:16]); if ``with_tangent``, ∂(Dᵀμ)/∂q1 is
-    added to ``mat`` (the Newton matrix; after a step only D is needed, for the work). ``trow`` is the
-    step's row of the time table (drivers' x(t1), ẋ(t1))."""
+def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, mat, fpos, ws):
+    """Φ(q1, t1), Φ_t, Φ_q(q1) and D into the workspace (ws[12:16]), ∂(Dᵀμ)/∂q1 added to ``mat`` (the
+    Newton matrix). ``trow`` is the step's row of the time table (drivers' x(t1), ẋ(t1))."""
     kind, row, t0, term_map, term_sign, const, length, m, _, l0, lin_idx, lin_coef, nrm, law = constraints
     phi, phi_t, cq, d = ws[12], ws[13], ws[14], ws[15]
     f, acc, rv, jac, dk = ws[18], ws[19], ws[20], ws[21], ws[22]
@@ -675,8 +705,7 @@ def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, with_tangent, mat,
                         for j in range(nb):
                             cq[r0 + a, o + j] += s * jac[a, j]
                             d[r0 + a, o + j] += s * dk[a, j]
-                if with_tangent:
-                    _add_dgrad_jacobian(maps, k, qb0, qb1, f, 1.0, mat, fpos, no_floor)
+                _add_dgrad_jacobian(maps, k, qb0, qb1, f, 1.0, mat, fpos, no_floor)
             if proj:
                 phi[r0] = nrm[i, 0] * acc[0] + nrm[i, 1] * acc[1]
             else:
@@ -706,15 +735,14 @@ def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, with_tangent, mat,
             my = 0.5 * (acc[1] + rv[1]) - const[i, 1]
             for j in range(nb):
                 d[r0, o + j] = mx * jac[0, j] + my * jac[1, j]
-            if with_tangent:                    # ∂(μ Jᵀ(r̄ − a))/∂q1 = ½ μ JᵀJ (J constant)
-                for a in range(nb):
-                    ia = fpos[o + a]
-                    if ia < 0:
-                        continue
-                    for j in range(nb):
-                        jb = fpos[o + j]
-                        if jb >= 0:
-                            mat[ia, jb] += 0.5 * mu[r0] * (jac[0, a] * jac[0, j] + jac[1, a] * jac[1, j])
+            for a in range(nb):                 # ∂(μ Jᵀ(r̄ − a))/∂q1 = ½ μ JᵀJ (J constant)
+                ia = fpos[o + a]
+                if ia < 0:
+                    continue
+                for j in range(nb):
+                    jb = fpos[o + j]
+                    if jb >= 0:
+                        mat[ia, jb] += 0.5 * mu[r0] * (jac[0, a] * jac[0, j] + jac[1, a] * jac[1, j])
 
 
 @numba.njit(cache=True)
@@ -759,9 +787,10 @@ def _add_loads(maps, loads, q0, dq, trow, h, ext, mat, fpos):
 
 
 @numba.njit(cache=True)
-def _add_frame_terms(frames, frame_off, q0, q1, v0, v1, h, p1, gk, gp, floor, mat, fpos):
+def _add_frame_terms(frames, frame_off, frame_full, q0, q1, v0, v1, h, p1, gk, gp, floor, mat, fpos):
     """Add the floating-frame bodies' energy-momentum terms (a separate function: ``frames`` is
-    None in scenes without such bodies, and Numba prunes the branch only on an argument)."""
+    None in scenes without such bodies, and Numba prunes the branch only on an argument);
+    ``frame_full[i]``: body i's tangent pattern is full and row-major."""
     if frames is None:
         return
     for i in range(len(frames)):
@@ -774,6 +803,15 @@ def _add_frame_terms(frames, frame_off, q0, q1, v0, v1, h, p1, gk, gp, floor, ma
         gk[o:o + nb] += gkb
         gp[o:o + nb] += gpb
         floor[o:o + nb] += flb
+        f0 = fpos[o]
+        if frame_full[i] and f0 >= 0 and fpos[o + nb - 1] == f0 + nb - 1:
+            # a full row-major pattern on free, consecutive coordinates: a plain block add (the
+            # indirect scatter below costs twice the kernel's own time on a 16-element beam)
+            for a in range(nb):
+                row = mat[f0 + a]
+                for b in range(nb):
+                    row[f0 + b] += data[a * nb + b]
+            continue
         for a in range(nb):
             ia = fpos[o + a]
             if ia < 0:
@@ -868,12 +906,12 @@ def _evaluate(system, x):
     force rows (discrete gradients, constraint forces) are scaled by Δψ/w and the Jacobian is
     (2/Δt) M diag(dz/dΔq) + diag(Δψ/w) J_forces + diag(g d(Δψ/w)/dΔψ), as in the Python step."""
     packed, step, ws = system
-    mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain = packed
+    mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain, plan = packed
     q0, v0, p0, free, fpos, h, p0_inf, e_scale0, rtol, ctol, etol, trow = step
     res, mat, dq_base, dq, q1, v1, p1, r, ext, gk, gp, floor = ws[:12]
     phi, cq, d, dtmu, f = ws[12], ws[14], ws[15], ws[16], ws[18]
     z, ratio, dratio, dz = ws[23], ws[24], ws[25], ws[26]
-    strains, strain_off, cay = strain
+    strains, strain_off, cay, _ = strain
     n, nf = q0.size, free.size
     m = constraints[7]
     mu = x[nf:]
@@ -897,7 +935,7 @@ def _evaluate(system, x):
     gk[:] = 0.0
     gp[:] = 0.0
     floor[:] = 0.0
-    _add_frame_terms(frames, frame_off, q0, q1, v0, v1, h, p1, gk, gp, floor, mat, fpos)
+    _add_frame_terms(frames, frame_off, strain[3], q0, q1, v0, v1, h, p1, gk, gp, floor, mat, fpos)
     _add_springs(loads, q0, q1, h, gp, floor, mat, fpos)
     if not _add_strain_terms(strains, strain_off, q0, q1, h, gp, floor, mat, fpos):
         return np.nan
@@ -922,7 +960,7 @@ def _evaluate(system, x):
     scale = max(scale, h * max_abs(gk), h * max_abs(gp))
     err_c = 0.0
     if m:
-        _constraint_terms(maps, constraints, q0, q1, mu, trow, n, True, mat, fpos, ws)
+        _constraint_terms(maps, constraints, q0, q1, mu, trow, n, mat, fpos, ws)
         for j in range(n):
             s = 0.0
             for i in range(m):
@@ -989,8 +1027,15 @@ def _evaluate(system, x):
 
 @numba.njit(cache=True)
 def _solve(system):
-    """``solve`` of the Newton core: the bordered Newton matrix by LAPACK gesv."""
+    """``solve`` of the Newton core: the bordered Newton matrix as a band with a dense border when the
+    scene's plan has one (:func:`skfem_flex.linear_solver.bordered_band_solve`, several times faster
+    on beams), else, or when that solve is not backward stable, by LAPACK gesv."""
     res, mat = system[2][0], system[2][1]
+    interior, border, lo, up = system[0][9]
+    if interior.size:
+        x, ok = bordered_band_solve(mat, res, interior, border, lo, up)
+        if ok:
+            return x, True
     try:
         return np.linalg.solve(mat, res), True
     except Exception:                  # singular: numba raises LinAlgError
@@ -1038,7 +1083,7 @@ def _step(packed, ws, q0, v0, p0, h, qp1, trow, pres, free, fpos, lam0, rtol, ct
 def _derived(packed, q, v, p, rv):
     """(T, V, p_x, p_y, L about the origin) of the scene at (q, v) with momentum p (``rv``: a 2-vector to
     work in)."""
-    mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain = packed
+    mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain, plan = packed
     pot = _frame_strain_energy(frames, frame_off, q) + _strain_energy(strain[0], strain[1], q)
     spr_idx, spr_k, spr_p = loads[0], loads[1], loads[2]
     for j in range(spr_idx.size):
@@ -1074,7 +1119,7 @@ def _new_workspace(packed, n, nx):
 @numba.njit(cache=True)
 def _run(packed, q_start, v_start, t, hs, qp, table, pres, free, fpos, lam_start, reaction_start, rtol, ctol, etol,
          max_iterations, line_search, work, first_step, record_every, n_steps):
-    mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain = packed
+    mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain, plan = packed
     n, ns, npr, m = q_start.size, hs.size, pres.size, constraints[7]
     n_rec = record_count(first_step, ns, record_every, n_steps)
     rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac = record_buffers(n_rec, n, npr)
@@ -1106,7 +1151,8 @@ def _run(packed, q_start, v_start, t, hs, qp, table, pres, free, fpos, lam_start
             reaction[i] = r[pres[i]] / h
             w += z[pres[i]] * reaction[i]
         if m:
-            _constraint_terms(maps, constraints, q, q1, mu, table[k], n, False, ws[1], fpos, ws)
+            # Φ, Φ_q and D are those of the last evaluation: the Newton core ends at the point it
+            # evaluated last (module newton: no exit evaluates a point it then leaves)
             dphi = 0.0                          # D diag(Δψ/w) z = D Δq = ΔΦ + Δx
             for i in range(m):
                 for j in range(n):
@@ -1194,11 +1240,15 @@ def newton_system(scene, q0, v0, h, t=0.0, lam=None):
     packed = pack(scene)
     if packed is None:
         raise ValueError(f"scene {scene.name!r} has a part without a compiled form (see compiled_scene.eligible)")
+    return _system(scene, packed, _packed(scene)[2], q0, v0, h, t, lam)
+
+
+def _system(scene, packed, columns, q0, v0, h, t, lam):
     n, m = scene.n, scene.n_constraints
     q0, v0 = np.asarray(q0, dtype=float), np.asarray(v0, dtype=float)
     free = scene.free_index.astype(np.int64)
     p0 = _scene_momentum(packed[0], packed[1], packed[2], q0, v0)
-    trow = time_table(_packed(scene)[2], float(t), np.array([float(h)]))[0]
+    trow = time_table(columns, float(t), np.array([float(h)]))[0]
     ws = _new_workspace(packed, n, free.size + m)
     if scene.prescribed_index.size:
         ws[2][scene.prescribed_index] = scene.prescribed_state(t + h)[0] - q0[scene.prescribed_index]

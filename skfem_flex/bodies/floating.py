@@ -170,13 +170,15 @@ class FloatingBeam(FloatingFrame):
         self._gl_cache = {}
         # ------------------------------------------------ matrix layout and compiled-kernel data
         blocks = dict(MA=self._MA, H=self._H, Mff=self._Mff, K=self._K)
-        if self.sparse:
-            self._pattern = sparse_pattern(n, nf, blocks, self._ax.loc)
-        else:
+        # the compiled kernels work on the sparse pattern for dense bodies too: the elastic block is a
+        # band, and the full n × n pattern made them touch 4× the entries (flexible pendulum, 16 el.)
+        self._pattern = sparse_pattern(n, nf, blocks, self._ax.loc)
+        if not self.sparse:
             self._ffd = blocks
             self._scatter = dense_scatter(self._ax.loc, nf)
-        self._kd = kernel_data(n, nf, strain == "green-lagrange", inertia, blocks,
-                               self._pattern if self.sparse else None, self._ax.dNt, self._ax.loc, self._ax.wq)
+            self._pattern_rows = np.repeat(np.arange(n), np.diff(self._pattern.indptr))
+        self._kd = kernel_data(n, nf, strain == "green-lagrange", inertia, blocks, self._pattern, self._ax.dNt,
+                               self._ax.loc, self._ax.wq)
 
         # ------------------------------------------------ initial state
         qf0 = np.zeros(nf) if elastic is None else check_finite_vector("elastic", elastic, nf)
@@ -350,7 +352,8 @@ class FloatingBeam(FloatingFrame):
         if self.sparse:
             jac = sps.csr_matrix((data, self._pattern.indices, self._pattern.indptr), shape=(n, n))
         else:
-            jac = data.reshape(n, n)
+            jac = np.zeros((n, n))
+            jac[self._pattern_rows, self._pattern.indices] = data
         return p, gk, gp, jac, floor
 
     def strains(self, q):

@@ -11,9 +11,8 @@ element matrices of the axial kernel (``floating_strain.py``) on each element's 
 * Dense bodies compose with ``FloatingFrame._compose`` and scatter the element matrices into the
   elastic block through :class:`DenseScatter` (O(n) work, not the O(n³) of dense dεᵀ dε).
 * :func:`kernel_data` packs the arrays the compiled kernels (``floating_kernel.py``) work on: the
-  tangent is written as the data of one CSR pattern (the sparse body's, or the full n × n
-  pattern of a dense body, whose data reshapes to the dense matrix), so every term gets its
-  positions in that pattern here.
+  tangent is written as the data of the body's one CSR pattern (dense bodies use it too, and
+  scatter it into their dense matrix), so every term gets its positions in that pattern here.
 """
 from __future__ import annotations
 
@@ -175,8 +174,8 @@ def kernel_data(n, nf, green, inertia, blocks, pattern, dNt, loc, wq):
         The invariants (``floating_inertia.py``).
     blocks : dict
         The constant elastic blocks M_A, H, M_ff, K by key (as the body holds them).
-    pattern : SparsePattern or None
-        The sparse body's pattern; None: dense body (full n × n pattern).
+    pattern : SparsePattern
+        The body's pattern (:func:`sparse_pattern`, for dense bodies too: their elastic block is a band).
     dNt, loc, wq : ndarray
         ``AxialQuadrature.dNt``, ``.loc``, ``.wq``.
 
@@ -185,10 +184,7 @@ def kernel_data(n, nf, green, inertia, blocks, pattern, dNt, loc, wq):
     RuntimeError
         If a term falls outside the pattern (a bug in :func:`sparse_pattern`, not bad input).
     """
-    if pattern is not None:
-        ptr, idx = pattern.indptr, pattern.indices
-    else:
-        ptr, idx = np.arange(0, n * n + 1, n), np.tile(np.arange(n), n)
+    ptr, idx = pattern.indptr, pattern.indices
     keys = np.repeat(np.arange(n, dtype=np.int64), np.diff(ptr)) * n + idx   # row-major keys of the pattern
 
     def at(flat):
