@@ -323,6 +323,8 @@ def chunk_schedule(scene, t, dt, t_end, first_step, n_chunk, n_steps):
         t = t + h
         hs[k], times[k] = h, t
     laws = [p.law.position for p in scene.prescribed]
+    if not laws:
+        return hs, np.zeros((n_chunk, 0))
     qp = np.array([[float(f(tk)) for f in laws] for tk in times], dtype=float).reshape(n_chunk, len(laws))
     return hs, qp
 

@@ -550,12 +550,26 @@ def _pack(scene):
     dense = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), 0, 0)
     packed = (mass, tuple(frames) if frames else None, np.asarray(frame_off, dtype=np.int64), maps, gravity,
               constraints, bodies, loads, strain, dense)
-    nx = scene.free_index.size + scene.n_constraints
-    if nx >= MIN_DENSE_BORDERED:                # how the loop solves the Newton system: fixed by its pattern
-        plan = dense_bordered_plan(_newton_pattern(scene, packed, tuple(table)))
-        if plan is not None:
-            packed = packed[:9] + (plan,)
     return packed, tuple(probe_names), tuple(table)
+
+
+_PLANNED = weakref.WeakKeyDictionary()
+
+
+def _planned(scene):
+    """The packed scene with its plan for the Newton solve (a band with a dense border, or dense LU when
+    that is not cheaper), fixed once per scene by the matrix's pattern. Made on the first run, not in
+    :func:`pack`: the pattern takes compiled evaluations, which a cold cache must compile first
+    (``simulate`` says so before, and counts it as compile time)."""
+    packed = _PLANNED.get(scene)
+    if packed is None:
+        packed, _, columns = _packed(scene)
+        if scene.free_index.size + scene.n_constraints >= MIN_DENSE_BORDERED:
+            plan = dense_bordered_plan(_newton_pattern(scene, packed, columns))
+            if plan is not None:
+                packed = packed[:9] + (plan,)
+        _PLANNED[scene] = packed
+    return packed
 
 
 def _newton_pattern(scene, packed, columns):
@@ -1200,20 +1214,34 @@ def _run(packed, q_start, v_start, t, hs, qp, table, pres, free, fpos, lam_start
 def time_table(columns, t, hs):
     """The functions of time the loop needs, evaluated in Python for a chunk of steps from time ``t`` (s)
     with sizes ``hs``: row k, column c is ``fun(t_k+1)[comp]`` ("end": drivers' motion laws, as the
-    Python step evaluates Φ(q1, t1)) or ``fun(t_k + h_k/2)[comp]`` ("mid": loads at the mid-point)."""
+    Python step evaluates Φ(q1, t1)) or ``fun(t_k + h_k/2)[comp]`` ("mid": loads at the mid-point).
+
+    Each function is called once per step (its ``unchecked`` form when it has one), and the table is
+    checked at once: an entry that is not finite raises the function's own error (or a ValueError
+    naming it and the time)."""
     table = np.zeros((hs.size, max(len(columns), 1)))
     if not columns:
         return table
-    for k in range(hs.size):
-        t1 = t + hs[k]
-        tm = t + 0.5 * hs[k]
-        cache = {}
-        for c, (when, fun, comp) in enumerate(columns):
-            key = (id(fun), when)
-            if key not in cache:
-                cache[key] = np.atleast_1d(np.asarray(fun(t1 if when == "end" else tm), dtype=float))
-            table[k, c] = cache[key][comp]
-        t = t1
+    ends = np.empty(hs.size)
+    mids = np.empty(hs.size)
+    for k in range(hs.size):              # the sums of the Python loop: t1 = t0 + h, t_m = t0 + h/2
+        mids[k] = t + 0.5 * hs[k]
+        t = t + hs[k]
+        ends[k] = t
+    groups = {}
+    for c, (when, fun, comp) in enumerate(columns):
+        groups.setdefault((id(fun), when), (fun, when, []))[2].append((c, comp))
+    for fun, when, targets in groups.values():
+        raw = getattr(fun, "unchecked", fun)
+        times = ends if when == "end" else mids
+        vals = np.array([np.ravel(raw(tk)) for tk in times], dtype=float).reshape(hs.size, -1)
+        bad = ~np.isfinite(vals).all(axis=1)
+        if bad.any():
+            tk = float(times[int(np.argmax(bad))])
+            fun(tk)                           # raises its own error if it has one
+            raise ValueError(f"{getattr(fun, '__qualname__', fun)!s}({tk!r}) is not finite")
+        for c, comp in targets:
+            table[:, c] = vals[:, comp]
     return table
 
 
@@ -1237,10 +1265,9 @@ def newton_system(scene, q0, v0, h, t=0.0, lam=None):
     x0 : ndarray
         The start of the Newton iteration.
     """
-    packed = pack(scene)
-    if packed is None:
+    if pack(scene) is None:
         raise ValueError(f"scene {scene.name!r} has a part without a compiled form (see compiled_scene.eligible)")
-    return _system(scene, packed, _packed(scene)[2], q0, v0, h, t, lam)
+    return _system(scene, _planned(scene), _packed(scene)[2], q0, v0, h, t, lam)
 
 
 def _system(scene, packed, columns, q0, v0, h, t, lam):
@@ -1272,7 +1299,7 @@ def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, rec
     (the multipliers, mean over the last step).
     """
     s = scheme.newton
-    packed = pack(scene)
+    packed = _planned(scene)
     hs, qp = chunk_schedule(scene, state.t, dt, t_end, first_step, n_chunk, n_steps)
     table = time_table(_packed(scene)[2], float(state.t), hs)
     m = scene.n_constraints

@@ -260,6 +260,9 @@ def time_function(value, size, name="load"):
             if not np.all(np.isfinite(out)):
                 raise ValueError(f"{name}({t!r}) is not finite: {out!r}")
             return out
+        # the compiled loop tabulates a chunk of steps at once and checks the whole table (``fun``
+        # raises the error for the first entry that is not finite)
+        fun.unchecked = value
         return fun
     const = check_finite_vector(name, value, size)
     return lambda t: const

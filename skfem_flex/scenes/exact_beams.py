@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..bodies.exact import ExactBeam, NodalLoad
+from ..bodies.probes import LinearProbe, PointProbe
 from ..forces import Gravity
 from ..motion import MotionLaw, Prescribed, spin_up_law
 from ..scene import Scene
@@ -76,14 +77,10 @@ def flying_beam(n_elements=10, order=1, length=10.0, EA=1e4, GA=1e4, EI=100.0, r
     load = NodalLoad(body, 0.0, force=(force, 0.0), moment=moment, time_function=LoadWindow(0.0, t_load),
                      name="end load")
     a, b = body.point(0.0), body.point(body.length)
-
-    def probe_com(s, t, q, v):
-        return body.centre_of_mass(s.coordinates(body, q))
-
+    gam, c = body.mass_moment()                     # centre of mass (Γ q + c)/m: linear in q
     return Scene([body], forces=[load], name="flying_beam",
-                 probes={"end_a": lambda s, t, q, v: a.position(s.coordinates(body, q)),
-                         "end_b": lambda s, t, q, v: b.position(s.coordinates(body, q)),
-                         "centre_of_mass": probe_com},
+                 probes={"end_a": PointProbe(a), "end_b": PointProbe(b),
+                         "centre_of_mass": LinearProbe(body, gam / body.total_mass, c / body.total_mass)},
                  parameters=dict(n_elements=n_elements, order=order, length=length, EA=EA, GA=GA, EI=EI,
                                  rhoA=rhoA, rhoI=rhoI, force=force, moment=moment, t_load=t_load,
                                  rotation_rate=rotation_rate))
@@ -120,7 +117,7 @@ def very_flexible_pendulum(n_elements=16, order=1, length=1.2, A=0.0018, I=1.215
     pin = [Prescribed(body, "ux0", _fixed(0.0)), Prescribed(body, "uy0", _fixed(0.0))]
     tip = body.point(body.length)
     return Scene([body], forces=[Gravity((0.0, -g))], prescribed=pin, name="very_flexible_pendulum",
-                 probes={"tip": lambda s, t, q, v: tip.position(s.coordinates(body, q))},
+                 probes={"tip": PointProbe(tip)},
                  parameters=dict(n_elements=n_elements, order=order, length=length, A=A, I=I, rho=rho, E=E,
                                  nu=nu, k=k, g=g))
 
