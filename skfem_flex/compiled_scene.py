@@ -1,33 +1,39 @@
-r"""Compiled (Numba) energy-momentum loop for small mechanisms: joints and gravity included.
+r"""Compiled (Numba) energy-momentum loop for small scenes: bodies, joints, drivers, springs and loads.
 
 :mod:`skfem_flex.compiled_loop` runs one floating-frame body without joints or loads. This module
-runs the energy-momentum scheme for the small (dense) scenes the benchmark is about beyond that:
-point masses and rigid bodies, floating-frame bodies (a :class:`~skfem_flex.bodies.FloatingBeam`
-or a reduced :class:`~skfem_flex.bodies.ModalBody`), gravity, and joints built on body points
-(pins, revolute joints, distance constraints), prescribed coordinates allowed — the rigid, the
-flexible and the double pendulum. A scene is *packed* once into flat arrays through public
-interfaces of its parts (no type checks):
+runs the energy-momentum scheme for the small (dense) scenes beyond that: point masses and rigid
+bodies, floating-frame bodies (a :class:`~skfem_flex.bodies.FloatingBeam` or a reduced
+:class:`~skfem_flex.bodies.ModalBody`), geometrically exact beams (Cayley rotation rates), gravity,
+coordinate springs, global point forces and moments and the exact beam's loads, pins, revolute
+joints, welds, distance constraints, drivers, sliders and prismatic joints on ground lines,
+prescribed coordinates — every catalogue mechanism. A scene is *packed* once into flat arrays
+through public interfaces of its parts (no type checks):
 
-* a body with constant mass and no strain energy gives its constant mass matrix and the first
-  moment of its mass ``mass_moment()`` (Γ, c), ∫ r dm = Γ q + c; a floating-frame body its
-  ``compiled_kernel_data()`` and ``mass_moment_map()`` (m, S₀, S̄), ∫ r dm = m R + A(θ)(S₀ + S̄ q_f);
+* a body with constant mass gives its mass matrix and the first moment of its mass
+  ``mass_moment()`` (Γ, c), ∫ r dm = Γ q + c, and, if it has a strain energy, its
+  ``compiled_strain_data()`` (an exact beam); a floating-frame body its ``compiled_kernel_data()``
+  and ``mass_moment_map()`` (m, S₀, S̄), ∫ r dm = m R + A(θ)(S₀ + S̄ q_f); a body whose momenta are
+  not R × p_R + p_θ gives its ``momentum_layout()``;
 * a body point its ``compiled_map()``: ("linear", G, c) for r = G q + c, or ("frame", y₀, Y) for
   r = R + A(θ)(y₀ + Y q_f);
-* a force element its ``compiled_form()``: ("gravity", g) (others: None, the scene runs in Python);
-* a constraint its ``compiled_form()``: ("points", [(point, sign), ...], c) for
-  Φ = Σ sign · r(point) − c, or ("distance", point, a, l) for Φ = ½(|r − a|² − l²).
+* a force element its ``compiled_form()`` (:meth:`skfem_flex.forces.ForceElement.compiled_form`);
+* a constraint its ``compiled_form()``: blocks of rows made of its terms' forms
+  (:meth:`skfem_flex.point_terms.Term.compiled_form`), each minus a motion law where it has one, or
+  ("distance", point, a, l) for Φ = ½(|r − a|² − l²).
 
-Every position map, of a joint's point and of gravity's first moment alike, is one of the two
-forms above, and one set of kernels gives its value, Jacobian, exact discrete gradient
+Every position map, of a joint's point, a point load and gravity's first moment alike, is one of the
+two forms above, and one set of kernels gives its value, Jacobian, exact discrete gradient
 (products by the mean-value rule, A(θ₁) − A(θ₀) = sinc(Δθ/2) Δθ A(θ_m) E, as the numpy points do)
-and that gradient's Jacobian. ``tests/test_compiled_scene.py`` holds these kernels to the numpy
-points and bodies at 1e-12 and the loop's trajectories to the Python step.
+and those derivatives' Jacobians. Functions of time (motion laws, load histories) are evaluated in
+Python once per chunk into a table (:func:`time_table`). ``tests/test_compiled_scene.py`` holds the
+kernels to the numpy points and bodies at 1e-12 and the loop's trajectories to the Python step.
 
-The step is the one of :meth:`~skfem_flex.integrators.EnergyMomentum.step` (same residual, scales,
-round-off floor, initial guess), on the package's one Newton core
-(:mod:`skfem_flex.newton`), with a dense LAPACK solve of the bordered Newton matrix.
-On any failure the loop stops before the failing step and ``simulate`` re-runs that step on the
-Python path, as for :mod:`skfem_flex.compiled_loop`.
+The step is the one of :meth:`~skfem_flex.integrators.EnergyMomentum.step` (same residual, Cayley
+scaling, scales, round-off floor, initial guess), on the package's one Newton core
+(:mod:`skfem_flex.newton`); the bordered Newton matrix is solved as a band with a dense border
+(:func:`skfem_flex.linear_solver.bordered_band_solve`) when the scene's pattern makes that cheaper,
+else by LAPACK. On any failure the loop stops before the failing step and ``simulate`` re-runs that
+step on the Python path, as for :mod:`skfem_flex.compiled_loop`.
 """
 from __future__ import annotations
 
@@ -634,8 +640,8 @@ def _momentum_layout(body, kd, rng):
 def eligible(scene, scheme):
     """True if ``simulate`` may run ``scene`` with ``scheme`` through this loop: the
     :class:`~skfem_flex.integrators.EnergyMomentum` class itself, a plain dense scene (at most
-    ``DENSE_LIMIT`` coordinates) without incremental-rotation coordinates, whose bodies, force
-    elements, constraints and joint points all have compiled forms (module docstring)."""
+    ``DENSE_LIMIT`` coordinates) whose bodies, force elements, constraints and joint points all have
+    compiled forms (module docstring)."""
     return type(scheme) is EnergyMomentum and pack(scene) is not None
 
 
@@ -671,14 +677,16 @@ def _scene_momentum(mass, frames, frame_off, q, v):
 
 @numba.njit(cache=True)
 def _workspace(n, m, nx, nbmax):
-    """The arrays one step works in, allocated once per chunk (the loop allocates nothing per step but
-    the Newton core's state): res, mat (the Newton system), Δq_base, Δq, q1, v1, p1, r, Q, g_kin, g_V,
+    """The arrays one step works in, allocated once per chunk (per step only the Newton core's state and
+    a few small kernel outputs are allocated): res, mat (the Newton system), Δq_base, Δq, q1, v1, p1, r, Q, g_kin, g_V,
     floor, Φ, Φ_t, Φ_q, D, Dᵀμ, μ, three 2-vectors, two (2, nb) map blocks and the rates: z (Δq with
-    the Cayley parameter 2 tan(Δψ/2) on Cayley coordinates), Δψ/w, d(Δψ/w)/dΔψ, dz/dΔq."""
+    the Cayley parameter 2 tan(Δψ/2) on Cayley coordinates), Δψ/w, d(Δψ/w)/dΔψ, dz/dΔq, and a flag set
+    when an evaluation met a state the Python step refuses (a folded element, a turn ≥ MAX_INCREMENT)."""
     return (np.zeros(nx), np.zeros((nx, nx)), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
             np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(m), np.zeros(m),
             np.zeros((m, n)), np.zeros((m, n)), np.zeros(n), np.zeros(m), np.zeros(2), np.zeros(2), np.zeros(2),
-            np.zeros((2, nbmax)), np.zeros((2, nbmax)), np.zeros(n), np.ones(n), np.zeros(n), np.ones(n))
+            np.zeros((2, nbmax)), np.zeros((2, nbmax)), np.zeros(n), np.ones(n), np.zeros(n), np.ones(n),
+            np.zeros(1, dtype=np.int64))
 
 
 @numba.njit(cache=True)
@@ -840,7 +848,8 @@ def _add_frame_terms(frames, frame_off, frame_full, q0, q1, v0, v1, h, p1, gk, g
 def _add_strain_terms(strains, strain_off, q0, q1, h, gp, floor, mat, fpos):
     """Add the exact beams' discrete strain gradients (:mod:`skfem_flex.bodies.exact_kernel`), their
     tangent Δt ∂g/∂q1 and round-off floor; False if a step folds an element or turns a section by
-    MAX_INCREMENT or more (the loop then hands the step to Python, which raises the proper error)."""
+    MAX_INCREMENT or more (at any Newton iterate the loop then hands the step to Python, which raises
+    the proper error and halves the step, as it does on the Python path)."""
     if strains is None:
         return True
     for i in range(len(strains)):
@@ -952,6 +961,7 @@ def _evaluate(system, x):
     _add_frame_terms(frames, frame_off, strain[3], q0, q1, v0, v1, h, p1, gk, gp, floor, mat, fpos)
     _add_springs(loads, q0, q1, h, gp, floor, mat, fpos)
     if not _add_strain_terms(strains, strain_off, q0, q1, h, gp, floor, mat, fpos):
+        ws[27][0] = 1
         return np.nan
     gmaps, gvec = gravity
     dk = ws[22]
@@ -1083,9 +1093,14 @@ def _step(packed, ws, q0, v0, p0, h, qp1, trow, pres, free, fpos, lam0, rtol, ct
     system = (packed, step, ws)
     state = newton_start(x, x_scale, max_iterations, line_search)
     action = EVALUATE
+    ws[27][0] = 0
     while action < 0:                  # do what the Newton core asks; its rules are all in the core
         if action == EVALUATE:
-            action = newton_evaluated(state, _evaluate(system, state[2]))
+            err = _evaluate(system, state[2])
+            if ws[27][0]:
+                # the Python step raises here, at any iterate (no backtracking): the step goes to Python
+                return NONFINITE_RESIDUAL, state[4][0]
+            action = newton_evaluated(state, err)
         else:
             y, regular = _solve(system)
             action = newton_solved(state, y, regular)

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .bodies.base import BodyPoint, check_finite_vector, zero_matrix
+from .bodies.base import BodyPoint, check_finite_vector, keeps_methods, zero_matrix
 from .bodies.rigid import E_MATRIX, rotation
 from .motion import MotionLaw
 # PointLayout is re-exported here (it was defined in this module and is part of its public names)
@@ -42,6 +42,11 @@ __all__ = ["Constraint", "Distance", "UserConstraint", "Pin", "Revolute", "Slide
 
 
 # ============================================================ the base class
+#: the methods a constraint's compiled form stands for (a subclass redefining one runs in Python)
+CONTRACT = ("value", "jacobian", "hessian_product", "time_derivative", "time_terms", "velocity_jacobian",
+            "acceleration_rhs", "discrete_gradient", "discrete_gradient_jacobian")
+
+
 class Constraint:
     """Base class of holonomic constraints.
 
@@ -152,6 +157,8 @@ class Constraint:
         lam = np.asarray(lam, dtype=float)
         if type(self).reaction is Constraint.reaction:
             return -lam
+        if lam.shape[0] == 0:
+            return np.zeros((0, len(self.reaction_labels) or self.n_equations))
         rows = [np.atleast_1d(np.asarray(self.reaction(qi, li), dtype=float)) for qi, li in zip(q, lam)]
         return np.array(rows).reshape(lam.shape[0], -1)
 
@@ -203,6 +210,8 @@ class _TermConstraint(Constraint):
         return out
 
     def compiled_form(self):
+        if self.rheonomic or not keeps_methods(self, _TermConstraint, CONTRACT):
+            return None
         forms = [term.compiled_form() for term in self._terms]
         if any(f is None or f[0] == "constant" for f in forms):
             return None
@@ -399,7 +408,9 @@ class Slider(_TermConstraint):
 
     def reaction_history(self, q, lam):
         lam = np.asarray(lam, dtype=float)
-        if self.on is not None:                 # the normal turns with the guiding body
+        if self.on is not None or type(self).normal is not Slider.normal or \
+                type(self).reaction not in (Slider.reaction, Prismatic.reaction):
+            # the normal turns with the guiding body (or a subclass computes the reaction its own way)
             return super().reaction_history(q, lam)
         f = -lam[:, :1] * self.normal(None)[None, :]          # a ground line's constant normal
         return f if lam.shape[1] == 1 else np.column_stack([f, -lam[:, 1]])
@@ -497,6 +508,8 @@ class Driver(_TermConstraint):
 
     def compiled_form(self):
         form = self._s.compiled_form()
+        if form is None or not keeps_methods(self, Driver, CONTRACT):
+            return None
         return "rows", [(form, self.law)]
 
     def time_terms(self, q, v, t):
@@ -554,12 +567,16 @@ class Distance(Constraint):
         return mu[0] * np.eye(2)
 
     def compiled_form(self):
+        if not keeps_methods(self, Distance, CONTRACT):
+            return None
         return "distance", self.bodies[0].point(), self.anchor, self.length
 
     def reaction(self, q, lam):
         return -float(lam[0]) * (np.asarray(q, dtype=float) - self.anchor)
 
     def reaction_history(self, q, lam):
+        if not keeps_methods(self, Distance, ("reaction",)):
+            return super().reaction_history(q, lam)
         return -np.asarray(lam, dtype=float)[:, :1] * (np.asarray(q, dtype=float) - self.anchor[None, :])
 
 

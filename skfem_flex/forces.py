@@ -9,11 +9,13 @@ external work.
 """
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sps
 
-from .bodies.base import DENSE_LIMIT, BodyPoint, check_finite_vector
+from .bodies.base import DENSE_LIMIT, BodyPoint, check_finite_vector, keeps_methods
 from .bodies.rigid import E_MATRIX, rotation
 from .point_terms import Difference, Dot, PointLayout, Position, angle_term
 
@@ -28,6 +30,10 @@ def split_blocks(bodies, q_loc):
         out.append(q_loc[start:start + b.n_dofs])
         start += b.n_dofs
     return out
+
+
+#: the methods of a conservative element's compiled form (a subclass redefining one runs in Python)
+CONSERVATIVE = ("potential_energy", "potential_gradient", "potential_hessian", "potential_discrete_gradient")
 
 
 class ForceElement:
@@ -106,10 +112,15 @@ class Gravity(ForceElement):
         self._linear = all(c is not None for c in self._const_grad)
 
     def on(self, bodies):
-        """The same field acting on ``bodies`` (used by the scene for ``bodies=None``)."""
-        return Gravity(self.g, bodies)
+        """The same field acting on ``bodies`` (used by the scene for ``bodies=None``); a subclass stays
+        itself (a copy, set up again for ``bodies``)."""
+        new = copy.copy(self)
+        Gravity.__init__(new, self.g, bodies)
+        return new
 
     def compiled_form(self):
+        if not keeps_methods(self, Gravity, CONSERVATIVE):
+            return None
         return "gravity", self.g
 
     def potential_energy(self, q):
@@ -234,6 +245,8 @@ class NonlinearSpring(ForceElement):
         return g, h
 
     def compiled_form(self):
+        if not keeps_methods(self, NonlinearSpring, CONSERVATIVE):
+            return None
         return "coordinate spring", self.index, self.k, self.power
 
 
@@ -597,7 +610,9 @@ class PointForce(ForceElement):
         return jac.T @ f, fq, None
 
     def compiled_form(self):
-        return None if self.follower else ("point force", self.point, self.force)
+        if self.follower or not keeps_methods(self, PointForce, ("generalized_force", "global_force")):
+            return None
+        return "point force", self.point, self.force
 
 
 class PointMoment(ForceElement):
@@ -630,4 +645,6 @@ class PointMoment(ForceElement):
         return float(self.moment(t)[0]) * self._angle.grad, None, None
 
     def compiled_form(self):
+        if not keeps_methods(self, PointMoment, ("generalized_force",)):
+            return None
         return "generalized force", self._angle.grad.reshape(1, -1).copy(), self.moment

@@ -355,13 +355,17 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
                             elif record_every != 1:
                                 resumable = False
                             raise
-                        rec.record_block({k: (val[i:i + 1] if k != "probes" else {p: a[i:i + 1] for p, a in val.items()})
-                                          for k, val in recs.items()})
+                        rec.record_block(_first_records(recs, i + 1, start=i))
                         guard.check_energy(s_r.t)
                         prev = s_r
                 else:
-                    rec.record_block(recs)
-                    guard.check_energy_block(recs["t"], recs["derived"][:, 0], recs["derived"][:, 1], recs["work"])
+                    bad = guard.first_energy_violation(recs["t"], recs["derived"][:, 0], recs["derived"][:, 1],
+                                                       recs["work"])
+                    if bad is None:
+                        rec.record_block(recs)
+                    else:                        # the histories end at the record the rule stops at
+                        rec.record_block(_first_records(recs, bad + 1))
+                        guard.check_energy(float(recs["t"][bad]))
                 if out["done"]:
                     state = State(out["t"], out["q"], out["v"], lam=out["lam"], prescribed_force=out["reaction"])
                     work = out["work"]
@@ -408,6 +412,12 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
         for s in sinks:
             s.close()
     return result()
+
+
+def _first_records(recs, stop, start=0):
+    """Records ``start … stop − 1`` of a compiled chunk's records."""
+    return {k: ({p: a[start:stop] for p, a in val.items()} if k == "probes" else val[start:stop])
+            for k, val in recs.items()}
 
 
 def _step_count(scene, t_end, dt, record_every):
@@ -564,36 +574,46 @@ class _DivergenceGuard:
             raise DivergenceError(f"diverged at t = {state.t:.6g} s: a coordinate reached {big:.3g}, more than "
                                   f"{DIVERGENCE_FACTOR:.0e} times the scene's size ({self.q_bound / DIVERGENCE_FACTOR:.3g})")
 
-    def check_energy_block(self, t, kinetic, potential, work):
-        """:meth:`check_energy` for a block of records just appended (times ``t``, energies and work)."""
-        first = len(self.rec.rows["kinetic"]) - t.size            # index of the block's first record
-        n_early = min(t.size, max(0, _SCALE_RECORDS - first))    # these still set the scale: in order
+    def first_energy_violation(self, t, kinetic, potential, work):
+        """Index of the first record of a compiled block (not yet stored) at which :meth:`check_energy`
+        would stop the run, or None; the guard's energy scale and work bound advance over the
+        records before it (then store the block up to that record and call :meth:`check_energy`)."""
+        first = len(self.rec.rows["kinetic"])                  # index of the block's first record
+        n_early = min(t.size, max(0, _SCALE_RECORDS - first))  # these still set the scale: in order
         for i in range(n_early):
-            self._check(t[i], kinetic[i], potential[i], work[i], first + i)
+            w_max = max(self.w_max, abs(work[i]))
+            e_scale = max(self.e_scale, abs(kinetic[i]) + abs(potential[i]))
+            if self._violated(kinetic[i] + potential[i], e_scale + w_max):
+                return i
+            self.w_max, self.e_scale = w_max, e_scale
         if n_early == t.size:
-            return
-        w_max = np.maximum.accumulate(np.maximum(np.abs(work[n_early:]), self.w_max))
+            return None
+        w_max = np.maximum.accumulate(np.fmax(np.abs(work[n_early:]), self.w_max))
         energy = kinetic[n_early:] + potential[n_early:]
         scale = self.e_scale + w_max
         bad = ~np.isfinite(energy) | ((scale > 0) & (np.abs(energy) > DIVERGENCE_FACTOR * scale))
         if bad.any():
             i = int(np.argmax(bad))
-            self.w_max = float(w_max[i])
-            self._check(t[n_early + i], kinetic[n_early + i], potential[n_early + i], work[n_early + i], _SCALE_RECORDS)
+            if i:
+                self.w_max = float(w_max[i - 1])
+            return n_early + i
         self.w_max = float(w_max[-1])
+        return None
+
+    @staticmethod
+    def _violated(energy, scale):
+        return not math.isfinite(energy) or (scale > 0 and abs(energy) > DIVERGENCE_FACTOR * scale)
 
     def check_energy(self, t):
+        """The energy rule at the last record stored (time ``t``, s)."""
         r = self.rec.rows
-        self._check(t, r["kinetic"][-1], r["potential"][-1], r["external_work"][-1], len(r["kinetic"]) - 1)
-
-    def _check(self, t, kinetic, potential, work, index):
-        """The energy rule at one record (number ``index`` of the run)."""
-        self.w_max = max(self.w_max, abs(work))
+        kinetic, potential = r["kinetic"][-1], r["potential"][-1]
+        self.w_max = max(self.w_max, abs(r["external_work"][-1]))
         energy = kinetic + potential
-        if index < _SCALE_RECORDS:
+        if len(r["kinetic"]) <= _SCALE_RECORDS:
             self.e_scale = max(self.e_scale, abs(kinetic) + abs(potential))
         scale = self.e_scale + self.w_max
-        if not math.isfinite(energy) or (scale > 0 and abs(energy) > DIVERGENCE_FACTOR * scale):
+        if self._violated(energy, scale):
             raise DivergenceError(f"diverged at t = {t:.6g} s: energy {energy:.3g} J against an initial energy "
                                   f"scale plus work done of {scale:.3g} J")
 

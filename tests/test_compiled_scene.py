@@ -469,3 +469,67 @@ def test_convergence_error_is_the_python_paths(monkeypatch, newton, dt, max_halv
     assert ra.steps == rb.steps and ra.halvings == rb.halvings
     np.testing.assert_array_equal(ra.t, rb.t)
     np.testing.assert_allclose(ra.q, rb.q, rtol=0, atol=1e-10 * np.abs(rb.q).max())
+
+
+def test_subclasses_that_redefine_the_equations_run_in_python():
+    """A compiled form stands for its class's equations: a user subclass that redefines them is not packed."""
+    class MovingPin(sf.Pin):
+        def value(self, q, t):
+            return super().value(q, t) - np.array([0.01 * t, 0.0])
+
+    class FastDriver(sf.Driver):
+        def time_derivative(self, q, t):
+            return 2.0 * super().time_derivative(q, t)
+
+    class StiffGravity(sf.Gravity):
+        def potential_energy(self, q):
+            return 2.0 * super().potential_energy(q)
+    em = EnergyMomentum()
+    bar = _bar()
+    assert compiled_scene.eligible(sf.Scene([bar], constraints=[sf.Pin(bar.point((-0.5, 0.0)))],
+                                            forces=[sf.Gravity()]), em)
+    assert not compiled_scene.eligible(sf.Scene([bar], constraints=[MovingPin(bar.point((-0.5, 0.0)))]), em)
+    assert not compiled_scene.eligible(sf.Scene([bar], forces=[StiffGravity()]), em)
+    law = sf.MotionLaw(lambda t: t, lambda t: 1.0, lambda t: 0.0)
+    assert not compiled_scene.eligible(sf.Scene([bar], constraints=[FastDriver(bar, law, coordinate="theta")]), em)
+    assert compiled_scene.eligible(sf.Scene([bar], constraints=[sf.Driver(bar, law, coordinate="theta")]), em)
+
+
+def test_block_energy_guard_stops_where_the_record_by_record_guard_does():
+    """first_energy_violation on a block equals check_energy applied record by record (scale window
+    included), for a blow-up at every position, a NaN energy and a run that never diverges."""
+    from skfem_flex.errors import DivergenceError
+    from skfem_flex.simulate import _DivergenceGuard, _SCALE_RECORDS
+
+    class Rows:
+        def __init__(self, kin, pot, work):
+            self.rows = dict(kinetic=list(kin), potential=list(pot), external_work=list(work),
+                             q=[np.zeros(2)])
+
+    class Scene_:
+        length_scale = 1.0
+    rng = np.random.default_rng(5)
+    n = 3 * _SCALE_RECORDS
+    for stop in list(range(n)) + [None, "nan"]:
+        kin = 1.0 + rng.random(n)
+        pot = -0.5 * rng.random(n)
+        work = np.cumsum(0.01 * rng.random(n))
+        if stop == "nan":
+            kin[n // 2] = np.nan
+        elif stop is not None:
+            kin[stop] = 1e9
+        expected = None                       # record by record
+        rec = Rows(kin[:1], pot[:1], work[:1])
+        guard = _DivergenceGuard(Scene_(), rec)
+        for i in range(1, n):
+            for key, arr in (("kinetic", kin), ("potential", pot), ("external_work", work)):
+                rec.rows[key].append(arr[i])
+            try:
+                guard.check_energy(float(i))
+            except DivergenceError:
+                expected = i
+                break
+        rec = Rows(kin[:1], pot[:1], work[:1])    # as a block of records 1 … n − 1
+        guard = _DivergenceGuard(Scene_(), rec)
+        got = guard.first_energy_violation(np.arange(1.0, n), kin[1:], pot[1:], work[1:])
+        assert (None if got is None else got + 1) == expected, stop

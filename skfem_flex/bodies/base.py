@@ -80,6 +80,13 @@ def place_block(n, index, block, sign=1.0, out=None):
     return out + sps.csr_matrix((sign * c.data, (idx[c.row], idx[c.col])), shape=(n, n))
 
 
+def keeps_methods(obj, cls, names):
+    """True if ``obj``'s class inherits the methods ``names`` from ``cls`` unchanged (a compiled form
+    describes ``cls``'s equations; a subclass that redefines one of them must run in Python)."""
+    kind = type(obj)
+    return all(getattr(kind, name) is getattr(cls, name) for name in names)
+
+
 def to_dense(a):
     """``a`` as a dense ndarray (bodies may return scipy.sparse blocks)."""
     return a.toarray() if hasattr(a, "toarray") else np.asarray(a)

@@ -103,7 +103,7 @@ from ..forces import ForceElement
 from ..errors import ConvergenceError
 from ..rotations import MAX_INCREMENT as _MAX_INCREMENT, cayley_divided_difference, cayley_ratio
 from ..section import Section
-from .base import Body, BodyGeometry, BodyPoint, check_finite_vector, to_dense
+from .base import Body, BodyGeometry, BodyPoint, check_finite_vector, keeps_methods, to_dense
 
 __all__ = ["ExactBeam", "NodalLoad", "ExactDistributedLoad", "ElementInversionError"]
 
@@ -873,7 +873,7 @@ class NodalLoad(ForceElement):
         return c * np.array([cd * self.force[0] - sd * self.force[1], sd * self.force[0] + cd * self.force[1]])
 
     def compiled_form(self):
-        if self.follower:
+        if self.follower or not keeps_methods(self, NodalLoad, ("generalized_force", "force_at")):
             return None
         base = np.array([self.force[0], self.force[1], self.moment])
         return ("generalized force", np.vstack([to_dense(self.point.jr), to_dense(self.point.jphi).reshape(1, -1)]),
@@ -920,5 +920,7 @@ class ExactDistributedLoad(ForceElement):
         return _factor(self.time_function, t) * self.vector, None, None
 
     def compiled_form(self):
+        if not keeps_methods(self, ExactDistributedLoad, ("generalized_force",)):
+            return None
         return "generalized force", np.asarray(self.vector, dtype=float).reshape(1, -1), \
             lambda t: np.array([_factor(self.time_function, t)])
