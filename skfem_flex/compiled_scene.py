@@ -564,38 +564,40 @@ _PLANNED = weakref.WeakKeyDictionary()
 
 def _planned(scene):
     """The packed scene with its plan for the Newton solve (a band with a dense border, or dense LU when
-    that is not cheaper), fixed once per scene by the matrix's pattern. Made on the first run, not in
-    :func:`pack`: the pattern takes compiled evaluations, which a cold cache must compile first
-    (``simulate`` says so before, and counts it as compile time)."""
+    that is not cheaper), fixed once per scene by the matrix's pattern (made on the first run)."""
     packed = _PLANNED.get(scene)
     if packed is None:
-        packed, _, columns = _packed(scene)
+        packed = _packed(scene)[0]
         if scene.free_index.size + scene.n_constraints >= MIN_DENSE_BORDERED:
-            plan = dense_bordered_plan(_newton_pattern(scene, packed, columns))
+            plan = dense_bordered_plan(_newton_pattern(scene, packed))
             if plan is not None:
                 packed = packed[:9] + (plan,)
         _PLANNED[scene] = packed
     return packed
 
 
-def _newton_pattern(scene, packed, columns):
-    """Where the bordered Newton matrix (free coordinates, then multipliers) is nonzero: the union over
-    three evaluations at random states near the initial one (random states leave no entry zero by
-    symmetry). An entry missed here cannot give a wrong step: the bordered band solve checks its
-    backward error and the dense solve takes over."""
-    rng = np.random.default_rng(1)
-    q_ref, v_ref = scene.initial_state()
+def _newton_pattern(scene, packed):
+    """Where the bordered Newton matrix (free coordinates, then multipliers) can be nonzero, from the
+    structure of the packed scene: the constant masses, the floating-frame and exact beams' kernel
+    patterns (a floating body's frame rows and columns hold every tangent of its points, loads and
+    gravity), the diagonal (springs, Cayley terms) and each constraint's rows and columns over all
+    coordinates of its bodies. An entry missed here could not give a wrong step: the bordered band
+    solve checks its backward error and the dense solve takes over."""
+    mass, frames, frame_off = packed[0], packed[1], packed[2]
+    strains, strain_off = packed[8][0], packed[8][1]
     n, m = scene.n, scene.n_constraints
-    pat = None
-    for _ in range(3):
-        q = q_ref + 1e-3 * (1.0 + np.abs(q_ref)) * rng.standard_normal(n)
-        v = v_ref + rng.standard_normal(n)
-        system, x = _system(scene, packed, columns, q, v, 1e-3, 0.0, rng.standard_normal(m))
-        x = x + 1e-6 * rng.standard_normal(x.size)
-        _evaluate(system, x)
-        hit = system[2][1] != 0.0
-        pat = hit if pat is None else pat | hit
-    return pat
+    pat = np.eye(n + m, dtype=bool)
+    ptr, idx, _ = mass
+    pat[np.repeat(np.arange(n), np.diff(ptr)), idx] = True
+    for group, offsets in ((frames, frame_off), (strains, strain_off)):
+        for kd, o in zip(group or (), offsets):
+            rows = np.repeat(np.arange(kd.n), np.diff(kd.pat_ptr))
+            pat[o + rows, o + kd.pat_idx] = True
+    for idx_c, rows_c in scene.constraint_layout:
+        pat[np.ix_(n + np.asarray(rows_c), idx_c)] = True
+        pat[np.ix_(idx_c, n + np.asarray(rows_c))] = True
+    sel = np.concatenate([scene.free_index, n + np.arange(m)])
+    return pat[np.ix_(sel, sel)]
 
 
 def _momentum_layout(body, kd, rng):
