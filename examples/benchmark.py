@@ -198,7 +198,7 @@ def flexible(repeat=1, record_every=10):
     setup = time.perf_counter() - start
     wall, us, its, steps = time_case(lambda: rod_scene, revolution, 1e-4, repeat, record_every)
     rows.append((f"slider–crank, plane-stress rod 2 000 Q2 elements → {rod_scene.bodies[1].n_elastic} coordinates, "
-                 f"one revolution, dt = 1e-4 s", "Python", steps, wall, us, its))
+                 f"one revolution, dt = 1e-4 s", loop_name(rod_scene), steps, wall, us, its))
     return rows, setup
 
 
