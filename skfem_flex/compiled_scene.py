@@ -677,27 +677,33 @@ def _scene_momentum(mass, frames, frame_off, q, v):
     return p
 
 
+#: rows of the workspace's (n,) vectors ``ws[2]``
+_DQ_BASE, _DQ, _Q1, _V1, _P1, _R, _EXT, _GK, _GP, _FLOOR, _DTMU, _Z, _RATIO, _DRATIO, _DZ = range(15)
+
+
 @numba.njit(cache=True)
 def _workspace(n, m, nx, nbmax):
     """The arrays one step works in, allocated once per chunk (per step only the Newton core's state and
-    a few small kernel outputs are allocated): res, mat (the Newton system), Δq_base, Δq, q1, v1, p1, r, Q, g_kin, g_V,
-    floor, Φ, Φ_t, Φ_q, D, Dᵀμ, μ, three 2-vectors, two (2, nb) map blocks and the rates: z (Δq with
-    the Cayley parameter 2 tan(Δψ/2) on Cayley coordinates), Δψ/w, d(Δψ/w)/dΔψ, dz/dΔq, and a flag set
-    when an evaluation met a state the Python step refuses (a folded element, a turn ≥ MAX_INCREMENT)."""
-    return (np.zeros(nx), np.zeros((nx, nx)), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n),
-            np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(m), np.zeros(m),
-            np.zeros((m, n)), np.zeros((m, n)), np.zeros(n), np.zeros(m), np.zeros(2), np.zeros(2), np.zeros(2),
-            np.zeros((2, nbmax)), np.zeros((2, nbmax)), np.zeros(n), np.ones(n), np.zeros(n), np.ones(n),
-            np.zeros(1, dtype=np.int64))
+    a few small kernel outputs are allocated), as few arrays as possible (each array of a tuple costs
+    compile time wherever the tuple goes): the Newton residual and matrix; the (n,) vectors Δq_base,
+    Δq, q1, v1, p1, r, Q, g_kin, g_V, floor, Dᵀμ, z (Δq with the Cayley parameter 2 tan(Δψ/2) on
+    Cayley coordinates), Δψ/w, d(Δψ/w)/dΔψ, dz/dΔq (rows of ``ws[2]``, names ``_DQ`` …); Φ, Φ_t, μ
+    (rows of ``ws[3]``); Φ_q, D; three 2-vectors; two (2, nb) map blocks; and a flag set when an
+    evaluation met a state the Python step refuses (a folded element, a turn ≥ MAX_INCREMENT)."""
+    wn = np.zeros((15, n))
+    wn[_RATIO, :] = 1.0
+    wn[_DZ, :] = 1.0
+    return (np.zeros(nx), np.zeros((nx, nx)), wn, np.zeros((3, m)), np.zeros((m, n)), np.zeros((m, n)),
+            np.zeros((3, 2)), np.zeros((2, 2, nbmax)), np.zeros(1, dtype=np.int64))
 
 
 @numba.njit(cache=True)
 def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, mat, fpos, ws):
-    """Φ(q1, t1), Φ_t, Φ_q(q1) and D into the workspace (ws[12:16]), ∂(Dᵀμ)/∂q1 added to ``mat`` (the
+    """Φ(q1, t1), Φ_t, Φ_q(q1) and D into the workspace, ∂(Dᵀμ)/∂q1 added to ``mat`` (the
     Newton matrix). ``trow`` is the step's row of the time table (drivers' x(t1), ẋ(t1))."""
     kind, row, t0, term_map, term_sign, const, length, m, _, l0, lin_idx, lin_coef, nrm, law = constraints
-    phi, phi_t, cq, d = ws[12], ws[13], ws[14], ws[15]
-    f, acc, rv, jac, dk = ws[18], ws[19], ws[20], ws[21], ws[22]
+    phi, phi_t, cq, d = ws[3][0], ws[3][1], ws[4], ws[5]
+    f, acc, rv, jac, dk = ws[6][0], ws[6][1], ws[6][2], ws[7][0], ws[7][1]
     nb_, off_ = maps[2], maps[1]
     phi[:] = 0.0
     phi_t[:] = 0.0
@@ -933,9 +939,11 @@ def _evaluate(system, x):
     packed, step, ws = system
     mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain, plan = packed
     q0, v0, p0, free, fpos, h, p0_inf, e_scale0, rtol, ctol, etol, trow = step
-    res, mat, dq_base, dq, q1, v1, p1, r, ext, gk, gp, floor = ws[:12]
-    phi, cq, d, dtmu, f = ws[12], ws[14], ws[15], ws[16], ws[18]
-    z, ratio, dratio, dz = ws[23], ws[24], ws[25], ws[26]
+    res, mat, wn = ws[0], ws[1], ws[2]
+    dq_base, dq, q1, v1, p1, r, ext, gk, gp, floor = (wn[_DQ_BASE], wn[_DQ], wn[_Q1], wn[_V1], wn[_P1], wn[_R],
+                                                      wn[_EXT], wn[_GK], wn[_GP], wn[_FLOOR])
+    dtmu, z, ratio, dratio, dz = wn[_DTMU], wn[_Z], wn[_RATIO], wn[_DRATIO], wn[_DZ]
+    phi, cq, d, f = ws[3][0], ws[4], ws[5], ws[6][0]
     strains, strain_off, cay, _ = strain
     n, nf = q0.size, free.size
     m = constraints[7]
@@ -963,10 +971,10 @@ def _evaluate(system, x):
     _add_frame_terms(frames, frame_off, strain[3], q0, q1, v0, v1, h, p1, gk, gp, floor, mat, fpos)
     _add_springs(loads, q0, q1, h, gp, floor, mat, fpos)
     if not _add_strain_terms(strains, strain_off, q0, q1, h, gp, floor, mat, fpos):
-        ws[27][0] = 1
+        ws[8][0] = 1
         return np.nan
     gmaps, gvec = gravity
-    dk = ws[22]
+    dk = ws[7][1]
     for i in range(gmaps.size):
         k = gmaps[i]
         o, nb = maps[1][k], maps[2][k]
@@ -1069,48 +1077,6 @@ def _solve(system):
 
 
 @numba.njit(cache=True)
-def _step(packed, ws, q0, v0, p0, h, qp1, trow, pres, free, fpos, lam0, rtol, ctol, etol, max_iterations,
-          line_search):
-    """One energy-momentum step: (status, Newton iterations); the new state is left in the workspace
-    ``ws`` (allocated once per chunk: Δq, q1, v1, p1, r, Q, D, Φ, μ = Δt λ̄ ...); ``trow`` is the step's
-    row of the time table."""
-    constraints = packed[5]
-    n, nf, m = q0.size, free.size, constraints[7]
-    dq_base, mu = ws[2], ws[17]
-    dq_base[:] = 0.0
-    for i in range(pres.size):
-        dq_base[pres[i]] = qp1[i] - q0[pres[i]]
-    x = np.empty(nf + m)
-    x_scale = 0.0
-    cay = packed[8][2]
-    for i in range(nf):
-        x[i] = h * v0[free[i]]
-        x_scale = max(x_scale, abs(q0[free[i]]))
-    for c in cay:                       # the Cayley rate of the last step, continued: Δψ = 2 atan(Δt ω0/2)
-        if fpos[c] >= 0:
-            x[fpos[c]] = 2.0 * np.arctan(0.5 * x[fpos[c]])
-    for i in range(m):
-        x[nf + i] = h * lam0[i]
-    step = (q0, v0, p0, free, fpos, h, max_abs(p0), abs(0.5 * _dot(v0, p0)), rtol, ctol, etol, trow)
-    system = (packed, step, ws)
-    state = newton_start(x, x_scale, max_iterations, line_search)
-    action = EVALUATE
-    ws[27][0] = 0
-    while action < 0:                  # do what the Newton core asks; its rules are all in the core
-        if action == EVALUATE:
-            err = _evaluate(system, state[2])
-            if ws[27][0]:
-                # the Python step raises here, at any iterate (no backtracking): the step goes to Python
-                return NONFINITE_RESIDUAL, state[4][0]
-            action = newton_evaluated(state, err)
-        else:
-            y, regular = _solve(system)
-            action = newton_solved(state, y, regular)
-    mu[:] = state[0][nf:]
-    return action, state[4][0]
-
-
-@numba.njit(cache=True)
 def _derived(packed, q, v, p, rv):
     """(T, V, p_x, p_y, L about the origin) of the scene at (q, v) with momentum p (``rv``: a 2-vector to
     work in)."""
@@ -1139,15 +1105,6 @@ def _derived(packed, q, v, p, rv):
 
 
 @numba.njit(cache=True)
-def _new_workspace(packed, n, nx):
-    maps, m = packed[3], packed[5][7]
-    nbmax = 1
-    for k in range(maps[2].size):
-        nbmax = max(nbmax, maps[2][k])
-    return _workspace(n, m, nx, nbmax)
-
-
-@numba.njit(cache=True)
 def _run(packed, q_start, v_start, t, hs, qp, table, pres, free, fpos, lam_start, reaction_start, rtol, ctol, etol,
          max_iterations, line_search, work, first_step, record_every, n_steps):
     mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain, plan = packed
@@ -1160,18 +1117,53 @@ def _run(packed, q_start, v_start, t, hs, qp, table, pres, free, fpos, lam_start
     probe_maps = bodies[7]
     rec_probe = np.empty((n_rec, probe_maps.size, 2))
     its_total = 0
-    ws = _new_workspace(packed, n, free.size + m)
-    dq, q1, v1, p1, r, ext = ws[3], ws[4], ws[5], ws[6], ws[7], ws[8]
-    phi, phi_t, cq, d, mu, rv = ws[12], ws[13], ws[14], ws[15], ws[17], ws[20]
-    z, ratio = ws[23], ws[24]
+    nbmax = 1
+    for k in range(maps[2].size):
+        nbmax = max(nbmax, maps[2][k])
+    nf = free.size
+    ws = _workspace(n, m, nf + m, nbmax)
+    wn = ws[2]
+    dq_base, cay = wn[_DQ_BASE], strain[2]
+    dq, q1, v1, p1, r, ext = wn[_DQ], wn[_Q1], wn[_V1], wn[_P1], wn[_R], wn[_EXT]
+    phi, phi_t, mu, cq, d, rv = ws[3][0], ws[3][1], ws[3][2], ws[4], ws[5], ws[6][2]
+    z, ratio = wn[_Z], wn[_RATIO]
     # the state, updated in place after each step (the caller's arrays are not touched)
     q, v, lam, reaction = q_start.copy(), v_start.copy(), lam_start.copy(), reaction_start.copy()
     p = _scene_momentum(mass, frames, frame_off, q, v)
     i_rec = 0
     for k in range(ns):
         h = hs[k]
-        status, its = _step(packed, ws, q, v, p, h, qp[k], table[k], pres, free, fpos, lam, rtol, ctol, etol,
-                            max_iterations, line_search)
+        # one energy-momentum step from (q, v, p): the new state is left in the workspace
+        dq_base[:] = 0.0
+        for i in range(npr):
+            dq_base[pres[i]] = qp[k, i] - q[pres[i]]
+        x = np.empty(nf + m)
+        x_scale = 0.0
+        for i in range(nf):
+            x[i] = h * v[free[i]]
+            x_scale = max(x_scale, abs(q[free[i]]))
+        for c in cay:                   # the Cayley rate of the last step, continued: Δψ = 2 atan(Δt ω0/2)
+            if fpos[c] >= 0:
+                x[fpos[c]] = 2.0 * np.arctan(0.5 * x[fpos[c]])
+        for i in range(m):
+            x[nf + i] = h * lam[i]
+        system = (packed, (q, v, p, free, fpos, h, max_abs(p), abs(0.5 * _dot(v, p)), rtol, ctol, etol, table[k]), ws)
+        state = newton_start(x, x_scale, max_iterations, line_search)
+        status = EVALUATE
+        ws[8][0] = 0
+        while status < 0:               # do what the Newton core asks; its rules are all in the core
+            if status == EVALUATE:
+                err = _evaluate(system, state[2])
+                if ws[8][0]:
+                    # the Python step raises here, at any iterate (no backtracking): the step goes to Python
+                    status = NONFINITE_RESIDUAL
+                    break
+                status = newton_evaluated(state, err)
+            else:
+                y, regular = _solve(system)
+                status = newton_solved(state, y, regular)
+        its = state[4][0]
+        mu[:] = state[0][nf:]
         if status == OK and not (all_finite(q1) and all_finite(v1)):
             status = NONFINITE_RESIDUAL
         if status != OK:
@@ -1293,9 +1285,9 @@ def _system(scene, packed, columns, q0, v0, h, t, lam):
     free = scene.free_index.astype(np.int64)
     p0 = _scene_momentum(packed[0], packed[1], packed[2], q0, v0)
     trow = time_table(columns, float(t), np.array([float(h)]))[0]
-    ws = _new_workspace(packed, n, free.size + m)
+    ws = _workspace(n, m, free.size + m, max(1, int(packed[3][2].max(initial=1))))
     if scene.prescribed_index.size:
-        ws[2][scene.prescribed_index] = scene.prescribed_state(t + h)[0] - q0[scene.prescribed_index]
+        ws[2][_DQ_BASE][scene.prescribed_index] = scene.prescribed_state(t + h)[0] - q0[scene.prescribed_index]
     step = (q0, v0, p0, free, _free_positions(scene), float(h), max_abs(p0), abs(0.5 * float(v0 @ p0)), 1e-12, 1e-12,
             1e-14, trow)
     lam = np.zeros(m) if lam is None else np.asarray(lam, dtype=float)
