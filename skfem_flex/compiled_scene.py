@@ -548,11 +548,13 @@ def _pack(scene):
     mass = sps.csr_matrix(mass)
     mass.sort_indices()
     mass = (mass.indptr.astype(np.int64), mass.indices.astype(np.int64), mass.data.astype(float))
-    # whether each floating-frame body's tangent pattern is full and row-major (a block add)
-    frame_full = np.array([kd.pat_idx.size == kd.n ** 2 and np.array_equal(kd.pat_idx, np.tile(np.arange(kd.n), kd.n))
-                           for kd in frames], dtype=np.bool_)
+    # where each entry of the bodies' kernel patterns lands in the flattened Newton matrix (−1: a row or
+    # column of a prescribed coordinate): one indirect add per entry in the loop
+    fpos, nx = _free_positions(scene), scene.free_index.size + scene.n_constraints
+    frame_pos = _pattern_positions(frames, frame_off, fpos, nx)
+    strain_pos = _pattern_positions(strains, strain_off, fpos, nx)
     strain = (tuple(strains) if strains else None, np.asarray(strain_off, dtype=np.int64),
-              np.asarray(scene.cayley_index, dtype=np.int64), frame_full)
+              np.asarray(scene.cayley_index, dtype=np.int64), frame_pos, strain_pos)
     dense = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), 0, 0)
     packed = (mass, tuple(frames) if frames else None, np.asarray(frame_off, dtype=np.int64), maps, gravity,
               constraints, bodies, loads, strain, dense)
@@ -584,6 +586,19 @@ def _planned(scene):
                 packed = packed[:9] + (plan,)
         _PLANNED[scene] = packed
     return packed
+
+
+def _pattern_positions(kernels, offsets, fpos, nx):
+    """(positions, pointers): entry t of kernel i's CSR pattern goes to flat index positions[ptr[i] + t]
+    of the (nx × nx) Newton matrix, or nowhere (−1)."""
+    parts, ptr = [], [0]
+    for kd, o in zip(kernels, offsets):
+        rows = fpos[o + np.repeat(np.arange(kd.n), np.diff(kd.pat_ptr))]
+        cols = fpos[o + np.asarray(kd.pat_idx)]
+        parts.append(np.where((rows >= 0) & (cols >= 0), rows * nx + cols, -1))
+        ptr.append(ptr[-1] + rows.size)
+    return (np.concatenate(parts).astype(np.int64) if parts else np.zeros(0, dtype=np.int64),
+            np.asarray(ptr, dtype=np.int64))
 
 
 def _newton_pattern(scene, packed):
@@ -827,12 +842,14 @@ def _add_loads(maps, loads, q0, dq, trow, h, ext, mat, fpos):
 
 
 @numba.njit(cache=True)
-def _add_frame_terms(frames, frame_off, frame_full, q0, q1, v0, v1, h, p1, gk, gp, floor, mat, fpos):
+def _add_frame_terms(frames, frame_off, frame_pos, q0, q1, v0, v1, h, p1, gk, gp, floor, mat):
     """Add the floating-frame bodies' energy-momentum terms (a separate function: ``frames`` is
     None in scenes without such bodies, and Numba prunes the branch only on an argument);
-    ``frame_full[i]``: body i's tangent pattern is full and row-major."""
+    ``frame_pos``: where their tangents' entries land in the flattened Newton matrix."""
     if frames is None:
         return
+    flat = mat.reshape(-1)
+    pos, ptr = frame_pos
     for i in range(len(frames)):
         kd = frames[i]
         o = frame_off[i]
@@ -843,33 +860,23 @@ def _add_frame_terms(frames, frame_off, frame_full, q0, q1, v0, v1, h, p1, gk, g
         gk[o:o + nb] += gkb
         gp[o:o + nb] += gpb
         floor[o:o + nb] += flb
-        f0 = fpos[o]
-        if frame_full[i] and f0 >= 0 and fpos[o + nb - 1] == f0 + nb - 1:
-            # a full row-major pattern on free, consecutive coordinates: a plain block add (the
-            # indirect scatter below costs twice the kernel's own time on a 16-element beam)
-            for a in range(nb):
-                row = mat[f0 + a]
-                for b in range(nb):
-                    row[f0 + b] += data[a * nb + b]
-            continue
-        for a in range(nb):
-            ia = fpos[o + a]
-            if ia < 0:
-                continue
-            for t in range(kd.pat_ptr[a], kd.pat_ptr[a + 1]):
-                jb = fpos[o + kd.pat_idx[t]]
-                if jb >= 0:
-                    mat[ia, jb] += data[t]
+        base = ptr[i]
+        for t in range(data.size):
+            k = pos[base + t]
+            if k >= 0:
+                flat[k] += data[t]
 
 
 @numba.njit(cache=True)
-def _add_strain_terms(strains, strain_off, q0, q1, h, gp, floor, mat, fpos):
+def _add_strain_terms(strains, strain_off, strain_pos, q0, q1, h, gp, floor, mat):
     """Add the exact beams' discrete strain gradients (:mod:`skfem_flex.bodies.exact_kernel`), their
     tangent Δt ∂g/∂q1 and round-off floor; False if a step folds an element or turns a section by
     MAX_INCREMENT or more (at any Newton iterate the loop then hands the step to Python, which raises
     the proper error and halves the step, as it does on the Python path)."""
     if strains is None:
         return True
+    flat = mat.reshape(-1)
+    pos, ptr = strain_pos
     for i in range(len(strains)):
         kd = strains[i]
         o, nb = strain_off[i], kd.n
@@ -881,13 +888,11 @@ def _add_strain_terms(strains, strain_off, q0, q1, h, gp, floor, mat, fpos):
         for a in range(nb):
             gp[o + a] += g[a]
             floor[o + a] += h * fl[a]
-            ia = fpos[o + a]
-            if ia < 0:
-                continue
-            for t in range(kd.pat_ptr[a], kd.pat_ptr[a + 1]):
-                jb = fpos[o + kd.pat_idx[t]]
-                if jb >= 0:
-                    mat[ia, jb] += h * data[t]
+        base = ptr[i]
+        for t in range(data.size):
+            k = pos[base + t]
+            if k >= 0:
+                flat[k] += h * data[t]
     return True
 
 
@@ -954,7 +959,7 @@ def _evaluate(system, x):
                                                       wn[_EXT], wn[_GK], wn[_GP], wn[_FLOOR])
     dtmu, z, ratio, dratio, dz = wn[_DTMU], wn[_Z], wn[_RATIO], wn[_DRATIO], wn[_DZ]
     phi, cq, d, f = ws[3][0], ws[4], ws[5], ws[6][0]
-    strains, strain_off, cay, _ = strain
+    strains, strain_off, cay = strain[0], strain[1], strain[2]
     n, nf = q0.size, free.size
     m = constraints[7]
     mu = x[nf:]
@@ -978,9 +983,9 @@ def _evaluate(system, x):
     gk[:] = 0.0
     gp[:] = 0.0
     floor[:] = 0.0
-    _add_frame_terms(frames, frame_off, strain[3], q0, q1, v0, v1, h, p1, gk, gp, floor, mat, fpos)
+    _add_frame_terms(frames, frame_off, strain[3], q0, q1, v0, v1, h, p1, gk, gp, floor, mat)
     _add_springs(loads, q0, q1, h, gp, floor, mat, fpos)
-    if not _add_strain_terms(strains, strain_off, q0, q1, h, gp, floor, mat, fpos):
+    if not _add_strain_terms(strains, strain_off, strain[4], q0, q1, h, gp, floor, mat):
         ws[8][0] = 1
         return np.nan
     gmaps, gvec = gravity
