@@ -71,6 +71,8 @@ def test_cli_survives_any_set_value(tmp_path, capsys, data, name):
     (["run", "pendulum", "--out", ""], "--out"),
     (["run", "pendulum", "--set", "length=1", "--set", "length=2"], "twice"),
     (["run", "spin_up_beam", "--set", "n_elements=100000000"], "memory"),
+    (["run", "flexible_pendulum", "--set", "n_elements=1000000000"], "memory"),
+    (["run", "slider_crank", "--set", "body=plane-stress", "--set", "n_elements=1000000000"], "memory"),
     (["run", "flexible_pendulum", "--set", "EA=1e13"], "EA"),
     (["run", "flexible_pendulum", "--set", "EI=1e-5"], "EI"),
     (["run", "flexible_pendulum", "--set", "length=1e300"], "length"),

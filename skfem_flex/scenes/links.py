@@ -23,9 +23,10 @@ from dataclasses import dataclass
 import numpy as np
 import skfem
 
-from ..beam import TimoshenkoBeam
+from ..beam import TimoshenkoBeam, line_mesh
 from ..bodies.floating import FloatingBeam
 from ..bodies.plane_stress import PlaneStress, load_mesh
+from ..resources import BYTES_PER_ELEMENT, check_fits
 from ._registry import positive_count, positive_value
 
 __all__ = ["LINK_KINDS", "Link", "link", "strip_material"]
@@ -67,6 +68,8 @@ def strip_material(section, length):
 
 
 def _strip(length, E, nu, rho, height, thickness, n_elements, n_across, name):
+    # refused at once, before its mesh is allocated (a hypothesis run asked for 10⁹ elements)
+    check_fits(BYTES_PER_ELEMENT * n_elements * n_across, f"a plane-stress strip of {n_elements} × {n_across} elements")
     mesh = skfem.MeshQuad.init_tensor(np.linspace(0.0, length, n_elements + 1),
                                       np.linspace(-0.5 * height, 0.5 * height, n_across + 1))
     tol = 1e-9 * length
@@ -113,7 +116,7 @@ def link(kind, length, section, n_elements, n_modes=3, n_across=2, reference="cl
     length = positive_value("length", length)
     n = positive_count("n_elements", n_elements)
     if kind.startswith("beam"):
-        tb = TimoshenkoBeam(skfem.MeshLine(np.linspace(0.0, length, n + 1)), section)
+        tb = TimoshenkoBeam(line_mesh(length, n), section)       # checks that it fits in memory first
         beam = FloatingBeam(tb, reference=reference if kind == "beam" else "clamped", strain=strain, name=name,
                             **state)
         if mesh is not None:
