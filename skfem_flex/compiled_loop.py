@@ -40,10 +40,10 @@ import numpy as np
 from numba.extending import get_cython_function_address
 
 from .bodies.floating_kernel import energy_momentum_terms, momentum, potential_energy
-from .integrators import EnergyMomentum
+from .integrators import EnergyMomentum, predictor_acceleration
 from .linear_solver import MAX_BANDWIDTH
 from .newton import (CONVERGED, EVALUATE, NONFINITE_RESIDUAL, all_finite, max_abs, newton_evaluated, newton_solved,
-                     newton_start, roundoff_floor)
+                     newton_start, predicted_increment, roundoff_floor)
 from .scene import Scene
 
 __all__ = ["eligible", "run_chunk", "chunk_steps", "chunk_schedule", "record_count", "record_buffers", "jit_cache_cold",
@@ -236,15 +236,15 @@ def _newton_solve(system):
 
 
 @numba.njit(cache=True)
-def _step(kd, q0, v0, p0, h, qp1, pres, free, target, mat_size, kl, ku, rtol, etol, max_iterations, line_search):
+def _step(kd, q0, v0, a0, p0, h, qp1, pres, free, target, mat_size, kl, ku, rtol, etol, max_iterations,
+          line_search):
     """One energy-momentum step by the Newton core; (status, iterations, dq, q1, v1, p1, r)."""
     n = q0.size
     dq_base = np.zeros(n)
     for i in range(pres.size):
         dq_base[pres[i]] = qp1[i] - q0[pres[i]]
     x = np.empty(free.size)
-    for i in range(free.size):
-        x[i] = h * v0[free[i]]
+    predicted_increment(v0, a0, h, free, x)
     x_scale = 0.0
     for i in range(free.size):
         x_scale = max(x_scale, abs(q0[free[i]]))
@@ -263,8 +263,8 @@ def _step(kd, q0, v0, p0, h, qp1, pres, free, target, mat_size, kl, ku, rtol, et
 
 
 @numba.njit(cache=True)
-def _run(kd, q, v, t, hs, qp, pres, free, target, mat_size, kl, ku, rtol, etol, max_iterations, line_search, work,
-         first_step, record_every, n_steps):
+def _run(kd, q, v, acc, t, hs, qp, pres, free, target, mat_size, kl, ku, rtol, etol, max_iterations, line_search,
+         work, first_step, record_every, n_steps):
     n, ns, npr = q.size, hs.size, pres.size
     n_rec = record_count(first_step, ns, record_every, n_steps)
     rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac = record_buffers(n_rec, n, npr)
@@ -277,12 +277,12 @@ def _run(kd, q, v, t, hs, qp, pres, free, target, mat_size, kl, ku, rtol, etol, 
     i_rec = 0
     for k in range(ns):
         h = hs[k]
-        status, its, dq, q1, v1, p1, r = _step(kd, q, v, p, h, qp[k], pres, free, target, mat_size, kl, ku, rtol,
-                                               etol, max_iterations, line_search)
+        status, its, dq, q1, v1, p1, r = _step(kd, q, v, acc, p, h, qp[k], pres, free, target, mat_size, kl, ku,
+                                               rtol, etol, max_iterations, line_search)
         if status == OK and not (all_finite(q1) and all_finite(v1)):
             status = NONFINITE_RESIDUAL
         if status != OK:
-            return (status, k, t, q, v, p, reaction, work, its_total, i_rec,
+            return (status, k, t, q, v, acc, reaction, work, its_total, i_rec,
                     rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac, rec_derived)
         w = 0.0
         for i in range(npr):
@@ -292,6 +292,7 @@ def _run(kd, q, v, t, hs, qp, pres, free, target, mat_size, kl, ku, rtol, etol, 
             w += dq[pres[i]] * reaction[i]
         work += w
         t = t + h
+        acc = (v1 - v) / h
         q, v, p = q1, v1, p1
         its_total += its
         s = first_step + k
@@ -308,7 +309,7 @@ def _run(kd, q, v, t, hs, qp, pres, free, target, mat_size, kl, ku, rtol, etol, 
             rec_derived[i_rec, 3] = p[1]
             rec_derived[i_rec, 4] = q[0] * p[1] - q[1] * p[0] + p[2]
             i_rec += 1
-    return (OK, ns, t, q, v, p, reaction, work, its_total, i_rec,
+    return (OK, ns, t, q, v, acc, reaction, work, its_total, i_rec,
             rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac, rec_derived)
 
 
@@ -374,7 +375,8 @@ def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, rec
     -------
     dict
         ``status`` (OK or the failure code of the step after the completed ones), ``done``
-        (steps completed), ``t, q, v, reaction`` (state after them; ``reaction`` is the mean
+        (steps completed), ``t, q, v, acc, reaction`` (state after them; ``acc`` is the last step's mean
+        acceleration (:func:`~skfem_flex.integrators.predictor_acceleration`), ``reaction`` the mean
         generalized force of the prescribed laws over the last step), ``work`` (accumulated),
         ``iterations`` (Newton iterations summed over the completed steps) and ``records``, the
         recorded steps as arrays with one row per record: dict(t, q, v, work, iterations, reaction,
@@ -388,11 +390,11 @@ def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, rec
     hs, qp = chunk_schedule(scene, state.t, dt, t_end, first_step, n_chunk, n_steps)
     target, size, kl, ku = _plan(scene)
     out = _run(body.compiled_kernel_data(), np.ascontiguousarray(state.q, dtype=float),
-               np.ascontiguousarray(state.v, dtype=float), float(state.t), hs, qp,
+               np.ascontiguousarray(state.v, dtype=float), predictor_acceleration(state), float(state.t), hs, qp,
                scene.prescribed_index.astype(np.int64), scene.free_index.astype(np.int64), target, size, kl, ku,
                float(s.rtol), float(s.etol), int(s.max_iterations), bool(s.line_search), float(work),
                int(first_step), int(record_every), int(n_steps))
-    (status, done, t, q, v, _, reaction, work, its_total, n_rec, rec_t, rec_q, rec_v, rec_work, rec_its,
+    (status, done, t, q, v, acc, reaction, work, its_total, n_rec, rec_t, rec_q, rec_v, rec_work, rec_its,
      rec_reac, rec_derived) = out
     # the records of both compiled loops have one form: no constraints here (‖Φ‖ = ‖Φ_q v‖ = 0, no λ)
     # and no probe evaluated in the loop
@@ -402,5 +404,5 @@ def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, rec
     records = dict(t=rec_t[:n_rec], q=rec_q[:n_rec], v=rec_v[:n_rec], work=rec_work[:n_rec],
                    iterations=rec_its[:n_rec], reaction=rec_reac[:n_rec], derived=derived,
                    lam=np.zeros((n_rec, 0)), probes={})
-    return dict(status=int(status), done=int(done), t=float(t), q=q, v=v, lam=no_lam, reaction=reaction,
+    return dict(status=int(status), done=int(done), t=float(t), q=q, v=v, acc=acc, lam=no_lam, reaction=reaction,
                 work=float(work), iterations=int(its_total), records=records)

@@ -47,10 +47,10 @@ from .bodies import exact_kernel
 from .bodies.base import to_dense
 from .bodies.floating_kernel import energy_momentum_terms, momentum, potential_energy, sinc_half
 from .compiled_loop import chunk_schedule, record_buffers, record_count
-from .integrators import EnergyMomentum
+from .integrators import EnergyMomentum, predictor_acceleration
 from .linear_solver import MIN_DENSE_BORDERED, bordered_band_solve, dense_bordered_plan
 from .newton import (CONVERGED, EVALUATE, NONFINITE_RESIDUAL, all_finite, max_abs, newton_evaluated, newton_solved,
-                     newton_start, roundoff_floor)
+                     newton_start, predicted_increment, roundoff_floor)
 from .rotations import SERIES_BELOW, sinc
 from .scene import Scene
 
@@ -72,8 +72,10 @@ POINTS, PROJECTED, LINEAR_ROW, DISTANCE = 0, 1, 2, 3
 # A map k reads the coordinate block q[off[k] : off[k] + nb[k]] of one body. LINEAR: r = G q + c with G
 # (2 × nb) stored row-major at gptr[k]. FRAME: r = mR R + A(θ)(y0 + Y q_f), R = q[0:2], θ = q[2],
 # q_f = q[3:], Y (2 × (nb − 3)) stored row-major at yptr[k].
+# The functions that allocate nothing are compiled with _nrt=False (see skfem_flex.newton: no reference
+# counting of the arrays they unpack from the packed tuples).
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _frame_offset(maps, k, qa, qb):
     """(s_x, s_y) = y0 + Y (qa_f + qb_f)/2 of FRAME map k: the point in the body frame at the mean of two
     states (qa = qb: at that state; 0.5 (a + a) = a exactly)."""
@@ -88,7 +90,7 @@ def _frame_offset(maps, k, qa, qb):
     return sx, sy
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _position_into(maps, k, q, out):
     """out[0:2] = r(q) of map k, m; ``q`` is the body's block."""
     kind, off, nb, m_r, c, y0, gdat, gptr, ydat, yptr = maps
@@ -106,7 +108,7 @@ def _position_into(maps, k, q, out):
     out[1] = m_r[k] * q[1] + S * sx + C * sy
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _jacobian_into(maps, k, q, out):
     """out[:, :nb] = ∂r/∂q of map k."""
     kind, off, nb, m_r, c, y0, gdat, gptr, ydat, yptr = maps
@@ -130,7 +132,7 @@ def _jacobian_into(maps, k, q, out):
         out[1, 3 + j] = S * yx + C * yy
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _dgrad_into(maps, k, q0, q1, out):
     """out[:, :nb] = the exact discrete gradient D of map k: D (q1 − q0) = r(q1) − r(q0).
 
@@ -181,11 +183,11 @@ def map_dgrad(maps, k, q0, q1):
     return d
 
 
-@numba.njit(cache=True)
-def _dgrad_jacobian_parts(maps, k, q0, q1, f):
-    """The nonzero parts of ∂(Dᵀ f)/∂q1 of a FRAME map: the (θ, θ) entry, the θ row over q_f and
-    the q_f rows of the θ column (everything else is zero: D depends on q1 through θ and q_f only,
-    and its q_f columns only through θ)."""
+@numba.njit(cache=True, _nrt=False)
+def _dgrad_jacobian_parts(maps, k, q0, q1, f, row, col):
+    """The nonzero parts of ∂(Dᵀ f)/∂q1 of a FRAME map: the (θ, θ) entry (returned), the θ row over
+    q_f and the q_f rows of the θ column (into ``row``, ``col``; everything else is zero: D depends on
+    q1 through θ and q_f only, and its q_f columns only through θ)."""
     kind, off, nb, m_r, c, y0, gdat, gptr, ydat, yptr = maps
     ne = nb[k] - 3
     y = yptr[k]
@@ -199,15 +201,13 @@ def _dgrad_jacobian_parts(maps, k, q0, q1, f):
     fay = -f[0] * S + f[1] * C
     # fA·(E s) and fA·s; E s = (−sy, sx)
     h22 = dsig * (-fax * sy + fay * sx) - 0.5 * sig * (fax * sx + fay * sy)
-    row = np.empty(ne)
-    col = np.empty(ne)
     for j in range(ne):
         yx, yy = ydat[y + j], ydat[y + ne + j]
         # ½ σ (fA E)·Y_j with fA E = (fay, −fax)
         row[j] = 0.5 * sig * (fay * yx - fax * yy)
         # −½ sin(Δθ/2) Y_jᵀ fA + ½ cos(Δθ/2) Y_jᵀ Eᵀ fA, Eᵀ fA = (fay, −fax)
         col[j] = -0.5 * sn * (yx * fax + yy * fay) + 0.5 * kap * (yx * fay - yy * fax)
-    return h22, row, col
+    return h22
 
 
 @numba.njit(cache=True)
@@ -217,7 +217,8 @@ def map_dgrad_jacobian(maps, k, q0, q1, f):
     h = np.zeros((n, n))
     if maps[0][k] == LINEAR:
         return h
-    h22, row, col = _dgrad_jacobian_parts(maps, k, q0, q1, f)
+    row, col = np.empty(n), np.empty(n)
+    h22 = _dgrad_jacobian_parts(maps, k, q0, q1, f, row, col)
     h[2, 2] = h22
     for j in range(n - 3):
         h[2, 3 + j] = row[j]
@@ -225,7 +226,7 @@ def map_dgrad_jacobian(maps, k, q0, q1, f):
     return h
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _add_hessian_product(maps, k, q, f, scale, mat, fpos):
     """mat[F, F] += scale · ∂(Jᵀ f)/∂q of map k at the body block q (f fixed, (2,)); zero for LINEAR maps.
 
@@ -259,14 +260,16 @@ def map_hessian_product(maps, k, q, f):
     return h
 
 
-@numba.njit(cache=True)
-def _add_dgrad_jacobian(maps, k, q0, q1, f, scale, mat, fpos, floor):
+@numba.njit(cache=True, _nrt=False)
+def _add_dgrad_jacobian(maps, k, q0, q1, f, scale, mat, fpos, floor, scratch):
     """mat[F, F] += scale · ∂(Dᵀ f)/∂q1 of map k, and, if ``floor`` is not empty, its round-off floor
-    |scale ∂(Dᵀf)/∂q1| (|q0| + |q1|) added to floor[o:o + nb] (the body's block; q0, q1 are the block's)."""
+    |scale ∂(Dᵀf)/∂q1| (|q0| + |q1|) added to floor[o:o + nb] (the body's block; q0, q1 are the block's);
+    ``scratch``: (2, ≥ nb) to work in."""
     if maps[0][k] == LINEAR:
         return
     o, n = maps[1][k], maps[2][k]
-    h22, row, col = _dgrad_jacobian_parts(maps, k, q0, q1, f)
+    row, col = scratch[0], scratch[1]
+    h22 = _dgrad_jacobian_parts(maps, k, q0, q1, f, row, col)
     i2 = fpos[o + 2]
     a2 = abs(q0[2]) + abs(q1[2])
     if i2 >= 0:
@@ -713,16 +716,16 @@ def _workspace(n, m, nx, nbmax):
     compile time wherever the tuple goes): the Newton residual and matrix; the (n,) vectors Δq_base,
     Δq, q1, v1, p1, r, Q, g_kin, g_V, floor, Dᵀμ, z (Δq with the Cayley parameter 2 tan(Δψ/2) on
     Cayley coordinates), Δψ/w, d(Δψ/w)/dΔψ, dz/dΔq (rows of ``ws[2]``, names ``_DQ`` …); Φ, Φ_t, μ
-    (rows of ``ws[3]``); Φ_q, D; three 2-vectors; two (2, nb) map blocks; and a flag set when an
+    (rows of ``ws[3]``); Φ_q, D; three 2-vectors; three (2, nb) map blocks; and a flag set when an
     evaluation met a state the Python step refuses (a folded element, a turn ≥ MAX_INCREMENT)."""
     wn = np.zeros((15, n))
     wn[_RATIO, :] = 1.0
     wn[_DZ, :] = 1.0
     return (np.zeros(nx), np.zeros((nx, nx)), wn, np.zeros((3, m)), np.zeros((m, n)), np.zeros((m, n)),
-            np.zeros((3, 2)), np.zeros((2, 2, nbmax)), np.zeros(1, dtype=np.int64))
+            np.zeros((3, 2)), np.zeros((3, 2, nbmax)), np.zeros(1, dtype=np.int64))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, mat, fpos, ws):
     """Φ(q1, t1), Φ_t, Φ_q(q1) and D into the workspace, ∂(Dᵀμ)/∂q1 added to ``mat`` (the
     Newton matrix). ``trow`` is the step's row of the time table (drivers' x(t1), ẋ(t1))."""
@@ -760,7 +763,7 @@ def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, mat, fpos, ws):
                         for j in range(nb):
                             cq[r0 + a, o + j] += s * jac[a, j]
                             d[r0 + a, o + j] += s * dk[a, j]
-                _add_dgrad_jacobian(maps, k, qb0, qb1, f, 1.0, mat, fpos, no_floor)
+                _add_dgrad_jacobian(maps, k, qb0, qb1, f, 1.0, mat, fpos, no_floor, ws[7][2])
             if proj:
                 phi[r0] = nrm[i, 0] * acc[0] + nrm[i, 1] * acc[1]
             else:
@@ -800,7 +803,7 @@ def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, mat, fpos, ws):
                         mat[ia, jb] += 0.5 * mu[r0] * (jac[0, a] * jac[0, j] + jac[1, a] * jac[1, j])
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _add_springs(loads, q0, q1, h, gp, floor, mat, fpos):
     """Coordinate springs V = ½ k u^p: their exact divided difference (no cancellation) into ``gp``,
     tangent and round-off floor."""
@@ -908,7 +911,7 @@ def _strain_energy(strains, strain_off, q):
     return pot
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def cayley_terms(dpsi):
     """(z, Δψ/w, d(Δψ/w)/dΔψ, dz/dΔψ) of an increment Δψ (rad), z = w = 2 tan(Δψ/2): the formulas of
     :func:`~skfem_flex.rotations.cayley`, ``cayley_ratio``, ``cayley_ratio_derivative`` and
@@ -935,7 +938,7 @@ def _frame_strain_energy(frames, frame_off, q):
     return pot
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _dot(a, b):
     s = 0.0
     for i in range(a.size):
@@ -1002,7 +1005,7 @@ def _evaluate(system, x):
         f[0], f[1] = -gvec[i, 0], -gvec[i, 1]
         for j in range(nb):
             gp[o + j] += f[0] * dk[0, j] + f[1] * dk[1, j]
-        _add_dgrad_jacobian(maps, k, qb0, qb1, f, h, mat, fpos, floor)
+        _add_dgrad_jacobian(maps, k, qb0, qb1, f, h, mat, fpos, floor, ws[7][2])
     for i in range(n):                  # the discrete-gradient forces (Dᵀμ added below)
         r[i] = h * gp[i] - h * gk[i]
     scale = max(max_abs(p1), p0_inf)
@@ -1120,8 +1123,8 @@ def _derived(packed, q, v, p, rv):
 
 
 @numba.njit(cache=True)
-def _run(packed, q_start, v_start, t, hs, qp, table, pres, free, fpos, lam_start, reaction_start, rtol, ctol, etol,
-         max_iterations, line_search, work, first_step, record_every, n_steps):
+def _run(packed, q_start, v_start, acc_start, t, hs, qp, table, pres, free, fpos, lam_start, reaction_start, rtol,
+         ctol, etol, max_iterations, line_search, work, first_step, record_every, n_steps):
     mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain, plan = packed
     n, ns, npr, m = q_start.size, hs.size, pres.size, constraints[7]
     n_rec = record_count(first_step, ns, record_every, n_steps)
@@ -1143,7 +1146,8 @@ def _run(packed, q_start, v_start, t, hs, qp, table, pres, free, fpos, lam_start
     phi, phi_t, mu, cq, d, rv = ws[3][0], ws[3][1], ws[3][2], ws[4], ws[5], ws[6][2]
     z, ratio = wn[_Z], wn[_RATIO]
     # the state, updated in place after each step (the caller's arrays are not touched)
-    q, v, lam, reaction = q_start.copy(), v_start.copy(), lam_start.copy(), reaction_start.copy()
+    q, v, acc = q_start.copy(), v_start.copy(), acc_start.copy()
+    lam, reaction = lam_start.copy(), reaction_start.copy()
     p = _scene_momentum(mass, frames, frame_off, q, v)
     i_rec = 0
     for k in range(ns):
@@ -1154,8 +1158,8 @@ def _run(packed, q_start, v_start, t, hs, qp, table, pres, free, fpos, lam_start
             dq_base[pres[i]] = qp[k, i] - q[pres[i]]
         x = np.empty(nf + m)
         x_scale = 0.0
+        predicted_increment(v, acc, h, free, x)
         for i in range(nf):
-            x[i] = h * v[free[i]]
             x_scale = max(x_scale, abs(q[free[i]]))
         for c in cay:                   # the Cayley rate of the last step, continued: Δψ = 2 atan(Δt ω0/2)
             if fpos[c] >= 0:
@@ -1182,8 +1186,8 @@ def _run(packed, q_start, v_start, t, hs, qp, table, pres, free, fpos, lam_start
         if status == OK and not (all_finite(q1) and all_finite(v1)):
             status = NONFINITE_RESIDUAL
         if status != OK:
-            return (status, k, t, q, v, lam, reaction, work, its_total, i_rec, rec_t, rec_q, rec_v, rec_work, rec_its,
-                    rec_reac, rec_lam, rec_derived, rec_probe)
+            return (status, k, t, q, v, acc, lam, reaction, work, its_total, i_rec, rec_t, rec_q, rec_v, rec_work,
+                    rec_its, rec_reac, rec_lam, rec_derived, rec_probe)
         w = _dot(z, ext)
         for i in range(npr):
             reaction[i] = r[pres[i]] / h
@@ -1198,6 +1202,8 @@ def _run(packed, q_start, v_start, t, hs, qp, table, pres, free, fpos, lam_start
             w -= dphi / h                       # μ = Δt λ̄: the work is −λ̄·ΔΦ
         work += w
         t = t + h
+        for i in range(n):
+            acc[i] = (v1[i] - v[i]) / h
         q[:] = q1
         v[:] = v1
         p[:] = p1
@@ -1231,8 +1237,8 @@ def _run(packed, q_start, v_start, t, hs, qp, table, pres, free, fpos, lam_start
                 rec_probe[i_rec, j, 0] = rv[0]
                 rec_probe[i_rec, j, 1] = rv[1]
             i_rec += 1
-    return (OK, ns, t, q, v, lam, reaction, work, its_total, i_rec, rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac,
-            rec_lam, rec_derived, rec_probe)
+    return (OK, ns, t, q, v, acc, lam, reaction, work, its_total, i_rec, rec_t, rec_q, rec_v, rec_work, rec_its,
+            rec_reac, rec_lam, rec_derived, rec_probe)
 
 
 def time_table(columns, t, hs):
@@ -1332,16 +1338,16 @@ def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, rec
     reaction = (np.asarray(state.prescribed_force, dtype=float) if np.size(state.prescribed_force) == npr
                 else np.zeros(npr))
     out = _run(packed, np.ascontiguousarray(state.q, dtype=float),
-               np.ascontiguousarray(state.v, dtype=float), float(state.t), hs, qp, table,
+               np.ascontiguousarray(state.v, dtype=float), predictor_acceleration(state), float(state.t), hs, qp, table,
                scene.prescribed_index.astype(np.int64), scene.free_index.astype(np.int64), _free_positions(scene),
                lam, reaction,
                float(s.rtol), float(s.ctol), float(s.etol), int(s.max_iterations), bool(s.line_search), float(work),
                int(first_step), int(record_every), int(n_steps))
-    (status, done, t, q, v, lam, reaction, work, its_total, n_rec, rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac,
-     rec_lam, rec_derived, rec_probe) = out
+    (status, done, t, q, v, acc, lam, reaction, work, its_total, n_rec, rec_t, rec_q, rec_v, rec_work, rec_its,
+     rec_reac, rec_lam, rec_derived, rec_probe) = out
     names = _packed(scene)[1]
     records = dict(t=rec_t[:n_rec], q=rec_q[:n_rec], v=rec_v[:n_rec], work=rec_work[:n_rec], iterations=rec_its[:n_rec],
                    reaction=rec_reac[:n_rec], derived=rec_derived[:n_rec], lam=rec_lam[:n_rec],
                    probes={name: rec_probe[:n_rec, j] for j, name in enumerate(names)})
-    return dict(status=int(status), done=int(done), t=float(t), q=q, v=v, lam=lam, reaction=reaction,
+    return dict(status=int(status), done=int(done), t=float(t), q=q, v=v, acc=acc, lam=lam, reaction=reaction,
                 work=float(work), iterations=int(its_total), records=records)

@@ -41,12 +41,12 @@ import scipy.sparse as sps
 
 from .errors import ConvergenceError, SimulationError
 from .linear_solver import PatternCache, linear_solve
-from .newton import NewtonSettings, newton_solve, roundoff_floor
+from .newton import NewtonSettings, newton_solve, predicted_increment, roundoff_floor
 from .rotations import MAX_INCREMENT, cayley, cayley_derivative, cayley_ratio, cayley_ratio_derivative
 from .scene import add_matrices
 
 __all__ = ["SimulationError", "ConvergenceError", "NewtonSettings", "State", "Integrator", "newton_solve", "linear_solve",
-           "EnergyMomentum", "Newmark", "Trapezoidal", "GeneralizedAlpha", "make_integrator", "INTEGRATORS"]
+           "EnergyMomentum", "predictor_acceleration", "Newmark", "Trapezoidal", "GeneralizedAlpha", "make_integrator", "INTEGRATORS"]
 
 _TINY = 1e-300
 
@@ -62,7 +62,8 @@ class State:
     q, v : ndarray
         Coordinates and velocities (global vectors).
     acc : ndarray
-        Acceleration q̈ (Newmark schemes; computed once at the start).
+        Acceleration q̈: consistent at the start, then the Newmark schemes' q̈_{n+1} and the
+        energy-momentum step's mean acceleration (v_{n+1} − v_n)/Δt (its Newton start).
     pseudo : ndarray
         Generalized-α's algorithmic acceleration a.
     lam : ndarray
@@ -307,7 +308,9 @@ class EnergyMomentum(Integrator):
             cache.update(dq=dq, z=z, mu=mu, q1=q1, v1=v1, r=r, d=d, ext=ext)
             return res, full, err
 
-        dq_guess = dt * v0[free]
+        dq_guess = np.empty(nf)
+        predicted_increment(np.asarray(v0, dtype=float), predictor_acceleration(state), float(dt),
+                            np.asarray(free, dtype=np.int64), dq_guess)
         if cay.size:                    # the Cayley rate of the last step, continued: Δψ = 2 atan(Δt ω0/2)
             on = np.isin(free, cay)
             dq_guess[on] = 2.0 * np.arctan(0.5 * dq_guess[on])
@@ -325,7 +328,7 @@ class EnergyMomentum(Integrator):
         if pres.size:
             reaction = r[pres] / dt
             work += float(z[pres] @ reaction)
-        new = State(t1, q1, v1, lam=mu / dt, prescribed_force=reaction)
+        new = State(t1, q1, v1, acc=(v1 - v0) / dt, lam=mu / dt, prescribed_force=reaction)
         vres = 0.0
         if m:
             vres = _inf(scene.constraint_jacobian(q1, t1) @ v1 + scene.constraint_time_derivative(q1, t1))
@@ -333,6 +336,15 @@ class EnergyMomentum(Integrator):
 
 
 _NO_INDEX = np.zeros(0, dtype=int)
+
+
+def predictor_acceleration(state):
+    """a0 of the energy-momentum step's Newton start (:func:`skfem_flex.newton.predicted_increment`):
+    ``state.acc``, which after an energy-momentum step is the step's mean acceleration (v1 − v0)/Δt;
+    zeros without one."""
+    if state.acc is not None and np.size(state.acc) == np.size(state.v):
+        return np.ascontiguousarray(state.acc, dtype=float)
+    return np.zeros(np.size(state.v))
 
 
 def _cayley_rates(dq, cay, t1, dt):

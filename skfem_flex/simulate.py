@@ -23,61 +23,79 @@ __all__ = ["simulate", "SignalStop"]
 
 
 class _Recorder:
-    """Collects histories step by step; builds a Result at any time."""
+    """Collects histories step by step or a compiled chunk at a time; builds a Result at any time.
+
+    Each history is a list of blocks (arrays whose first axis runs over records), joined once when
+    a Result is built: a chunk of a thousand records is stored as one array, not a thousand rows."""
+
+    _KEYS = ("t", "q", "v", "lam", "kinetic", "potential", "external_work", "constraint_residual",
+             "velocity_constraint_residual", "newton_iterations", "prescribed_force", "linear_momentum",
+             "angular_momentum")
 
     def __init__(self, scene):
         self.scene = scene
-        self.rows = {k: [] for k in ("t", "q", "v", "lam", "kinetic", "potential", "external_work",
-                                     "constraint_residual", "velocity_constraint_residual",
-                                     "newton_iterations", "prescribed_force", "linear_momentum",
-                                     "angular_momentum")}
+        self.rows = {k: [] for k in self._KEYS}
         self.probes = {k: [] for k in scene.probes}
         self.with_momentum = None
         self.reactions = _reaction_maps(scene)
         self.reaction_rows = {k: [] for k, _ in self.reactions}
+        self.count = 0
 
     def prefill(self, prior):
         """Start from the histories of an earlier run (``simulate(..., resume=...)``)."""
         for k in self.rows:
             val = getattr(prior, k, None)
             if val is not None:
-                self.rows[k] = list(val)
+                self.rows[k] = [np.asarray(val)]
+        self.count = int(np.size(prior.t))
         self.with_momentum = prior.linear_momentum is not None
         for k in self.probes:
             if k not in prior.probes:
                 raise ValueError(f"cannot resume: the earlier run has no probe {k!r}")
-            self.probes[k] = list(prior.probes[k])
+            self.probes[k] = [np.asarray(prior.probes[k])]
         for k in self.reaction_rows:
             if k in prior.reactions:
-                self.reaction_rows[k] = list(prior.reactions[k])
+                self.reaction_rows[k] = [np.asarray(prior.reactions[k])]
+
+    def first(self, key):
+        """The first record of history ``key``."""
+        return self.rows[key][0][0]
+
+    def last(self, key):
+        """The last record of history ``key``."""
+        return self.rows[key][-1][-1]
+
+    def last_energy(self):
+        """(kinetic energy, potential energy, work done) of the last record, J."""
+        return tuple(float(self.last(k)) for k in ("kinetic", "potential", "external_work"))
+
+    def history(self, key):
+        """History ``key`` as one array."""
+        blocks = self.rows[key]
+        return np.concatenate(blocks) if blocks else np.zeros(0)
 
     def record(self, state, work, iterations, vres):
         """Append one state of the Python path (energies, momenta, constraints and probes from the scene)."""
         s = self.scene
         q, v, t = state.q, state.v, state.t
-        r = self.rows
-        r["t"].append(t)
-        r["q"].append(q.copy())
-        r["v"].append(v.copy())
-        r["lam"].append(np.array(state.lam, dtype=float))
-        r["kinetic"].append(s.kinetic_energy(q, v))
-        r["potential"].append(s.potential_energy(q))
-        r["external_work"].append(work)
-        r["constraint_residual"].append(float(np.max(np.abs(s.constraint_value(q, t)))) if s.n_constraints else 0.0)
-        r["velocity_constraint_residual"].append(vres)
-        r["newton_iterations"].append(iterations)
-        r["prescribed_force"].append(np.array(state.prescribed_force, dtype=float))
+        one = {"t": t, "q": q, "v": v, "lam": state.lam, "kinetic": s.kinetic_energy(q, v),
+               "potential": s.potential_energy(q), "external_work": work,
+               "constraint_residual": float(np.max(np.abs(s.constraint_value(q, t)))) if s.n_constraints else 0.0,
+               "velocity_constraint_residual": vres, "newton_iterations": iterations,
+               "prescribed_force": state.prescribed_force}
         if self.with_momentum is None:
             self.with_momentum = s.linear_momentum(q, v) is not None
         if self.with_momentum:
-            r["linear_momentum"].append(s.linear_momentum(q, v))
-            r["angular_momentum"].append(s.angular_momentum(q, v))
+            one.update(linear_momentum=s.linear_momentum(q, v), angular_momentum=s.angular_momentum(q, v))
+        for k, val in one.items():
+            self.rows[k].append(np.array(val, dtype=int if k == "newton_iterations" else float)[None])
         for k, val in s.evaluate_probes(t, q, v).items():
-            self.probes[k].append(val)
+            self.probes[k].append(np.asarray(val)[None])
         if self.reactions:
             lam = np.asarray(state.lam, dtype=float)
             for k, fn in self.reactions:
-                self.reaction_rows[k].append(fn(q, lam))
+                self.reaction_rows[k].append(fn(q, lam)[None])
+        self.count += 1
 
     def record_block(self, recs):
         """Append the recorded steps of a compiled chunk at once (``recs``: the ``records`` arrays of
@@ -87,41 +105,38 @@ class _Recorder:
         if n_rec == 0:
             return
         q, v, lam, derived = recs["q"], recs["v"], recs["lam"], recs["derived"]
-        r["t"].extend(recs["t"].tolist())
-        r["q"].extend(q)
-        r["v"].extend(v)
-        r["lam"].extend(lam)
-        r["kinetic"].extend(derived[:, 0].tolist())
-        r["potential"].extend(derived[:, 1].tolist())
-        r["external_work"].extend(recs["work"].tolist())
-        r["constraint_residual"].extend(derived[:, 5].tolist())
-        r["velocity_constraint_residual"].extend(derived[:, 6].tolist())
-        r["newton_iterations"].extend(recs["iterations"].tolist())
-        r["prescribed_force"].extend(recs["reaction"])
+        block = {"t": recs["t"], "q": q, "v": v, "lam": lam, "kinetic": derived[:, 0], "potential": derived[:, 1],
+                 "external_work": recs["work"], "constraint_residual": derived[:, 5],
+                 "velocity_constraint_residual": derived[:, 6], "newton_iterations": recs["iterations"],
+                 "prescribed_force": recs["reaction"]}
         if self.with_momentum is None:
             self.with_momentum = s.linear_momentum(q[0], v[0]) is not None
         if self.with_momentum:
-            r["linear_momentum"].extend(derived[:, 2:4])
-            r["angular_momentum"].extend(derived[:, 4].tolist())
+            block.update(linear_momentum=derived[:, 2:4], angular_momentum=derived[:, 4])
+        for k, val in block.items():
+            r[k].append(val)
         for k, fn in s.probes.items():
             if k in recs["probes"]:
-                self.probes[k].extend(recs["probes"][k])
+                self.probes[k].append(recs["probes"][k])
             else:
-                self.probes[k].extend(np.asarray(fn(s, t, qi, vi), dtype=float) for t, qi, vi in zip(recs["t"], q, v))
+                self.probes[k].append(np.array([np.asarray(fn(s, t, qi, vi), dtype=float)
+                                                for t, qi, vi in zip(recs["t"], q, v)]))
         if self.reactions:
             for (k, _), c, (idx, rows) in zip(self.reactions, s.constraints, s.constraint_layout):
-                self.reaction_rows[k].extend(c.reaction_history(q[:, idx], lam[:, rows]))
+                self.reaction_rows[k].append(np.asarray(c.reaction_history(q[:, idx], lam[:, rows]), dtype=float))
+        self.count += n_rec
 
     def result(self, **meta):
-        r = {k: np.asarray(val, dtype=float) for k, val in self.rows.items()}
-        r["newton_iterations"] = np.asarray(self.rows["newton_iterations"], dtype=int)
+        r = {k: np.asarray(self.history(k), dtype=float) for k in self.rows}
+        r["newton_iterations"] = np.asarray(self.history("newton_iterations"), dtype=int)
         kin, pot = r["kinetic"], r["potential"]
         if not self.with_momentum:
             r["linear_momentum"] = None
             r["angular_momentum"] = None
-        reactions = {k: np.asarray(val, dtype=float) for k, val in self.reaction_rows.items()}
-        return Result(total_energy=kin + pot, probes={k: np.asarray(v) for k, v in self.probes.items()},
-                      reactions=reactions, **r, **meta)
+        reactions = {k: np.asarray(np.concatenate(val) if val else np.zeros(0), dtype=float)
+                     for k, val in self.reaction_rows.items()}
+        probes = {k: np.concatenate(val) if val else np.zeros(0) for k, val in self.probes.items()}
+        return Result(total_energy=kin + pot, probes=probes, reactions=reactions, **r, **meta)
 
 
 def _reaction_maps(scene):
@@ -288,7 +303,8 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
         for s in sinks:
             if hasattr(s, "resume"):
                 s.resume(scene, prior)
-    guard = _DivergenceGuard(scene, rec)
+    guard = _DivergenceGuard(scene, rec.first("q"), rec.history("kinetic"), rec.history("potential"),
+                             rec.history("external_work"))
     bar, bar_its = None, 0
 
     def open_bar():
@@ -313,7 +329,7 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
         # the histories and the final state of the result stay those of one step
         _write_sinks(sinks, scene, state)
         rec.record(state, work, its, vres)
-        guard.check_energy(state.t)
+        guard.check_energy(state.t, *rec.last_energy())
 
     def advanced(n, its):
         nonlocal bar_its
@@ -356,7 +372,7 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
                                 resumable = False
                             raise
                         rec.record_block(_first_records(recs, i + 1, start=i))
-                        guard.check_energy(s_r.t)
+                        guard.check_energy(s_r.t, *rec.last_energy())
                         prev = s_r
                 else:
                     bad = guard.first_energy_violation(recs["t"], recs["derived"][:, 0], recs["derived"][:, 1],
@@ -365,9 +381,10 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
                         rec.record_block(recs)
                     else:                        # the histories end at the record the rule stops at
                         rec.record_block(_first_records(recs, bad + 1))
-                        guard.check_energy(float(recs["t"][bad]))
+                        guard.check_energy(float(recs["t"][bad]), *rec.last_energy())
                 if out["done"]:
-                    state = State(out["t"], out["q"], out["v"], lam=out["lam"], prescribed_force=out["reaction"])
+                    state = State(out["t"], out["q"], out["v"], acc=out["acc"], lam=out["lam"],
+                                  prescribed_force=out["reaction"])
                     work = out["work"]
                     step += out["done"]
                     advanced(out["done"], out["iterations"])
@@ -557,14 +574,16 @@ class _DivergenceGuard:
       catches the others).
     """
 
-    def __init__(self, scene, rec):
-        self.rec = rec
-        q0 = np.asarray(rec.rows["q"][0], dtype=float)
+    def __init__(self, scene, q0, kinetic, potential, work):
+        """``q0``: the first recorded coordinates; ``kinetic``, ``potential``, ``work``: the records so far
+        (J; at least one)."""
+        q0 = np.asarray(q0, dtype=float)
         size = max(float(scene.length_scale), float(np.max(np.abs(q0), initial=0.0)), 1.0)
         self.q_bound = DIVERGENCE_FACTOR * size
-        r = rec.rows
-        self.e_scale = max(abs(k) + abs(p) for k, p in zip(r["kinetic"][:_SCALE_RECORDS], r["potential"]))
-        self.w_max = max((abs(w) for w in r["external_work"]), default=0.0)
+        kinetic, potential = np.asarray(kinetic, dtype=float), np.asarray(potential, dtype=float)
+        self.e_scale = float(np.max(np.abs(kinetic[:_SCALE_RECORDS]) + np.abs(potential[:_SCALE_RECORDS])))
+        self.w_max = float(np.max(np.abs(np.asarray(work, dtype=float)), initial=0.0))
+        self.count = kinetic.size
 
     def check_state(self, state):
         if not (np.all(np.isfinite(state.q)) and np.all(np.isfinite(state.v))):
@@ -578,7 +597,7 @@ class _DivergenceGuard:
         """Index of the first record of a compiled block (not yet stored) at which :meth:`check_energy`
         would stop the run, or None; the guard's energy scale and work bound advance over the
         records before it (then store the block up to that record and call :meth:`check_energy`)."""
-        first = len(self.rec.rows["kinetic"])                  # index of the block's first record
+        first = self.count                                     # index of the block's first record
         n_early = min(t.size, max(0, _SCALE_RECORDS - first))  # these still set the scale: in order
         for i in range(n_early):
             w_max = max(self.w_max, abs(work[i]))
@@ -586,6 +605,7 @@ class _DivergenceGuard:
             if self._violated(kinetic[i] + potential[i], e_scale + w_max):
                 return i
             self.w_max, self.e_scale = w_max, e_scale
+            self.count += 1
         if n_early == t.size:
             return None
         w_max = np.maximum.accumulate(np.fmax(np.abs(work[n_early:]), self.w_max))
@@ -596,21 +616,23 @@ class _DivergenceGuard:
             i = int(np.argmax(bad))
             if i:
                 self.w_max = float(w_max[i - 1])
+            self.count += i
             return n_early + i
         self.w_max = float(w_max[-1])
+        self.count += t.size - n_early
         return None
 
     @staticmethod
     def _violated(energy, scale):
         return not math.isfinite(energy) or (scale > 0 and abs(energy) > DIVERGENCE_FACTOR * scale)
 
-    def check_energy(self, t):
-        """The energy rule at the last record stored (time ``t``, s)."""
-        r = self.rec.rows
-        kinetic, potential = r["kinetic"][-1], r["potential"][-1]
-        self.w_max = max(self.w_max, abs(r["external_work"][-1]))
+    def check_energy(self, t, kinetic, potential, work):
+        """The energy rule at the next record: time ``t`` (s), kinetic and potential energy and the
+        work done so far (J)."""
+        self.count += 1
+        self.w_max = max(self.w_max, abs(work))
         energy = kinetic + potential
-        if len(r["kinetic"]) <= _SCALE_RECORDS:
+        if self.count <= _SCALE_RECORDS:
             self.e_scale = max(self.e_scale, abs(kinetic) + abs(potential))
         scale = self.e_scale + self.w_max
         if self._violated(energy, scale):

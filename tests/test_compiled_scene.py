@@ -501,11 +501,6 @@ def test_block_energy_guard_stops_where_the_record_by_record_guard_does():
     from skfem_flex.errors import DivergenceError
     from skfem_flex.simulate import _DivergenceGuard, _SCALE_RECORDS
 
-    class Rows:
-        def __init__(self, kin, pot, work):
-            self.rows = dict(kinetic=list(kin), potential=list(pot), external_work=list(work),
-                             q=[np.zeros(2)])
-
     class Scene_:
         length_scale = 1.0
     rng = np.random.default_rng(5)
@@ -519,17 +514,23 @@ def test_block_energy_guard_stops_where_the_record_by_record_guard_does():
         elif stop is not None:
             kin[stop] = 1e9
         expected = None                       # record by record
-        rec = Rows(kin[:1], pot[:1], work[:1])
-        guard = _DivergenceGuard(Scene_(), rec)
+        guard = _DivergenceGuard(Scene_(), np.zeros(2), kin[:1], pot[:1], work[:1])
         for i in range(1, n):
-            for key, arr in (("kinetic", kin), ("potential", pot), ("external_work", work)):
-                rec.rows[key].append(arr[i])
             try:
-                guard.check_energy(float(i))
+                guard.check_energy(float(i), kin[i], pot[i], work[i])
             except DivergenceError:
                 expected = i
                 break
-        rec = Rows(kin[:1], pot[:1], work[:1])    # as a block of records 1 … n − 1
-        guard = _DivergenceGuard(Scene_(), rec)
+        guard = _DivergenceGuard(Scene_(), np.zeros(2), kin[:1], pot[:1], work[:1])    # records 1 … n − 1 as a block
         got = guard.first_energy_violation(np.arange(1.0, n), kin[1:], pot[1:], work[1:])
         assert (None if got is None else got + 1) == expected, stop
+        # as two blocks, the second starting inside the scale window: the guard counts the records it saw
+        cut = _SCALE_RECORDS // 2
+        guard = _DivergenceGuard(Scene_(), np.zeros(2), kin[:1], pot[:1], work[:1])
+        got = guard.first_energy_violation(np.arange(1.0, cut), kin[1:cut], pot[1:cut], work[1:cut])
+        if got is not None:
+            got += 1
+        else:
+            got = guard.first_energy_violation(np.arange(cut, n), kin[cut:], pot[cut:], work[cut:])
+            got = None if got is None else got + cut
+        assert got == expected, stop
