@@ -46,7 +46,7 @@ from .newton import (CONVERGED, EVALUATE, NONFINITE_RESIDUAL, all_finite, max_ab
                      newton_start, predicted_increment, roundoff_floor)
 from .scene import Scene
 
-__all__ = ["eligible", "run_chunk", "chunk_steps", "chunk_schedule", "record_count", "record_buffers", "jit_cache_cold",
+__all__ = ["eligible", "run_chunk", "chunk_steps", "chunk_schedule", "record_count", "record_buffers", "record_step", "is_recorded", "chunk_records", "jit_cache_cold",
            "COMPILE_NOTICE", "OK"]
 
 #: the line ``simulate(..., progress=True)`` prints on stderr before a first run compiles the kernels
@@ -267,7 +267,7 @@ def _run(kd, q, v, acc, t, hs, qp, pres, free, target, mat_size, kl, ku, rtol, e
          work, first_step, record_every, n_steps):
     n, ns, npr = q.size, hs.size, pres.size
     n_rec = record_count(first_step, ns, record_every, n_steps)
-    rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac = record_buffers(n_rec, n, npr)
+    buffers = record_buffers(n_rec, n, npr)
     # T, V, p_R (2) and L about the origin of the recorded states, as the body's kinetic_energy,
     # potential_energy, linear_momentum and angular_momentum (R × p_R + p_θ) give them
     rec_derived = np.empty((n_rec, 5))
@@ -282,8 +282,7 @@ def _run(kd, q, v, acc, t, hs, qp, pres, free, target, mat_size, kl, ku, rtol, e
         if status == OK and not (all_finite(q1) and all_finite(v1)):
             status = NONFINITE_RESIDUAL
         if status != OK:
-            return (status, k, t, q, v, acc, reaction, work, its_total, i_rec,
-                    rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac, rec_derived)
+            return status, k, t, q, v, acc, reaction, work, its_total, i_rec, buffers, rec_derived
         w = 0.0
         for i in range(npr):
             j = pres[i]
@@ -296,21 +295,15 @@ def _run(kd, q, v, acc, t, hs, qp, pres, free, target, mat_size, kl, ku, rtol, e
         q, v, p = q1, v1, p1
         its_total += its
         s = first_step + k
-        if s % record_every == 0 or s == n_steps:
-            rec_t[i_rec] = t
-            rec_q[i_rec] = q
-            rec_v[i_rec] = v
-            rec_work[i_rec] = work
-            rec_its[i_rec] = its
-            rec_reac[i_rec] = reaction
+        if is_recorded(s, record_every, n_steps):
+            record_step(buffers, i_rec, t, q, v, work, its, reaction)
             rec_derived[i_rec, 0] = 0.5 * np.dot(v, p)
             rec_derived[i_rec, 1] = potential_energy(kd, q)
             rec_derived[i_rec, 2] = p[0]
             rec_derived[i_rec, 3] = p[1]
             rec_derived[i_rec, 4] = q[0] * p[1] - q[1] * p[0] + p[2]
             i_rec += 1
-    return (OK, ns, t, q, v, acc, reaction, work, its_total, i_rec,
-            rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac, rec_derived)
+    return OK, ns, t, q, v, acc, reaction, work, its_total, i_rec, buffers, rec_derived
 
 
 def chunk_schedule(scene, t, dt, t_end, first_step, n_chunk, n_steps):
@@ -336,8 +329,7 @@ def record_count(first_step, n_chunk, record_every, n_steps):
     ``s % record_every == 0 or s == n_steps``)."""
     n_rec = 0
     for k in range(n_chunk):
-        s = first_step + k
-        if s % record_every == 0 or s == n_steps:
+        if is_recorded(first_step + k, record_every, n_steps):
             n_rec += 1
     return n_rec
 
@@ -347,6 +339,33 @@ def record_buffers(n_rec, n, npr):
     """Arrays for the recorded steps of a chunk: t, q, v, work, Newton iterations, prescribed reactions."""
     return (np.empty(n_rec), np.empty((n_rec, n)), np.empty((n_rec, n)), np.empty(n_rec),
             np.empty(n_rec, dtype=np.int64), np.empty((n_rec, npr)))
+
+
+@numba.njit(cache=True, _nrt=False)
+def is_recorded(s, record_every, n_steps):
+    """Step s (1-based) of a run of ``n_steps`` is recorded."""
+    return s % record_every == 0 or s == n_steps
+
+
+@numba.njit(cache=True, _nrt=False)
+def record_step(buffers, i, t, q, v, work, iterations, reaction):
+    """Row i of the :func:`record_buffers` of a chunk: the state after a step."""
+    rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac = buffers
+    rec_t[i] = t
+    for j in range(q.size):
+        rec_q[i, j] = q[j]
+        rec_v[i, j] = v[j]
+    rec_work[i] = work
+    rec_its[i] = iterations
+    for j in range(reaction.size):
+        rec_reac[i, j] = reaction[j]
+
+
+def chunk_records(buffers, n_rec, derived, lam, probes):
+    """The records of a chunk as :func:`run_chunk` returns them: its first ``n_rec`` rows."""
+    rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac = buffers
+    return dict(t=rec_t[:n_rec], q=rec_q[:n_rec], v=rec_v[:n_rec], work=rec_work[:n_rec], iterations=rec_its[:n_rec],
+                reaction=rec_reac[:n_rec], derived=derived, lam=lam, probes=probes)
 
 
 def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, record_every, work):
@@ -394,15 +413,12 @@ def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, rec
                scene.prescribed_index.astype(np.int64), scene.free_index.astype(np.int64), target, size, kl, ku,
                float(s.rtol), float(s.etol), int(s.max_iterations), bool(s.line_search), float(work),
                int(first_step), int(record_every), int(n_steps))
-    (status, done, t, q, v, acc, reaction, work, its_total, n_rec, rec_t, rec_q, rec_v, rec_work, rec_its,
-     rec_reac, rec_derived) = out
+    status, done, t, q, v, acc, reaction, work, its_total, n_rec, buffers, rec_derived = out
     # the records of both compiled loops have one form: no constraints here (‖Φ‖ = ‖Φ_q v‖ = 0, no λ)
     # and no probe evaluated in the loop
     no_lam = np.zeros(0)
     derived = np.zeros((n_rec, 7))
     derived[:, :5] = rec_derived[:n_rec]
-    records = dict(t=rec_t[:n_rec], q=rec_q[:n_rec], v=rec_v[:n_rec], work=rec_work[:n_rec],
-                   iterations=rec_its[:n_rec], reaction=rec_reac[:n_rec], derived=derived,
-                   lam=np.zeros((n_rec, 0)), probes={})
+    records = chunk_records(buffers, n_rec, derived, np.zeros((n_rec, 0)), {})
     return dict(status=int(status), done=int(done), t=float(t), q=q, v=v, acc=acc, lam=no_lam, reaction=reaction,
                 work=float(work), iterations=int(its_total), records=records)

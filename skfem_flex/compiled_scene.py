@@ -46,7 +46,7 @@ import scipy.sparse as sps
 from .bodies import exact_kernel
 from .bodies.base import to_dense
 from .bodies.floating_kernel import energy_momentum_terms, momentum, potential_energy, sinc_half
-from .compiled_loop import chunk_schedule, record_buffers, record_count
+from .compiled_loop import chunk_records, chunk_schedule, is_recorded, record_buffers, record_count, record_step
 from .integrators import EnergyMomentum, predictor_acceleration
 from .linear_solver import MIN_DENSE_BORDERED, bordered_band_solve, dense_bordered_plan
 from .newton import (CONVERGED, EVALUATE, NONFINITE_RESIDUAL, all_finite, max_abs, newton_evaluated, newton_solved,
@@ -522,16 +522,23 @@ def _pack(scene):
     con_t0.append(len(term_map))
     con_l0.append(len(lin_idx))
     nc = len(con_kind)
-    # probes with a position map are recorded by the loop; the others are called in Python
+    # probes made of position maps (a PointProbe or LinearProbe: one; a CombinedProbe: several, combined
+    # in Python over a whole chunk) are recorded by the loop; the others are called in Python
     probe_maps = []
     for name, fn in scene.probes.items():
-        cm = _call(fn, "compiled_map")
-        body = getattr(fn, "body", None)
-        if cm is None or body is None or not any(body is b for b in scene.bodies):
-            continue
-        sl = scene.slice(body)
-        probe_maps.append(_map_of(cm, sl.start, sl.stop - sl.start, store))
-        probe_names.append(name)
+        parts = getattr(fn, "parts", None)
+        parts, combine = (tuple(parts), fn.combine) if parts is not None else ((fn,), None)
+        found = []
+        for part in parts:
+            cm = _call(part, "compiled_map")
+            body = getattr(part, "body", None)
+            if cm is None or body is None or not any(body is b for b in scene.bodies):
+                break
+            sl = scene.slice(body)
+            found.append((cm, sl.start, sl.stop - sl.start))
+        else:
+            probe_names.append((name, len(probe_maps), len(found), combine))
+            probe_maps += [_map_of(cm, o, nb, store) for cm, o, nb in found]
     maps = _finish_maps(store)
     gravity = (np.asarray(grav_maps, dtype=np.int64), np.asarray(grav_g, dtype=float).reshape(len(grav_maps), 2))
     constraints = (np.asarray(con_kind, dtype=np.int64), np.asarray(con_row, dtype=np.int64),
@@ -614,7 +621,8 @@ def _newton_pattern(scene, packed):
     mass, frames, frame_off = packed[0], packed[1], packed[2]
     strains, strain_off = packed[8][0], packed[8][1]
     n, m = scene.n, scene.n_constraints
-    pat = np.eye(n + m, dtype=bool)
+    pat = np.zeros((n + m, n + m), dtype=bool)
+    pat[np.arange(n), np.arange(n)] = True      # not the multipliers' rows: no diagonal, border coordinates
     ptr, idx, _ = mass
     pat[np.repeat(np.arange(n), np.diff(ptr)), idx] = True
     for group, offsets in ((frames, frame_off), (strains, strain_off)):
@@ -899,18 +907,6 @@ def _add_strain_terms(strains, strain_off, strain_pos, q0, q1, h, gp, floor, mat
     return True
 
 
-@numba.njit(cache=True)
-def _strain_energy(strains, strain_off, q):
-    if strains is None:
-        return 0.0
-    pot = 0.0
-    for i in range(len(strains)):
-        kd = strains[i]
-        o = strain_off[i]
-        pot += exact_kernel.potential_energy(kd, q[o:o + kd.n])
-    return pot
-
-
 @numba.njit(cache=True, _nrt=False)
 def cayley_terms(dpsi):
     """(z, Δψ/w, d(Δψ/w)/dΔψ, dz/dΔψ) of an increment Δψ (rad), z = w = 2 tan(Δψ/2): the formulas of
@@ -927,14 +923,20 @@ def cayley_terms(dpsi):
 
 
 @numba.njit(cache=True)
-def _frame_strain_energy(frames, frame_off, q):
-    if frames is None:
-        return 0.0
+def _strain_energy(frames, frame_off, strains, strain_off, q):
+    """Strain energy (J) of the floating-frame bodies (``frames``) and the exact beams (``strains``); either
+    may be None (a separate argument each, so that Numba prunes the absent kind)."""
     pot = 0.0
-    for i in range(len(frames)):
-        kd = frames[i]
-        o = frame_off[i]
-        pot += potential_energy(kd, q[o:o + kd.n])
+    if frames is not None:
+        for i in range(len(frames)):
+            kd = frames[i]
+            o = frame_off[i]
+            pot += potential_energy(kd, q[o:o + kd.n])
+    if strains is not None:
+        for i in range(len(strains)):
+            kd = strains[i]
+            o = strain_off[i]
+            pot += exact_kernel.potential_energy(kd, q[o:o + kd.n])
     return pot
 
 
@@ -1099,7 +1101,7 @@ def _derived(packed, q, v, p, rv):
     """(T, V, p_x, p_y, L about the origin) of the scene at (q, v) with momentum p (``rv``: a 2-vector to
     work in)."""
     mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain, plan = packed
-    pot = _frame_strain_energy(frames, frame_off, q) + _strain_energy(strain[0], strain[1], q)
+    pot = _strain_energy(frames, frame_off, strain[0], strain[1], q)
     spr_idx, spr_k, spr_p = loads[0], loads[1], loads[2]
     for j in range(spr_idx.size):
         pot += 0.5 * spr_k[j] * q[spr_idx[j]] ** spr_p[j]
@@ -1128,7 +1130,7 @@ def _run(packed, q_start, v_start, acc_start, t, hs, qp, table, pres, free, fpos
     mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain, plan = packed
     n, ns, npr, m = q_start.size, hs.size, pres.size, constraints[7]
     n_rec = record_count(first_step, ns, record_every, n_steps)
-    rec_t, rec_q, rec_v, rec_work, rec_its, rec_reac = record_buffers(n_rec, n, npr)
+    buffers = record_buffers(n_rec, n, npr)
     rec_lam = np.empty((n_rec, m))
     # T, V, p (2), L, ‖Φ‖∞, ‖Φ_q v + Φ_t‖∞
     rec_derived = np.empty((n_rec, 7))
@@ -1186,8 +1188,8 @@ def _run(packed, q_start, v_start, acc_start, t, hs, qp, table, pres, free, fpos
         if status == OK and not (all_finite(q1) and all_finite(v1)):
             status = NONFINITE_RESIDUAL
         if status != OK:
-            return (status, k, t, q, v, acc, lam, reaction, work, its_total, i_rec, rec_t, rec_q, rec_v, rec_work,
-                    rec_its, rec_reac, rec_lam, rec_derived, rec_probe)
+            return (status, k, t, q, v, acc, lam, reaction, work, its_total, i_rec, buffers, rec_lam, rec_derived,
+                    rec_probe)
         w = _dot(z, ext)
         for i in range(npr):
             reaction[i] = r[pres[i]] / h
@@ -1211,13 +1213,8 @@ def _run(packed, q_start, v_start, acc_start, t, hs, qp, table, pres, free, fpos
             lam[i] = mu[i] / h
         its_total += its
         s = first_step + k
-        if s % record_every == 0 or s == n_steps:
-            rec_t[i_rec] = t
-            rec_q[i_rec] = q
-            rec_v[i_rec] = v
-            rec_work[i_rec] = work
-            rec_its[i_rec] = its
-            rec_reac[i_rec] = reaction
+        if is_recorded(s, record_every, n_steps):
+            record_step(buffers, i_rec, t, q, v, work, its, reaction)
             rec_lam[i_rec] = lam
             tk, vk, px, py, ang = _derived(packed, q, v, p, rv)
             rec_derived[i_rec, 0] = tk
@@ -1237,8 +1234,7 @@ def _run(packed, q_start, v_start, acc_start, t, hs, qp, table, pres, free, fpos
                 rec_probe[i_rec, j, 0] = rv[0]
                 rec_probe[i_rec, j, 1] = rv[1]
             i_rec += 1
-    return (OK, ns, t, q, v, acc, lam, reaction, work, its_total, i_rec, rec_t, rec_q, rec_v, rec_work, rec_its,
-            rec_reac, rec_lam, rec_derived, rec_probe)
+    return OK, ns, t, q, v, acc, lam, reaction, work, its_total, i_rec, buffers, rec_lam, rec_derived, rec_probe
 
 
 def time_table(columns, t, hs):
@@ -1343,11 +1339,10 @@ def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, rec
                lam, reaction,
                float(s.rtol), float(s.ctol), float(s.etol), int(s.max_iterations), bool(s.line_search), float(work),
                int(first_step), int(record_every), int(n_steps))
-    (status, done, t, q, v, acc, lam, reaction, work, its_total, n_rec, rec_t, rec_q, rec_v, rec_work, rec_its,
-     rec_reac, rec_lam, rec_derived, rec_probe) = out
-    names = _packed(scene)[1]
-    records = dict(t=rec_t[:n_rec], q=rec_q[:n_rec], v=rec_v[:n_rec], work=rec_work[:n_rec], iterations=rec_its[:n_rec],
-                   reaction=rec_reac[:n_rec], derived=rec_derived[:n_rec], lam=rec_lam[:n_rec],
-                   probes={name: rec_probe[:n_rec, j] for j, name in enumerate(names)})
+    status, done, t, q, v, acc, lam, reaction, work, its_total, n_rec, buffers, rec_lam, rec_derived, rec_probe = out
+    probes = {}
+    for name, j, k, combine in _packed(scene)[1]:
+        probes[name] = rec_probe[:n_rec, j] if combine is None else combine(rec_probe[:n_rec, j:j + k])
+    records = chunk_records(buffers, n_rec, rec_derived[:n_rec], rec_lam[:n_rec], probes)
     return dict(status=int(status), done=int(done), t=float(t), q=q, v=v, acc=acc, lam=lam, reaction=reaction,
                 work=float(work), iterations=int(its_total), records=records)

@@ -7,12 +7,15 @@
    border is the beam's three frame coordinates and the pin's two multipliers.
 3. The solve reports failure (``ok`` False, no silent NaN) for a singular interior block, an entry
    the plan did not know about and a non-finite matrix; the plan declines full and tiny matrices.
-4. The border rule is the sparse solver's (``_bordered_band_plan`` unchanged, same border for the
-   same threshold).
+4. The border rule is the sparse solver's (the sparse plan covers every far entry and solves as
+   SuperLU does; the same border for the same threshold).
+5. The plan of a mechanism's Newton matrix puts every multiplier (no diagonal) in the border, and
+   its band solve succeeds (the slider-crank: 8 multipliers).
 """
 import numpy as np
 import pytest
 import scipy.sparse as sps
+import scipy.sparse.linalg as spla
 
 import skfem_flex as sf
 from skfem_flex import compiled_scene as cs
@@ -127,12 +130,7 @@ def test_border_columns_zero_on_the_interior_are_skipped():
 
 
 def residual_and_matrix(system):
-    """The Newton residual and matrix in a system of ``compiled_scene.newton_system`` after ``_evaluate``.
-
-    Two layouts are known: a flat tuple (``system[18]``, ``system[19]``) and (packed scene, step
-    data, workspace) with both at the start of the workspace."""
-    if len(system) > 19:
-        return system[18], system[19]
+    """The Newton residual and matrix in a system of ``compiled_scene.newton_system`` after ``_evaluate``."""
     return system[2][0], system[2][1]
 
 
@@ -239,54 +237,6 @@ def test_plan_declines_dense_tiny_and_wide():
         ls.dense_bordered_plan(np.ones((3, 4), dtype=bool))
 
 
-def _reference_bordered_band_plan(a):
-    """``linear_solver._bordered_band_plan`` as it was before its border rule became ``_choose_border``."""
-    n = a.shape[0]
-    if a.shape[1] != n or n == 0:
-        return None
-    rows = np.repeat(np.arange(n), np.diff(a.indptr))
-    cols = a.indices
-    far = np.abs(rows - cols) > ls.MAX_BANDWIDTH // 2
-    fr, fc = rows[far], cols[far]
-    border = a.diagonal() == 0.0
-    while fr.size:
-        if border.sum() >= ls.MAX_BORDER:
-            return None
-        worst = int(np.argmax(np.bincount(fr, minlength=n) + np.bincount(fc, minlength=n)))
-        border[worst] = True
-        keep = (fr != worst) & (fc != worst)
-        fr, fc = fr[keep], fc[keep]
-    k = int(border.sum())
-    if k == 0 or k == n:
-        return None
-    interior = np.flatnonzero(~border)
-    bidx = np.flatnonzero(border)
-    pos = np.empty(n, dtype=np.int64)
-    pos[interior] = np.arange(interior.size)
-    pos[bidx] = np.arange(k)
-    r_in, c_in = ~border[rows], ~border[cols]
-    ii, ib, bi, bb = r_in & c_in, r_in & ~c_in, ~r_in & c_in, ~r_in & ~c_in
-    off = pos[cols[ii]] - pos[rows[ii]]
-    lo, up = int(max(0, -off.min(initial=0))), int(max(0, off.max(initial=0)))
-    if lo + up > ls.MAX_BANDWIDTH:
-        return None
-    ni = interior.size
-    band = (np.flatnonzero(ii), (up - off) * ni + pos[cols[ii]])
-    dense_ib = (np.flatnonzero(ib), pos[rows[ib]] * k + pos[cols[ib]])
-    dense_bb = (np.flatnonzero(bb), pos[rows[bb]] * k + pos[cols[bb]])
-    take_bi = np.flatnonzero(bi)
-    bi_ptr = np.concatenate([[0], np.cumsum(np.bincount(pos[rows[bi]], minlength=k))])
-    return lo, up, interior, bidx, band, dense_ib, dense_bb, (take_bi, pos[cols[bi]], bi_ptr), rows
-
-
-def _same(a, b):
-    if isinstance(a, tuple):
-        return isinstance(b, tuple) and len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b))
-    if isinstance(a, np.ndarray):
-        return isinstance(b, np.ndarray) and a.dtype == b.dtype and np.array_equal(a, b)
-    return type(a) is type(b) and a == b
-
-
 def _csr_examples():
     yield bordered_matrix(200).tocsr()
     yield bordered_matrix(1000, n_frame=6, n_mult=4, half_band=5, seed=3).tocsr()
@@ -299,13 +249,33 @@ def _csr_examples():
     yield many.tocsr()
 
 
-def test_sparse_bordered_band_plan_unchanged():
+def test_sparse_bordered_band_plan_covers_far_entries_and_solves():
+    """The sparse plan's border holds the coordinates without a diagonal entry and a row or column of
+    every entry farther than MAX_BANDWIDTH/2 from the diagonal, its interior is a band within
+    MAX_BANDWIDTH, and the solve through it is SuperLU's (scipy.sparse.linalg.spsolve)."""
+    planned = 0
     for a in _csr_examples():
-        ref = _reference_bordered_band_plan(a)
-        new = ls._bordered_band_plan(a)
-        assert (ref is None) == (new is None)
-        if ref is not None:
-            assert _same(new, ref)
+        plan = ls._bordered_band_plan(a)
+        n = a.shape[0]
+        rows, cols = np.repeat(np.arange(n), np.diff(a.indptr)), a.indices
+        far = np.abs(rows - cols) > ls.MAX_BANDWIDTH // 2
+        if plan is None:
+            continue
+        planned += 1
+        lo, up, interior, bidx = plan[:4]
+        border = np.zeros(n, dtype=bool)
+        border[bidx] = True
+        assert np.all(border[rows[far]] | border[cols[far]])
+        assert np.all(border[a.diagonal() == 0.0])
+        np.testing.assert_array_equal(interior, np.flatnonzero(~border))
+        pos = np.full(n, -1)
+        pos[interior] = np.arange(interior.size)
+        inner = ~border[rows] & ~border[cols]
+        off = pos[cols[inner]] - pos[rows[inner]]
+        assert -lo <= off.min() and off.max() <= up and lo + up <= ls.MAX_BANDWIDTH
+        b = np.linspace(-1.0, 1.0, n)
+        assert rel_error(ls._bordered_band_solve(a, b, plan), spla.spsolve(a.tocsc(), b)) <= 1e-10
+    assert planned >= 2
 
 
 def test_dense_plan_with_the_sparse_threshold_has_the_sparse_border():
@@ -315,3 +285,19 @@ def test_dense_plan_with_the_sparse_threshold_has_the_sparse_border():
     np.testing.assert_array_equal(dense_plan[1], sparse_plan[3])
     np.testing.assert_array_equal(dense_plan[0], sparse_plan[2])
     assert dense_plan[2:] == sparse_plan[:2]
+
+
+def test_mechanism_plan_puts_every_multiplier_in_the_border():
+    """The Newton pattern has no diagonal on the multipliers' rows: all eight of the slider-crank's are
+    border coordinates, and the bordered band solve of its Newton matrix succeeds (with a multiplier
+    in the interior the band LU met zero pivots, failed its check and the dense solve ran after it)."""
+    scene = sf.scenes.get("slider_crank")()
+    nf, m = scene.free_index.size, scene.n_constraints
+    interior, border, lo, up = cs._planned(scene)[9]
+    assert m == 8 and set(range(nf, nf + m)) <= set(border.tolist()) and interior.size > 0
+    q0, v0 = scene.initial_state()
+    system, x0 = cs.newton_system(scene, q0, v0, 1e-4)
+    cs._evaluate(system, x0)
+    res, mat = (a.copy() for a in residual_and_matrix(system))
+    x, ok = ls.bordered_band_solve(mat, res, interior, border, lo, up)
+    assert ok and rel_error(x, np.linalg.solve(mat, res)) <= 1e-12

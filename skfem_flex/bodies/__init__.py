@@ -9,7 +9,7 @@ from .modal import ElasticModel, Interface, ModalBody
 from .plane_stress import PlaneStress, load_mesh
 from .reduction import craig_bampton, free_modes, full_body, reduce
 from .particle import PointMass
-from .probes import LinearProbe, PointProbe
+from .probes import CombinedProbe, LinearProbe, PointProbe
 from .rigid import RigidBody
 
-__all__ = ["Body", "BodyGeometry", "BodyPoint", "PointMass", "RigidBody", "PointProbe", "LinearProbe"]
+__all__ = ["Body", "BodyGeometry", "BodyPoint", "PointMass", "RigidBody", "PointProbe", "LinearProbe", "CombinedProbe"]

@@ -19,7 +19,7 @@ import numpy as np
 from ..beam import TimoshenkoBeam, line_mesh
 from ..bodies.floating import FloatingBeam
 from ..bodies.particle import PointMass
-from ..bodies.probes import PointProbe
+from ..bodies.probes import CombinedProbe, LinearProbe, PointProbe
 from ..bodies.rigid import RigidBody
 from ..constraints import Driver, Pin, Revolute, Slider
 from ..forces import Gravity, PointForce, half_sine_pulse
@@ -52,23 +52,27 @@ def chord_deflection(body, q_body, x=None):
 
     Positive to the left of the chord (root → tip); x defaults to mid-span.
     """
-    return _ChordDeflection(body, x)(q_body)
+    x = 0.5 * (body.x_min + body.x_max) if x is None else x
+    points = body.point(body.x_min), body.point(body.x_max), body.point(x)
+    return float(_chord_deflection(np.stack([p.position(q_body) for p in points])))
 
 
-class _ChordDeflection:
-    """Callable q_body -> deflection of a point from the chord through two others (points built once)."""
+def _chord_deflection(r):
+    """Deflection (m) of point r[..., 2, :] from the chord r[..., 0, :] → r[..., 1, :], positive to its left
+    (on a stack of records: leading axes)."""
+    c = r[..., 1, :] - r[..., 0, :]
+    d = r[..., 2, :] - r[..., 0, :]
+    return (c[..., 0] * d[..., 1] - c[..., 1] * d[..., 0]) / np.hypot(c[..., 0], c[..., 1])
 
-    def __init__(self, body, x=None, points=None):
-        if points is None:
-            x = 0.5 * (body.x_min + body.x_max) if x is None else x
-            points = body.point(body.x_min), body.point(body.x_max), body.point(x)
-        self.root, self.tip, self.mid = points
 
-    def __call__(self, q_body):
-        r0 = self.root.position(q_body)
-        c = self.tip.position(q_body) - r0
-        d = self.mid.position(q_body) - r0
-        return float(c[0] * d[1] - c[1] * d[0]) / float(np.hypot(*c))
+def _chord_angle(r):
+    """Angle (rad) of the chord r[..., 0, :] → r[..., 1, :] against the x axis."""
+    c = r[..., 1, :] - r[..., 0, :]
+    return np.arctan2(c[..., 1], c[..., 0])
+
+
+def _first_value(r):
+    return r[..., 0, 0]
 
 
 @register(t_end=2.0, dt=1e-3, length="m", g="m/s^2", body=" | ".join(LINK_KINDS), n_modes="-", **_SECTION_UNITS)
@@ -266,19 +270,11 @@ def slider_crank(crank_length=0.15, crank_mass=0.36, crank_inertia=0.002727, rod
             Slider(slider.point(), (1.0, 0.0), (0.0, 0.0), name="guide")]
     root, tip = lk.root, lk.tip
 
-    def rod_angle(scene, t, q, v):
-        qr = scene.coordinates(rod, q)
-        c = tip.position(qr) - root.position(qr)
-        return float(np.arctan2(c[1], c[0]))
-
-    deflection = _ChordDeflection(rod, points=(lk.root, lk.tip, lk.mid))
-
-    def midpoint(scene, t, q, v):
-        return deflection(scene.coordinates(rod, q))
-
-    probes = {"slider": lambda s, t, q, v: float(s.coordinates(slider, q)[0]),
-              "rod_angle": rod_angle, "midpoint": midpoint,
-              "crank_angle": lambda s, t, q, v: float(s.coordinates(crank, q)[2])}
+    # recorded by the compiled loop as positions, combined over a whole chunk at once
+    probes = {"slider": CombinedProbe([PointProbe(slider.point())], _first_value),
+              "rod_angle": CombinedProbe([PointProbe(root), PointProbe(tip)], _chord_angle),
+              "midpoint": CombinedProbe([PointProbe(root), PointProbe(tip), PointProbe(lk.mid)], _chord_deflection),
+              "crank_angle": CombinedProbe([LinearProbe(crank, [[0.0, 0.0, 1.0], [0.0, 0.0, 0.0]])], _first_value)}
     return Scene([crank, rod, slider], constraints=cons, name="slider_crank", probes=probes,
                  parameters=dict(crank_length=crank_length, crank_mass=crank_mass, crank_inertia=crank_inertia,
                                  rod_length=rod_length, E=E, nu=nu, rho=rho, width=width, height=height,
