@@ -1,7 +1,8 @@
-r"""Compiled (Numba) energy-momentum loop for small scenes: bodies, joints, drivers, springs and loads.
+r"""Compiled (Numba) time loops for small scenes: bodies, joints, drivers, springs and loads.
 
 :mod:`skfem_flex.compiled_loop` runs one floating-frame body without joints or loads. This module
-runs the energy-momentum scheme for the small (dense) scenes beyond that: point masses and rigid
+runs the energy-momentum scheme and the Newmark family (trapezoidal, generalized-α; the section "the
+Newmark step" at the end) for the small (dense) scenes beyond that: point masses and rigid
 bodies, floating-frame bodies (a :class:`~skfem_flex.bodies.FloatingBeam` or a reduced
 :class:`~skfem_flex.bodies.ModalBody`), geometrically exact beams (Cayley rotation rates), gravity,
 coordinate springs, global point forces and moments and the exact beam's loads, pins, revolute
@@ -45,9 +46,9 @@ import scipy.sparse as sps
 
 from .bodies import exact_kernel
 from .bodies.base import to_dense
-from .bodies.floating_kernel import energy_momentum_terms, momentum, potential_energy, sinc_half
+from .bodies.floating_kernel import energy_momentum_terms, momentum, newmark_terms, potential_energy, sinc_half
 from .compiled_loop import chunk_records, chunk_schedule, is_recorded, record_buffers, record_count, record_step
-from .integrators import EnergyMomentum, predictor_acceleration
+from .integrators import EnergyMomentum, GeneralizedAlpha, Newmark, Trapezoidal, predictor_acceleration
 from .linear_solver import MIN_DENSE_BORDERED, bordered_band_solve, dense_bordered_plan
 from .newton import (CONVERGED, EVALUATE, NONFINITE_RESIDUAL, all_finite, max_abs, newton_evaluated, newton_solved,
                      newton_start, predicted_increment, roundoff_floor)
@@ -675,12 +676,18 @@ def _momentum_layout(body, kd, rng):
                                                                              np.asarray(ia, dtype=np.int64))
 
 
+#: the Newmark-family schemes the compiled Newmark step stands for (the classes themselves, not subclasses)
+NEWMARK_SCHEMES = (Newmark, Trapezoidal, GeneralizedAlpha)
+
+
 def eligible(scene, scheme):
     """True if ``simulate`` may run ``scene`` with ``scheme`` through this loop: the
-    :class:`~skfem_flex.integrators.EnergyMomentum` class itself, a plain dense scene (at most
-    ``DENSE_LIMIT`` coordinates) whose bodies, force elements, constraints and joint points all have
-    compiled forms (module docstring)."""
-    return type(scheme) is EnergyMomentum and pack(scene) is not None
+    :class:`~skfem_flex.integrators.EnergyMomentum` class itself or one of :data:`NEWMARK_SCHEMES`, on a
+    plain dense scene (at most ``DENSE_LIMIT`` coordinates) whose bodies, force elements, constraints and
+    joint points all have compiled forms (module docstring)."""
+    if type(scheme) is not EnergyMomentum and type(scheme) not in NEWMARK_SCHEMES:
+        return False
+    return pack(scene) is not None
 
 
 def chunk_steps(scene):
@@ -1237,10 +1244,12 @@ def _run(packed, q_start, v_start, acc_start, t, hs, qp, table, pres, free, fpos
     return OK, ns, t, q, v, acc, lam, reaction, work, its_total, i_rec, buffers, rec_lam, rec_derived, rec_probe
 
 
-def time_table(columns, t, hs):
+def time_table(columns, t, hs, at_end=False):
     """The functions of time the loop needs, evaluated in Python for a chunk of steps from time ``t`` (s)
     with sizes ``hs``: row k, column c is ``fun(t_k+1)[comp]`` ("end": drivers' motion laws, as the
     Python step evaluates Φ(q1, t1)) or ``fun(t_k + h_k/2)[comp]`` ("mid": loads at the mid-point).
+
+    ``at_end``: every column at the end times (the Newmark step's loads act at t_{n+1}).
 
     Each function is called once per step (its ``unchecked`` form when it has one), and the table is
     checked at once: an entry that is not finite raises the function's own error (or a ValueError
@@ -1259,7 +1268,7 @@ def time_table(columns, t, hs):
         groups.setdefault((id(fun), when), (fun, when, []))[2].append((c, comp))
     for fun, when, targets in groups.values():
         raw = getattr(fun, "unchecked", fun)
-        times = ends if when == "end" else mids
+        times = ends if when == "end" or at_end else mids
         vals = np.array([np.ravel(raw(tk)) for tk in times], dtype=float).reshape(hs.size, -1)
         bad = ~np.isfinite(vals).all(axis=1)
         if bad.any():
@@ -1324,6 +1333,8 @@ def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, rec
     values of the probes with a position map ({name: (n_rec, 2)}); the result also holds ``lam``
     (the multipliers, mean over the last step).
     """
+    if type(scheme) is not EnergyMomentum:
+        return _run_chunk_newmark(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, record_every, work)
     s = scheme.newton
     packed = _planned(scene)
     hs, qp = chunk_schedule(scene, state.t, dt, t_end, first_step, n_chunk, n_steps)
@@ -1340,9 +1351,490 @@ def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, rec
                float(s.rtol), float(s.ctol), float(s.etol), int(s.max_iterations), bool(s.line_search), float(work),
                int(first_step), int(record_every), int(n_steps))
     status, done, t, q, v, acc, lam, reaction, work, its_total, n_rec, buffers, rec_lam, rec_derived, rec_probe = out
+    return _chunk_result(scene, status, done, t, q, v, acc, None, lam, reaction, work, its_total, n_rec, buffers,
+                         rec_lam, rec_derived, rec_probe)
+
+
+def _chunk_result(scene, status, done, t, q, v, acc, pseudo, lam, reaction, work, its_total, n_rec, buffers, rec_lam,
+                  rec_derived, rec_probe):
     probes = {}
     for name, j, k, combine in _packed(scene)[1]:
         probes[name] = rec_probe[:n_rec, j] if combine is None else combine(rec_probe[:n_rec, j:j + k])
     records = chunk_records(buffers, n_rec, rec_derived[:n_rec], rec_lam[:n_rec], probes)
-    return dict(status=int(status), done=int(done), t=float(t), q=q, v=v, acc=acc, lam=lam, reaction=reaction,
-                work=float(work), iterations=int(its_total), records=records)
+    return dict(status=int(status), done=int(done), t=float(t), q=q, v=v, acc=acc, pseudo=pseudo, lam=lam,
+                reaction=reaction, work=float(work), iterations=int(its_total), records=records)
+
+
+def _run_chunk_newmark(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, record_every, work):
+    """:func:`run_chunk` for the Newmark family: the prescribed laws' positions, rates and accelerations
+    and the other functions of time at the steps' end times (and the chunk's start time) from Python."""
+    s = scheme.newton
+    packed = _planned(scene)
+    hs, _ = chunk_schedule(scene, state.t, dt, t_end, first_step, n_chunk, n_steps)
+    npr, m, n = scene.prescribed_index.size, scene.n_constraints, scene.n
+    qp, vp, ap = (np.zeros((n_chunk, npr)) for _ in range(3))
+    t = float(state.t)
+    for k in range(n_chunk):              # the Python loop's sums t + h
+        t = t + hs[k]
+        if npr:
+            qp[k], vp[k], ap[k] = scene.prescribed_state(t)
+    table = time_table(_packed(scene)[2], float(state.t), np.concatenate([[0.0], hs]), at_end=True)
+    lam = np.asarray(state.lam, dtype=float) if np.size(state.lam) == m else np.zeros(m)
+    have_reaction = np.size(state.prescribed_force) == npr
+    reaction = np.asarray(state.prescribed_force, dtype=float) if have_reaction else np.zeros(npr)
+    acc = np.ascontiguousarray(state.acc, dtype=float)
+    pseudo = np.ascontiguousarray(state.pseudo, dtype=float)
+    if acc.size != n or pseudo.size != n:
+        raise ValueError(f"a {scheme.name} step needs the state's acc and pseudo ({n} values each; "
+                         f"Integrator.start makes them)")
+    out = _run_newmark(packed, np.ascontiguousarray(state.q, dtype=float), np.ascontiguousarray(state.v, dtype=float),
+                       acc, pseudo, float(state.t), hs, qp, vp, ap, table, scene.prescribed_index.astype(np.int64),
+                       scene.free_index.astype(np.int64), _free_positions(scene), lam, reaction, have_reaction,
+                       scheme.alpha_m, scheme.alpha_f, scheme.beta, scheme.gamma,
+                       scheme.constraint_level == "velocity", any(c.rheonomic for c in scene.constraints),
+                       float(s.rtol), float(s.ctol), int(s.max_iterations), bool(s.line_search), float(work),
+                       int(first_step), int(record_every), int(n_steps))
+    (status, done, t, q, v, acc, pseudo, lam, reaction, work, its_total, n_rec, buffers, rec_lam, rec_derived,
+     rec_probe) = out
+    return _chunk_result(scene, status, done, t, q, v, acc, pseudo, lam, reaction, work, its_total, n_rec, buffers,
+                         rec_lam, rec_derived, rec_probe)
+
+
+# ==================================================================== the Newmark step
+# The Newmark family (Trapezoidal, GeneralizedAlpha, Newmark; integrators.Newmark.step) on the same
+# packed scene: the residual h (M(q1) q̈1 + ∇V(q1) − Q_v − Q) + Φ_qᵀ μ with constraints at position level
+# (Φ(q1, t1)) or velocity level ((Φ_q v1 + Φ_t)/c_v), its Newton matrix and scaled error, exactly as the
+# Python step forms them; the same Newton core. Functions of time enter at the step's end time.
+
+@numba.njit(cache=True, _nrt=False)
+def _velocity_jacobian_into(maps, k, q, v, out):
+    """out[:, :nb] = ∂(J(q) v)/∂q of map k at the body's block q, velocities v (zero for LINEAR maps).
+
+    FRAME: J v = m_R Ṙ + A E s θ̇ + A Y ḟ with s = y₀ + Y q_f, so ∂/∂θ = −A s θ̇ + A E Y ḟ and
+    ∂/∂q_f,j = A E Y_j θ̇."""
+    kind, off, nb, m_r, c, y0, gdat, gptr, ydat, yptr = maps
+    n = nb[k]
+    for a in range(2):
+        for j in range(n):
+            out[a, j] = 0.0
+    if kind[k] == LINEAR:
+        return
+    ne, y = n - 3, yptr[k]
+    sx, sy = _frame_offset(maps, k, q, q)
+    C, S = np.cos(q[2]), np.sin(q[2])
+    w = v[2]
+    fx, fy = 0.0, 0.0                       # Y ḟ
+    for j in range(ne):
+        fx += ydat[y + j] * v[3 + j]
+        fy += ydat[y + ne + j] * v[3 + j]
+    out[0, 2] = -(C * sx - S * sy) * w + (-C * fy - S * fx)
+    out[1, 2] = -(S * sx + C * sy) * w + (-S * fy + C * fx)
+    for j in range(ne):
+        yx, yy = ydat[y + j], ydat[y + ne + j]
+        out[0, 3 + j] = w * (-C * yy - S * yx)
+        out[1, 3 + j] = w * (-S * yy + C * yx)
+
+
+@numba.njit(cache=True, _nrt=False)
+def _constraint_terms_at(maps, constraints, q1, v1, mu, trow, mat, fpos, ws, cv):
+    """Φ(q1, t1), Φ_t and Φ_q(q1) into the workspace, ∂(Φ_qᵀ μ)/∂q1 added to ``mat`` and ∂(Φ_q v1)/∂q1 into
+    ``cv`` (m × n). ``trow``: the time table's row at t1 (drivers' x(t1), ẋ(t1))."""
+    kind, row, t0, term_map, term_sign, const, length, m, _, l0, lin_idx, lin_coef, nrm, law = constraints
+    phi, phi_t, cq = ws[3][0], ws[3][1], ws[4]
+    f, acc, rv, jac, vj = ws[6][0], ws[6][1], ws[6][2], ws[7][0], ws[7][1]
+    nb_, off_ = maps[2], maps[1]
+    for i in range(phi.size):
+        phi[i] = 0.0
+        phi_t[i] = 0.0
+        for j in range(cq.shape[1]):
+            cq[i, j] = 0.0
+            cv[i, j] = 0.0
+    for i in range(kind.size):
+        r0 = row[i]
+        if kind[i] == POINTS or kind[i] == PROJECTED:
+            proj = kind[i] == PROJECTED
+            acc[0], acc[1] = -const[i, 0], -const[i, 1]
+            for t in range(t0[i], t0[i + 1]):
+                k, s = term_map[t], term_sign[t]
+                o, nb = off_[k], nb_[k]
+                qb1 = q1[o:o + nb]
+                _position_into(maps, k, qb1, rv)
+                _jacobian_into(maps, k, qb1, jac)
+                _velocity_jacobian_into(maps, k, qb1, v1[o:o + nb], vj)
+                acc[0] += s * rv[0]
+                acc[1] += s * rv[1]
+                if proj:
+                    for j in range(nb):
+                        cq[r0, o + j] += s * (nrm[i, 0] * jac[0, j] + nrm[i, 1] * jac[1, j])
+                        cv[r0, o + j] += s * (nrm[i, 0] * vj[0, j] + nrm[i, 1] * vj[1, j])
+                    f[0], f[1] = s * nrm[i, 0] * mu[r0], s * nrm[i, 1] * mu[r0]
+                else:
+                    for a in range(2):
+                        f[a] = s * mu[r0 + a]
+                        for j in range(nb):
+                            cq[r0 + a, o + j] += s * jac[a, j]
+                            cv[r0 + a, o + j] += s * vj[a, j]
+                _add_hessian_product(maps, k, qb1, f, 1.0, mat, fpos)
+            if proj:
+                phi[r0] = nrm[i, 0] * acc[0] + nrm[i, 1] * acc[1]
+            else:
+                phi[r0], phi[r0 + 1] = acc[0], acc[1]
+        elif kind[i] == LINEAR_ROW:               # g · q + c − x(t1): Φ_q = g
+            val = const[i, 0]
+            for t in range(l0[i], l0[i + 1]):
+                val += lin_coef[t] * q1[lin_idx[t]]
+                cq[r0, lin_idx[t]] += lin_coef[t]
+            if law[i] >= 0:
+                val -= trow[law[i]]
+                phi_t[r0] = -trow[law[i] + 1]
+            phi[r0] = val
+        else:                                   # DISTANCE on a linear map: Φ = ½(|r − a|² − l²)
+            k = term_map[t0[i]]
+            o, nb = off_[k], nb_[k]
+            qb1 = q1[o:o + nb]
+            _position_into(maps, k, qb1, rv)
+            _jacobian_into(maps, k, qb1, jac)
+            dx, dy = rv[0] - const[i, 0], rv[1] - const[i, 1]
+            phi[r0] = 0.5 * (dx * dx + dy * dy - length[i] * length[i])
+            jvx, jvy = 0.0, 0.0
+            for j in range(nb):
+                cq[r0, o + j] = dx * jac[0, j] + dy * jac[1, j]
+                jvx += jac[0, j] * v1[o + j]
+                jvy += jac[1, j] * v1[o + j]
+            for j in range(nb):                 # ∂((r − a)ᵀ J v)/∂q = (J v)ᵀ J (J constant)
+                cv[r0, o + j] = jvx * jac[0, j] + jvy * jac[1, j]
+            for a in range(nb):                 # ∂(μ Jᵀ(r − a))/∂q = μ JᵀJ
+                ia = fpos[o + a]
+                if ia < 0:
+                    continue
+                for j in range(nb):
+                    jb = fpos[o + j]
+                    if jb >= 0:
+                        mat[ia, jb] += mu[r0] * (jac[0, a] * jac[0, j] + jac[1, a] * jac[1, j])
+
+
+@numba.njit(cache=True)
+def _add_strain_potential(strains, strain_off, strain_pos, q1, h, grad, mat):
+    """The exact beams' ∇V(q1) into ``grad`` and h ∇²V(q1) into ``mat`` (False: a folded element); a separate
+    function so that Numba prunes it in scenes without exact beams."""
+    if strains is None:
+        return True
+    flat = mat.reshape(-1)
+    pos, ptr = strain_pos
+    for i in range(len(strains)):
+        kd = strains[i]
+        o, nb = strain_off[i], kd.n
+        g = np.empty(nb)
+        data = np.empty(kd.pat_idx.size)
+        fl = np.empty(nb)
+        qb = q1[o:o + nb]
+        # at equal end points the discrete gradient is ∇V and its ∂/∂q1 half the Hessian
+        if exact_kernel.potential_discrete_gradient(kd, qb, qb, g, data, fl) != exact_kernel.OK:
+            return False
+        for a in range(nb):
+            grad[o + a] += g[a]
+        base = ptr[i]
+        for t in range(data.size):
+            k = pos[base + t]
+            if k >= 0:
+                flat[k] += 2.0 * h * data[t]
+    return True
+
+
+@numba.njit(cache=True)
+def _add_potential_at(packed, q1, h, grad, mat, fpos, ws):
+    """∇V(q1) of the strain energies, gravity and coordinate springs into ``grad``, h ∇²V(q1) into ``mat``;
+    False if an exact beam's element is folded (the step then goes to Python)."""
+    maps, gravity, loads, strain = packed[3], packed[4], packed[7], packed[8]
+    if not _add_strain_potential(strain[0], strain[1], strain[4], q1, h, grad, mat):
+        return False
+    spr_idx, spr_k, spr_p = loads[0], loads[1], loads[2]
+    for j in range(spr_idx.size):           # V = ½ k u^p
+        i, p = spr_idx[j], spr_p[j]
+        u = q1[i]
+        grad[i] += 0.5 * spr_k[j] * p * u ** (p - 1)
+        ia = fpos[i]
+        if ia >= 0 and p >= 2:
+            mat[ia, ia] += h * 0.5 * spr_k[j] * p * (p - 1) * u ** (p - 2)
+    gmaps, gvec = gravity
+    jac, f = ws[7][0], ws[6][0]
+    for i in range(gmaps.size):             # V = −g · ∫ r dm: ∇V = −Jᵀ g, ∇²V = −∂(Jᵀ g)/∂q
+        k = gmaps[i]
+        o, nb = maps[1][k], maps[2][k]
+        qb = q1[o:o + nb]
+        _jacobian_into(maps, k, qb, jac)
+        for j in range(nb):
+            grad[o + j] -= gvec[i, 0] * jac[0, j] + gvec[i, 1] * jac[1, j]
+        f[0], f[1] = -gvec[i, 0], -gvec[i, 1]
+        _add_hessian_product(maps, k, qb, f, h, mat, fpos)
+    return True
+
+
+@numba.njit(cache=True)
+def _loads_at(maps, loads, q1, trow, h, ext, mat, fpos, jac, f):
+    """The loads at the step's end: Q(q1, t1) into ``ext``; −h ∂Q/∂q into ``mat`` unless h = 0."""
+    pf_map, pf_col, gf_ptr, gf_idx, gf_coef, gf_col = loads[3], loads[4], loads[5], loads[6], loads[7], loads[8]
+    for j in range(pf_map.size):
+        k = pf_map[j]
+        o, nb = maps[1][k], maps[2][k]
+        qb = q1[o:o + nb]
+        _jacobian_into(maps, k, qb, jac)
+        f[0], f[1] = trow[pf_col[j]], trow[pf_col[j] + 1]
+        for a in range(nb):
+            ext[o + a] += jac[0, a] * f[0] + jac[1, a] * f[1]
+        if h != 0.0:
+            _add_hessian_product(maps, k, qb, f, -h, mat, fpos)
+    for j in range(gf_col.size):
+        val = trow[gf_col[j]]
+        for t in range(gf_ptr[j], gf_ptr[j + 1]):
+            ext[gf_idx[t]] += gf_coef[t] * val
+
+
+@numba.njit(cache=True)
+def _add_frame_newmark(frames, frame_off, frame_pos, q1, v1, acc1, terms, c_a, c_v, h, inertia, grad, qv, mterms, mat):
+    """Add the floating-frame bodies' Newmark terms (:func:`~skfem_flex.bodies.floating_kernel.newmark_terms`):
+    M q̈1, ∇V, Q_v, |M| terms and h (c_a M + B + K − ∂Q_v/∂q − c_v ∂Q_v/∂v) (a separate function, as
+    :func:`_add_frame_terms`, so that Numba prunes it in scenes without such bodies)."""
+    if frames is None:
+        return
+    flat = mat.reshape(-1)
+    pos, ptr = frame_pos
+    for i in range(len(frames)):
+        kd = frames[i]
+        o = frame_off[i]
+        nb = kd.n
+        ib, gb, qb, data, mb = newmark_terms(kd, q1[o:o + nb], v1[o:o + nb], acc1[o:o + nb], c_a, c_v,
+                                              terms[o:o + nb])
+        for a in range(nb):
+            inertia[o + a] += ib[a]
+            grad[o + a] += gb[a]
+            qv[o + a] += qb[a]
+            mterms[o + a] += mb[a]
+        base = ptr[i]
+        for t in range(data.size):
+            k = pos[base + t]
+            if k >= 0:
+                flat[k] += h * data[t]
+
+
+@numba.njit(cache=True)
+def _evaluate_newmark(system, x):
+    """``evaluate`` of the Newton core for :meth:`~skfem_flex.integrators.Newmark.step` on the packed scene:
+    its residual, bordered Newton matrix and scaled error (``system`` = (packed, step data, workspace))."""
+    packed, step, ws = system
+    mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain, plan = packed
+    (q0, v0, a0, acc0, free, fpos, h, am, af, beta, gamma, by_velocity, vp, ap, pres, trow, rtol, ctol,
+     cv) = step
+    res, mat, wn = ws[0], ws[1], ws[2]
+    dq_base, dq, q1, v1, inertia, r, ext, qv, grad, mterms = (wn[_DQ_BASE], wn[_DQ], wn[_Q1], wn[_V1], wn[_P1],
+                                                              wn[_R], wn[_EXT], wn[_GK], wn[_GP], wn[_FLOOR])
+    a1, acc1, terms = wn[_Z], wn[_RATIO], wn[_DRATIO]
+    phi, phi_t, cq = ws[3][0], ws[3][1], ws[4]
+    n, nf, m = q0.size, free.size, constraints[7]
+    mu = x[nf:]
+    c_a = (1.0 - am) / ((1.0 - af) * beta * h * h)
+    c_v = gamma / (beta * h)
+    for i in range(n):
+        dq[i] = dq_base[i]
+    for i in range(nf):
+        dq[free[i]] = x[i]
+    for i in range(n):
+        q1[i] = q0[i] + dq[i]
+        a1[i] = (dq[i] - h * v0[i] - h * h * (0.5 - beta) * a0[i]) / (beta * h * h)
+        v1[i] = v0[i] + h * ((1.0 - gamma) * a0[i] + gamma * a1[i])
+        acc1[i] = ((1.0 - am) * a1[i] + am * a0[i] - af * acc0[i]) / (1.0 - af)
+        terms[i] = abs(dq[i]) + h * abs(v0[i]) + h * h * abs(0.5 - beta) * abs(a0[i])
+    for j in range(pres.size):
+        i = pres[j]
+        v1[i], acc1[i], a1[i] = vp[j], ap[j], ap[j]
+    mat[:, :] = 0.0
+    ptr, idx, dat = mass
+    for i in range(n):                  # the constant-mass bodies: M q̈1, |M| terms, h c_a M
+        s, sa = 0.0, 0.0
+        ia = fpos[i]
+        for t in range(ptr[i], ptr[i + 1]):
+            s += dat[t] * acc1[idx[t]]
+            sa += abs(dat[t]) * terms[idx[t]]
+            jb = fpos[idx[t]]
+            if ia >= 0 and jb >= 0:
+                mat[ia, jb] += h * c_a * dat[t]
+        inertia[i] = s
+        mterms[i] = sa
+    grad[:] = 0.0
+    qv[:] = 0.0
+    _add_frame_newmark(frames, frame_off, strain[3], q1, v1, acc1, terms, c_a, c_v, h, inertia, grad, qv, mterms,
+                       mat)
+    if not _add_potential_at(packed, q1, h, grad, mat, fpos, ws):
+        ws[8][0] = 1
+        return np.nan
+    scale = max(max_abs(inertia), max_abs(grad), c_a * max_abs(mterms), max_abs(qv))
+    ext[:] = 0.0
+    _loads_at(maps, loads, q1, trow, h, ext, mat, fpos, ws[7][0], ws[6][0])
+    scale = h * max(scale, max_abs(ext))
+    for i in range(n):
+        r[i] = h * (inertia[i] + grad[i] - qv[i] - ext[i])
+    err_c = 0.0
+    if m:
+        _constraint_terms_at(maps, constraints, q1, v1, mu, trow, mat, fpos, ws, cv)
+        ctmu_inf = 0.0
+        for j in range(n):
+            s = 0.0
+            for i in range(m):
+                s += cq[i, j] * mu[i]
+            r[j] += s
+            ctmu_inf = max(ctmu_inf, abs(s))
+        scale = max(scale, ctmu_inf)
+        cqq, cq_inf, cqv = 0.0, 0.0, 0.0
+        for i in range(m):
+            s, sa, sv = 0.0, 0.0, 0.0
+            for j in range(n):
+                a = abs(cq[i, j])
+                s += a * abs(q1[j])
+                sv += a * abs(v1[j])
+                sa = max(sa, a)
+            cqq = max(cqq, s)
+            cq_inf = max(cq_inf, sa)
+            cqv = max(cqv, sv)
+        c_scale = max(cqq, cq_inf * constraints[8], _TINY)
+        if by_velocity:                 # (βΔt/γ)(Φ_q v1 + Φ_t): a length, like Φ
+            c_scale = max(c_scale, cqv / c_v, max_abs(phi_t) / c_v)
+            for i in range(m):
+                res[nf + i] = (_dot(cq[i], v1) + phi_t[i]) / c_v
+                for j in range(nf):
+                    mat[nf + i, j] = cq[i, free[j]] + cv[i, free[j]] / c_v
+        else:
+            for i in range(m):
+                res[nf + i] = phi[i]
+                for j in range(nf):
+                    mat[nf + i, j] = cq[i, free[j]]
+        for i in range(m):
+            for j in range(nf):
+                mat[j, nf + i] = cq[i, free[j]]
+        err_c = max_abs(res[nf:]) / (ctol * c_scale)
+    for i in range(nf):
+        res[i] = r[free[i]]
+    err = max(max_abs(res[:nf]) / (rtol * max(scale, _TINY)), err_c)
+    return err if all_finite(res) else np.nan
+
+
+@numba.njit(cache=True)
+def _run_newmark(packed, q_start, v_start, acc_start, pseudo_start, t, hs, qp, vp, ap, table, pres, free, fpos,
+                 lam_start, reaction_start, have_reaction, am, af, beta, gamma, by_velocity, rheonomic, rtol, ctol,
+                 max_iterations, line_search, work, first_step, record_every, n_steps):
+    """Steps of :meth:`~skfem_flex.integrators.Newmark.step` through the Newton core; as :func:`_run`.
+
+    ``table`` row 0 holds the functions of time at the chunk's start time, row k + 1 at step k's end."""
+    mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain, plan = packed
+    n, ns, npr, m = q_start.size, hs.size, pres.size, constraints[7]
+    n_rec = record_count(first_step, ns, record_every, n_steps)
+    buffers = record_buffers(n_rec, n, npr)
+    rec_lam = np.empty((n_rec, m))
+    rec_derived = np.empty((n_rec, 7))
+    probe_maps = bodies[7]
+    rec_probe = np.empty((n_rec, probe_maps.size, 2))
+    its_total = 0
+    nbmax = 1
+    for k in range(maps[2].size):
+        nbmax = max(nbmax, maps[2][k])
+    nf = free.size
+    ws = _workspace(n, m, nf + m, nbmax)
+    wn = ws[2]
+    dq_base, dq, q1, v1, r, ext = wn[_DQ_BASE], wn[_DQ], wn[_Q1], wn[_V1], wn[_R], wn[_EXT]
+    a1, acc1 = wn[_Z], wn[_RATIO]
+    phi, phi_t, cq, rv = ws[3][0], ws[3][1], ws[4], ws[6][2]
+    cv = np.zeros((m, n))
+    q, v, acc, pseudo = q_start.copy(), v_start.copy(), acc_start.copy(), pseudo_start.copy()
+    lam, reaction = lam_start.copy(), reaction_start.copy()
+    # the loads and Φ_t at the chunk's start (the work of a step uses both ends)
+    ext0 = np.zeros(n)
+    _loads_at(maps, loads, q, table[0], 0.0, ext0, ws[1], fpos, ws[7][0], ws[6][0])
+    phit0 = np.zeros(m)
+    if rheonomic:
+        _constraint_terms_at(maps, constraints, q, v, np.zeros(m), table[0], ws[1], fpos, ws, cv)
+        phit0[:] = phi_t
+    i_rec = 0
+    for k in range(ns):
+        h = hs[k]
+        dq_base[:] = 0.0
+        for i in range(npr):
+            dq_base[pres[i]] = qp[k, i] - q[pres[i]]
+        x = np.empty(nf + m)
+        x_scale = 0.0
+        for i in range(nf):
+            x[i] = h * v[free[i]] + 0.5 * h * h * acc[free[i]]
+            x_scale = max(x_scale, abs(q[free[i]]))
+        for i in range(m):
+            x[nf + i] = h * lam[i]
+        system = (packed, (q, v, pseudo, acc, free, fpos, h, am, af, beta, gamma, by_velocity, vp[k], ap[k], pres,
+                           table[k + 1], rtol, ctol, cv), ws)
+        state = newton_start(x, x_scale, max_iterations, line_search)
+        status = EVALUATE
+        ws[8][0] = 0
+        while status < 0:               # do what the Newton core asks; its rules are all in the core
+            if status == EVALUATE:
+                err = _evaluate_newmark(system, state[2])
+                if ws[8][0]:
+                    status = NONFINITE_RESIDUAL
+                    break
+                status = newton_evaluated(state, err)
+            else:
+                y, regular = _solve(system)
+                status = newton_solved(state, y, regular)
+        its = state[4][0]
+        if status == OK and not (all_finite(q1) and all_finite(v1)):
+            status = NONFINITE_RESIDUAL
+        if status != OK:
+            return (status, k, t, q, v, acc, pseudo, lam, reaction, work, its_total, i_rec, buffers, rec_lam,
+                    rec_derived, rec_probe)
+        # work of the loads (trapezoidal in time), of the prescribed laws and of the rheonomic constraints
+        w = 0.0
+        for i in range(n):
+            w += dq[i] * 0.5 * (ext0[i] + ext[i])
+        for i in range(npr):
+            react = r[pres[i]] / h
+            prev = reaction[i] if k > 0 or have_reaction else react
+            w += dq[pres[i]] * 0.5 * (prev + react)
+            reaction[i] = react
+        if rheonomic:
+            s0, s1 = 0.0, 0.0
+            for i in range(m):
+                s0 += lam[i] * phit0[i]
+                s1 += state[0][nf + i] / h * phi_t[i]
+            w += 0.5 * h * (s0 + s1)
+        work += w
+        t = t + h
+        for i in range(n):
+            q[i] = q1[i]
+            v[i] = v1[i]
+            acc[i] = acc1[i]
+            pseudo[i] = a1[i]
+            ext0[i] = ext[i]
+        for i in range(m):
+            lam[i] = state[0][nf + i] / h
+            phit0[i] = phi_t[i]
+        its_total += its
+        s = first_step + k
+        if is_recorded(s, record_every, n_steps):
+            record_step(buffers, i_rec, t, q, v, work, its, reaction)
+            rec_lam[i_rec] = lam
+            p = _scene_momentum(mass, frames, frame_off, q, v)
+            tk, vk, px, py, ang = _derived(packed, q, v, p, rv)
+            rec_derived[i_rec, 0] = tk
+            rec_derived[i_rec, 1] = vk
+            rec_derived[i_rec, 2] = px
+            rec_derived[i_rec, 3] = py
+            rec_derived[i_rec, 4] = ang
+            vres = 0.0
+            for i in range(m):
+                vres = max(vres, abs(_dot(cq[i], v) + phi_t[i]))
+            rec_derived[i_rec, 5] = max_abs(phi)
+            rec_derived[i_rec, 6] = vres
+            for j in range(probe_maps.size):
+                kp = probe_maps[j]
+                o = maps[1][kp]
+                _position_into(maps, kp, q[o:o + maps[2][kp]], rv)
+                rec_probe[i_rec, j, 0] = rv[0]
+                rec_probe[i_rec, j, 1] = rv[1]
+            i_rec += 1
+    return (OK, ns, t, q, v, acc, pseudo, lam, reaction, work, its_total, i_rec, buffers, rec_lam, rec_derived,
+            rec_probe)

@@ -191,10 +191,10 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
         :func:`skfem_flex.initial_conditions.consistent_initial_state`).
         False: only check it. Either way redundant constraints raise.
     compiled : bool, optional
-        Run eligible scenes through the compiled energy-momentum loop
-        (:mod:`skfem_flex.compiled_loop`: one floating-frame body (beam or reduced), prescribed
-        coordinates, no constraints or force elements, a dense or banded Newton
-        block) — the same
+        Run eligible scenes through a compiled loop (:mod:`skfem_flex.compiled_loop`: one
+        floating-frame body alone under energy-momentum, dense or banded;
+        :mod:`skfem_flex.compiled_scene`: small scenes of built-in parts under energy-momentum,
+        trapezoidal and generalized-α; docs/user_elements.md, "What is fast") — the same
         scheme and Newton rules, so the same trajectory to round-off, many times
         faster. Default: True, unless the environment variable
         ``SKFEM_FLEX_COMPILED`` is ``0``. False forces the Python path; other
@@ -383,8 +383,8 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
                         rec.record_block(_first_records(recs, bad + 1))
                         guard.check_energy(float(recs["t"][bad]), *rec.last_energy())
                 if out["done"]:
-                    state = State(out["t"], out["q"], out["v"], acc=out["acc"], lam=out["lam"],
-                                  prescribed_force=out["reaction"])
+                    state = State(out["t"], out["q"], out["v"], acc=out["acc"], pseudo=out.get("pseudo"),
+                                  lam=out["lam"], prescribed_force=out["reaction"])
                     work = out["work"]
                     step += out["done"]
                     advanced(out["done"], out["iterations"])

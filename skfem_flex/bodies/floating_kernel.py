@@ -46,7 +46,8 @@ import numba
 from ..rotations import dsinc, sinc
 from .modal_kernel import quartic_discrete_gradient, quartic_energy
 
-__all__ = ["FloatingKernelData", "pack", "energy_momentum_terms", "momentum", "potential_energy", "sinc_half"]
+__all__ = ["FloatingKernelData", "pack", "energy_momentum_terms", "newmark_terms", "momentum", "potential_energy",
+           "sinc_half"]
 
 #: the arrays a floating-frame body hands its kernels (built once by :func:`pack`)
 FloatingKernelData = namedtuple("FloatingKernelData", [
@@ -403,3 +404,182 @@ def energy_momentum_terms(kd, q0, q1, v0, v1, dt):
                 s += abs(h) * (abs(q0[idx[k]]) + abs(q1[idx[k]]))
         floor[i] = dt * s
     return p, gk, gp, data, floor
+
+
+@numba.njit(cache=True)
+def newmark_terms(kd, q, v, a, c_a, c_v, terms):
+    r"""The terms of a floating-frame body in one Newton evaluation of the Newmark schemes (trapezoidal,
+    generalized-α: :meth:`Newmark.step <skfem_flex.integrators.Newmark.step>`), at one state.
+
+    With ω = θ̇, f = q̇_f (from ``v``) and the acceleration ``a`` = (Ä, α, a_f)::
+
+        inertia = M(q) a
+        grad    = ∇V(q)
+        qv      = Q_v(q, v) = (A(ω² s̄ − 2ω E S̄ f),  −2ω c_mᵀ f,  ω² c_m − 2ω H f)
+        data    = c_a M(q) + B(q, a) + K(q) − (∂Q_v/∂q + c_v ∂Q_v/∂v)
+        mass_terms = |M(q)| terms
+
+    B(q, a) = ∂(M(q) a)/∂q and K = ∂²V/∂q²: the numpy references are the body methods
+    ``mass_matrix``, ``momentum_jacobian``, ``quadratic_velocity_force``, ``potential_gradient`` and
+    ``potential_hessian`` (:class:`~skfem_flex.bodies.ffr.FloatingFrame`, FloatingBeam, ModalBody;
+    tests/test_floating_newmark_kernel.py). V is the strain energy of :func:`potential_energy`.
+
+    Parameters
+    ----------
+    kd : FloatingKernelData
+        The body's packed arrays (``body.compiled_kernel_data()``).
+    q, v, a : ndarray (n,)
+        Coordinates (m, rad, elastic), velocities and accelerations (per s, per s²).
+    c_a, c_v : float
+        ∂a/∂q = c_a (1/s², (1 − α_m)/((1 − α_f) β Δt²)) and ∂v/∂q = c_v (1/s, γ/(β Δt)) of the scheme.
+    terms : ndarray (n,)
+        Nonnegative weights (the sizes of the terms whose differences make the acceleration).
+
+    Returns
+    -------
+    inertia : ndarray (n,)
+        M(q) a, N and N m.
+    grad : ndarray (n,)
+        ∇V(q), N and N m.
+    qv : ndarray (n,)
+        Q_v(q, v), N and N m.
+    data : ndarray (nnz,)
+        The tangent as the data array of the body's CSR pattern (``kd.pat_ptr``, ``kd.pat_idx``).
+    mass_terms : ndarray (n,)
+        Σ_j |M_ij(q)| terms_j: the round-off floor of the inertia force (times c_a in the scheme).
+    """
+    n, nf = kd.n, kd.nf
+    sbar = kd.sbar
+    om = v[2]
+    oa = a[2]
+    # ---------------------------------------------------------------- products with the elastic state
+    sqx, sqy, sfx, sfy, sax, say = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    for i in range(nf):
+        sqx += sbar[0, i] * q[3 + i]
+        sqy += sbar[1, i] * q[3 + i]
+        sfx += sbar[0, i] * v[3 + i]
+        sfy += sbar[1, i] * v[3 + i]
+        sax += sbar[0, i] * a[3 + i]
+        say += sbar[1, i] * a[3 + i]
+    maq = _matvec(kd.ma_ptr, kd.ma_idx, kd.ma_dat, q, 3)
+    hq = _matvec(kd.h_ptr, kd.h_idx, kd.h_dat, q, 3)
+    maf = _matvec(kd.ma_ptr, kd.ma_idx, kd.ma_dat, v, 3)
+    hf = _matvec(kd.h_ptr, kd.h_idx, kd.h_dat, v, 3)
+    ha = _matvec(kd.h_ptr, kd.h_idx, kd.h_dat, a, 3)
+    kq = _matvec(kd.k_ptr, kd.k_idx, kd.k_dat, q, 3)
+    # s̄ = S_0 + S̄ q_f, c_m = c + M_A q_f, J = I_0 + q_f·(c + c_m)
+    sx, sy = kd.s0x + sqx, kd.s0y + sqy
+    J = kd.i0
+    cmf = 0.0
+    for i in range(nf):
+        cmi = kd.c[i] + maq[i]
+        J += q[3 + i] * (kd.c[i] + cmi)
+        cmf += cmi * v[3 + i]
+    C, S = math.cos(q[2]), math.sin(q[2])
+    aesx, aesy = C * (-sy) - S * sx, S * (-sy) + C * sx        # A E s̄
+    asx, asy = C * sx - S * sy, S * sx + C * sy                # A s̄
+    # ---------------------------------------------------------------- quadratic velocity force
+    inx, iny = om * om * sx + 2.0 * om * sfy, om * om * sy - 2.0 * om * sfx   # ω² s̄ − 2ω E S̄ f
+    qv = np.empty(n)
+    qv[0] = C * inx - S * iny
+    qv[1] = S * inx + C * iny
+    qv[2] = -2.0 * om * cmf
+    for i in range(nf):
+        qv[3 + i] = om * om * (kd.c[i] + maq[i]) - 2.0 * om * hf[i]
+    # ---------------------------------------------------------------- M alone (inertia, mass_terms), then the tangent
+    mdat = np.zeros(kd.pat_idx.size)
+    data = np.zeros(kd.pat_idx.size)
+    top, left = kd.map_top, kd.map_left
+    mdat[top[0]] = kd.mass
+    mdat[top[n + 1]] = kd.mass
+    mdat[top[2]] = aesx
+    mdat[top[n + 2]] = aesy
+    mdat[top[2 * n]] = aesx
+    mdat[top[2 * n + 1]] = aesy
+    mdat[top[2 * n + 2]] = J
+    bax, bay = C * a[0] + S * a[1], -S * a[0] + C * a[1]      # Aᵀ R̈
+    aesax, aesay = -S * sax - C * say, C * sax - S * say      # A E S̄ a_f
+    vx, vy = 2.0 * om * sx + 2.0 * sfy, 2.0 * om * sy - 2.0 * sfx           # 2ω s̄ − 2 E S̄ f
+    # column θ of rows R: B − ∂Q_v/∂θ − c_v ∂Q_v/∂ω (A E (ω² s̄ − 2ω E S̄ f) and A(2ω s̄ − 2 E S̄ f))
+    data[top[2]] = (-oa * asx + aesax) - (-S * inx - C * iny) - c_v * (C * vx - S * vy)
+    data[top[n + 2]] = (-oa * asy + aesay) - (C * inx - S * iny) - c_v * (S * vx + C * vy)
+    data[top[2 * n + 2]] = -(bax * sx + bay * sy) + 2.0 * c_v * cmf
+    w2 = om * om
+    for i in range(nf):
+        s0i, s1i = sbar[0, i], sbar[1, i]
+        asb0, asb1 = C * s0i - S * s1i, S * s0i + C * s1i      # A S̄
+        aesb0, aesb1 = -S * s0i - C * s1i, C * s0i - S * s1i  # A E S̄
+        ai = kd.k0n[i] + hq[i]
+        cmi = kd.c[i] + maq[i]
+        sbeb = -s1i * bax + s0i * bay                          # S̄ᵀEᵀ Aᵀ R̈
+        mdat[top[3 + i]] = asb0
+        mdat[top[n + 3 + i]] = asb1
+        mdat[top[2 * n + 3 + i]] = ai
+        mdat[left[3 * i]] = asb0
+        mdat[left[3 * i + 1]] = asb1
+        mdat[left[3 * i + 2]] = ai
+        data[top[3 + i]] = oa * aesb0 - w2 * asb0 + 2.0 * c_v * om * aesb0
+        data[top[n + 3 + i]] = oa * aesb1 - w2 * asb1 + 2.0 * c_v * om * aesb1
+        data[top[2 * n + 3 + i]] = (sbeb + 2.0 * oa * cmi - ha[i]) + 2.0 * om * maf[i] + 2.0 * c_v * om * cmi
+        data[left[3 * i + 2]] = sbeb - c_v * (2.0 * om * cmi - 2.0 * hf[i])
+    for k in range(kd.mff_dat.size):
+        mdat[kd.map_mff[k]] += kd.mff_dat[k]
+    inertia = np.empty(n)
+    mass_terms = np.empty(n)
+    ptr, idx = kd.pat_ptr, kd.pat_idx
+    for i in range(n):
+        s, t = 0.0, 0.0
+        for k in range(ptr[i], ptr[i + 1]):
+            s += mdat[k] * a[idx[k]]
+            t += abs(mdat[k]) * terms[idx[k]]
+        inertia[i] = s
+        mass_terms[i] = t
+    for k in range(data.size):
+        data[k] += c_a * mdat[k]
+    # ---------------------------------------------------------------- constant elastic blocks
+    ch = oa + 2.0 * c_v * om
+    for k in range(kd.h_dat.size):
+        data[kd.map_h[k]] += ch * kd.h_dat[k]
+    for k in range(kd.ma_dat.size):
+        data[kd.map_ma[k]] -= w2 * kd.ma_dat[k]
+    for k in range(kd.k_dat.size):
+        data[kd.map_k[k]] += kd.k_dat[k]
+    # ---------------------------------------------------------------- strain energy beyond ½ q_fᵀ K q_f
+    grad = np.zeros(n)
+    for i in range(nf):
+        grad[3 + i] = kq[i]
+    if kd.green:
+        dn, loc, wq, mloc = kd.dn, kd.loc, kd.wq, kd.map_loc
+        nel, nqp, nl = dn.shape
+        up, wp, eps = _axial_strains(kd, q)
+        coef = np.empty((2, 2))
+        for e in range(nel):
+            for kq_ in range(nqp):
+                k = e * nqp + kq_
+                t = wq[k] * eps[k]
+                b0, b1 = 1.0 + up[k], wp[k]                    # dε = (1 + u') dN_u + w' dN_w
+                for l in range(nl):
+                    iu, iw = loc[e, l], loc[e, nl + l]
+                    if iu >= 0:
+                        grad[3 + iu] += dn[e, kq_, l] * (t * b0)
+                    if iw >= 0:
+                        grad[3 + iw] += dn[e, kq_, l] * (t * b1)
+                # EA dx (dεᵀ dε + ε d²ε), d²ε = dN_uᵀ dN_u + dN_wᵀ dN_w
+                coef[0, 0] = wq[k] * b0 * b0 + t
+                coef[0, 1] = wq[k] * b0 * b1
+                coef[1, 0] = coef[0, 1]
+                coef[1, 1] = wq[k] * b1 * b1 + t
+                for ia in range(2 * nl):
+                    for ib in range(2 * nl):
+                        pos = mloc[e, ia, ib]
+                        if pos >= 0:
+                            data[pos] += coef[ia // nl, ib // nl] * (dn[e, kq_, ia % nl] * dn[e, kq_, ib % nl])
+    if kd.quartic:
+        # the discrete gradient between equal states is the gradient; it is symmetric in its two
+        # states, so the Hessian is twice its derivative with respect to one of them
+        g4, dg4 = quartic_discrete_gradient(kd.k3p, kd.k3q, kd.k3a, kd.k3b, kd.k4a, kd.k4s, kd.k4w, q, q, 3)
+        for i in range(nf):
+            grad[3 + i] += g4[i]
+            for j in range(nf):
+                data[kd.map_ee[i * nf + j]] += 2.0 * dg4[i, j]
+    return inertia, grad, qv, data, mass_terms
