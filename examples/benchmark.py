@@ -248,16 +248,15 @@ def catalogue_table(rows, steps):
     lines = [f"Every catalogue scene with its default parameters and step, the first {steps} steps "
              f"(or its default run if shorter), every step recorded, no files; after a two-step warm-up.", "",
              "| scene | coordinates | Δt (s) | " + " | ".join(f"{s} µs/step" for s in SCHEMES)
-             + " | energy-momentum loop |",
+             + " | time loops (" + "; ".join(SCHEMES) + ") |",
              "|---|---|---|" + "---|" * (len(SCHEMES) + 1)]
     by, loops = {}, {}
     for name, n, scheme, dt, us, msg, loop in rows:
         by.setdefault((name, n, dt), {})[scheme] = f"{us:.0f}" if np.isfinite(us) else f"failed: {msg}"
-        if scheme == "energy-momentum":
-            loops[(name, n, dt)] = loop
+        loops.setdefault((name, n, dt), {})[scheme] = loop
     for (name, n, dt), cells in by.items():
         lines.append(f"| {name} | {n} | {dt:g} | " + " | ".join(cells.get(s, "") for s in SCHEMES)
-                     + f" | {loops.get((name, n, dt), '')} |")
+                     + " | " + "; ".join(loops[(name, n, dt)].get(s, "") for s in SCHEMES) + " |")
     return "\n".join(lines) + "\n"
 
 

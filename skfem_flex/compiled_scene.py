@@ -839,16 +839,18 @@ def _add_springs(loads, q0, q1, h, gp, floor, mat, fpos):
         floor[i] += abs(tan) * (abs(u0) + abs(u1))
 
 
-@numba.njit(cache=True)
-def _add_loads(maps, loads, q0, dq, trow, h, ext, mat, fpos):
-    """The loads at the mid-point: Q(q0 + Δq/2, t_m) into ``ext``, −(Δt/2) ∂Q/∂q into ``mat``."""
+@numba.njit(cache=True, _nrt=False)
+def _add_loads(maps, loads, q0, dq, trow, h, ext, mat, fpos, jac, f, qmid):
+    """The loads at the mid-point: Q(q0 + Δq/2, t_m) into ``ext``, −(Δt/2) ∂Q/∂q into ``mat`` (``jac``,
+    ``f``, ``qmid``: (2, nb), (2,) and (nb,) to work in)."""
     pf_map, pf_col, gf_ptr, gf_idx, gf_coef, gf_col = loads[3], loads[4], loads[5], loads[6], loads[7], loads[8]
-    f = np.empty(2)
     for j in range(pf_map.size):
         k = pf_map[j]
         o, nb = maps[1][k], maps[2][k]
-        qm = q0[o:o + nb] + 0.5 * dq[o:o + nb]
-        jac = map_jacobian(maps, k, qm)
+        qm = qmid[:nb]
+        for a in range(nb):
+            qm[a] = q0[o + a] + 0.5 * dq[o + a]
+        _jacobian_into(maps, k, qm, jac)
         f[0], f[1] = trow[pf_col[j]], trow[pf_col[j] + 1]
         for a in range(nb):
             ext[o + a] += jac[0, a] * f[0] + jac[1, a] * f[1]
@@ -965,7 +967,9 @@ def _evaluate(system, x):
     (2/Δt) M diag(dz/dΔq) + diag(Δψ/w) J_forces + diag(g d(Δψ/w)/dΔψ), as in the Python step."""
     packed, step, ws = system
     mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain, plan = packed
-    q0, v0, p0, free, fpos, h, p0_inf, e_scale0, rtol, ctol, etol, trow = step
+    q0, v0, p0, free, fpos, sc, table, kk = step
+    h, p0_inf, e_scale0, rtol, ctol, etol = sc[0], sc[1], sc[2], sc[3], sc[4], sc[5]
+    trow = table[kk[0]]
     res, mat, wn = ws[0], ws[1], ws[2]
     dq_base, dq, q1, v1, p1, r, ext, gk, gp, floor = (wn[_DQ_BASE], wn[_DQ], wn[_Q1], wn[_V1], wn[_P1], wn[_R],
                                                       wn[_EXT], wn[_GK], wn[_GP], wn[_FLOOR])
@@ -1046,7 +1050,7 @@ def _evaluate(system, x):
             if jb >= 0:
                 mat[ia, jb] += (2.0 / h) * dat[t] * dz[idx[t]]
     ext[:] = 0.0
-    _add_loads(maps, loads, q0, dq, trow, h, ext, mat, fpos)
+    _add_loads(maps, loads, q0, dq, trow, h, ext, mat, fpos, ws[7][0], ws[6][0], ws[7][2][0])
     scale = max(scale, h * max_abs(ext))
     for i in range(n):
         r[i] = (p1[i] - p0[i]) + r[i] - h * ext[i]
@@ -1158,6 +1162,10 @@ def _run(packed, q_start, v_start, acc_start, t, hs, qp, table, pres, free, fpos
     q, v, acc = q_start.copy(), v_start.copy(), acc_start.copy()
     lam, reaction = lam_start.copy(), reaction_start.copy()
     p = _scene_momentum(mass, frames, frame_off, q, v)
+    # the step's data: arrays updated in place, so that the system tuple is built once per chunk
+    sc = np.array([0.0, 0.0, 0.0, rtol, ctol, etol])
+    kk = np.zeros(1, dtype=np.int64)
+    system = (packed, (q, v, p, free, fpos, sc, table, kk), ws)
     i_rec = 0
     for k in range(ns):
         h = hs[k]
@@ -1175,7 +1183,8 @@ def _run(packed, q_start, v_start, acc_start, t, hs, qp, table, pres, free, fpos
                 x[fpos[c]] = 2.0 * np.arctan(0.5 * x[fpos[c]])
         for i in range(m):
             x[nf + i] = h * lam[i]
-        system = (packed, (q, v, p, free, fpos, h, max_abs(p), abs(0.5 * _dot(v, p)), rtol, ctol, etol, table[k]), ws)
+        sc[0], sc[1], sc[2] = h, max_abs(p), abs(0.5 * _dot(v, p))
+        kk[0] = k
         state = newton_start(x, x_scale, max_iterations, line_search)
         status = EVALUATE
         ws[8][0] = 0
@@ -1314,8 +1323,9 @@ def _system(scene, packed, columns, q0, v0, h, t, lam):
     ws = _workspace(n, m, free.size + m, max(1, int(packed[3][2].max(initial=1))))
     if scene.prescribed_index.size:
         ws[2][_DQ_BASE][scene.prescribed_index] = scene.prescribed_state(t + h)[0] - q0[scene.prescribed_index]
-    step = (q0, v0, p0, free, _free_positions(scene), float(h), max_abs(p0), abs(0.5 * float(v0 @ p0)), 1e-12, 1e-12,
-            1e-14, trow)
+    sc = np.array([float(h), max_abs(p0), abs(0.5 * float(v0 @ p0)), 1e-12, 1e-12, 1e-14])
+    step = (q0, v0, p0, free, _free_positions(scene), sc, np.ascontiguousarray(trow[None, :]),
+            np.zeros(1, dtype=np.int64))
     lam = np.zeros(m) if lam is None else np.asarray(lam, dtype=float)
     return (packed, step, ws), np.concatenate([h * v0[free], h * lam])
 
@@ -1541,13 +1551,9 @@ def _add_strain_potential(strains, strain_off, strain_pos, q1, h, grad, mat):
     return True
 
 
-@numba.njit(cache=True)
-def _add_potential_at(packed, q1, h, grad, mat, fpos, ws):
-    """∇V(q1) of the strain energies, gravity and coordinate springs into ``grad``, h ∇²V(q1) into ``mat``;
-    False if an exact beam's element is folded (the step then goes to Python)."""
-    maps, gravity, loads, strain = packed[3], packed[4], packed[7], packed[8]
-    if not _add_strain_potential(strain[0], strain[1], strain[4], q1, h, grad, mat):
-        return False
+@numba.njit(cache=True, _nrt=False)
+def _add_conservative_at(maps, gravity, loads, q1, h, grad, mat, fpos, jac, f):
+    """∇V(q1) of gravity and the coordinate springs into ``grad``, h ∇²V(q1) into ``mat``."""
     spr_idx, spr_k, spr_p = loads[0], loads[1], loads[2]
     for j in range(spr_idx.size):           # V = ½ k u^p
         i, p = spr_idx[j], spr_p[j]
@@ -1557,7 +1563,6 @@ def _add_potential_at(packed, q1, h, grad, mat, fpos, ws):
         if ia >= 0 and p >= 2:
             mat[ia, ia] += h * 0.5 * spr_k[j] * p * (p - 1) * u ** (p - 2)
     gmaps, gvec = gravity
-    jac, f = ws[7][0], ws[6][0]
     for i in range(gmaps.size):             # V = −g · ∫ r dm: ∇V = −Jᵀ g, ∇²V = −∂(Jᵀ g)/∂q
         k = gmaps[i]
         o, nb = maps[1][k], maps[2][k]
@@ -1567,10 +1572,9 @@ def _add_potential_at(packed, q1, h, grad, mat, fpos, ws):
             grad[o + j] -= gvec[i, 0] * jac[0, j] + gvec[i, 1] * jac[1, j]
         f[0], f[1] = -gvec[i, 0], -gvec[i, 1]
         _add_hessian_product(maps, k, qb, f, h, mat, fpos)
-    return True
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _loads_at(maps, loads, q1, trow, h, ext, mat, fpos, jac, f):
     """The loads at the step's end: Q(q1, t1) into ``ext``; −h ∂Q/∂q into ``mat`` unless h = 0."""
     pf_map, pf_col, gf_ptr, gf_idx, gf_coef, gf_col = loads[3], loads[4], loads[5], loads[6], loads[7], loads[8]
@@ -1623,8 +1627,10 @@ def _evaluate_newmark(system, x):
     its residual, bordered Newton matrix and scaled error (``system`` = (packed, step data, workspace))."""
     packed, step, ws = system
     mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain, plan = packed
-    (q0, v0, a0, acc0, free, fpos, h, am, af, beta, gamma, by_velocity, vp, ap, pres, trow, rtol, ctol,
-     cv) = step
+    q0, v0, a0, acc0, free, fpos, sc, by_velocity, vps, aps, pres, table, kk, cv = step
+    h, am, af, beta, gamma, rtol, ctol = sc[0], sc[1], sc[2], sc[3], sc[4], sc[5], sc[6]
+    k = kk[0]
+    vp, ap, trow = vps[k], aps[k], table[k + 1]
     res, mat, wn = ws[0], ws[1], ws[2]
     dq_base, dq, q1, v1, inertia, r, ext, qv, grad, mterms = (wn[_DQ_BASE], wn[_DQ], wn[_Q1], wn[_V1], wn[_P1],
                                                               wn[_R], wn[_EXT], wn[_GK], wn[_GP], wn[_FLOOR])
@@ -1664,9 +1670,10 @@ def _evaluate_newmark(system, x):
     qv[:] = 0.0
     _add_frame_newmark(frames, frame_off, strain[3], q1, v1, acc1, terms, c_a, c_v, h, inertia, grad, qv, mterms,
                        mat)
-    if not _add_potential_at(packed, q1, h, grad, mat, fpos, ws):
-        ws[8][0] = 1
+    if not _add_strain_potential(strain[0], strain[1], strain[4], q1, h, grad, mat):
+        ws[8][0] = 1                    # a folded element: the step goes to Python
         return np.nan
+    _add_conservative_at(maps, gravity, loads, q1, h, grad, mat, fpos, ws[7][0], ws[6][0])
     scale = max(max_abs(inertia), max_abs(grad), c_a * max_abs(mterms), max_abs(qv))
     ext[:] = 0.0
     _loads_at(maps, loads, q1, trow, h, ext, mat, fpos, ws[7][0], ws[6][0])
@@ -1752,9 +1759,14 @@ def _run_newmark(packed, q_start, v_start, acc_start, pseudo_start, t, hs, qp, v
     if rheonomic:
         _constraint_terms_at(maps, constraints, q, v, np.zeros(m), table[0], ws[1], fpos, ws, cv)
         phit0[:] = phi_t
+    sc = np.array([0.0, am, af, beta, gamma, rtol, ctol])
+    kk = np.zeros(1, dtype=np.int64)
+    system = (packed, (q, v, pseudo, acc, free, fpos, sc, by_velocity, vp, ap, pres, table, kk, cv), ws)
     i_rec = 0
     for k in range(ns):
         h = hs[k]
+        sc[0] = h
+        kk[0] = k
         dq_base[:] = 0.0
         for i in range(npr):
             dq_base[pres[i]] = qp[k, i] - q[pres[i]]
@@ -1765,8 +1777,6 @@ def _run_newmark(packed, q_start, v_start, acc_start, pseudo_start, t, hs, qp, v
             x_scale = max(x_scale, abs(q[free[i]]))
         for i in range(m):
             x[nf + i] = h * lam[i]
-        system = (packed, (q, v, pseudo, acc, free, fpos, h, am, af, beta, gamma, by_velocity, vp[k], ap[k], pres,
-                           table[k + 1], rtol, ctol, cv), ws)
         state = newton_start(x, x_scale, max_iterations, line_search)
         status = EVALUATE
         ws[8][0] = 0
