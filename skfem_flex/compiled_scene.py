@@ -63,6 +63,8 @@ _TINY = 1e-300
 OK = CONVERGED
 #: kinds of position maps
 LINEAR, FRAME = 0, 1
+#: kinds of linear rows g · q of force elements: V = ½ k (g · q + c)², Q = −c (g · v) g
+LR_SPRING, LR_DAMPER = 0, 1
 #: kinds of constraint blocks: Σ sign r(point) − c (2 rows), its projection on a constant normal
 #: (1 row), g · q + c − x(t) (1 row), ½(|r − a|² − l²) (1 row)
 POINTS, PROJECTED, LINEAR_ROW, DISTANCE = 0, 1, 2, 3
@@ -422,6 +424,7 @@ def _pack(scene):
     spr_idx, spr_k, spr_p = [], [], []
     pf_map, pf_col = [], []
     gf_ptr, gf_idx, gf_coef, gf_col = [0], [], [], []
+    lr_ptr, lr_idx, lr_coef, lr_par = [0], [], [], []
     for f in scene.forces:
         form = _call(f, "compiled_form")
         if form is None:
@@ -446,6 +449,14 @@ def _pack(scene):
             pf_map.append(_map_of(cm, sl.start, sl.stop - sl.start, store))
             pf_col.append(len(table))
             table += [("mid", fun, 0), ("mid", fun, 1)]
+        elif form[0] in ("quadratic spring", "linear damper"):    # a row g over the element's coordinates
+            grad = np.asarray(form[1], dtype=float)
+            nz = np.flatnonzero(grad)
+            lr_idx.extend(idx[nz])
+            lr_coef.extend(grad[nz])
+            lr_ptr.append(len(lr_idx))
+            lr_par.append((LR_SPRING, float(form[3]), float(form[2])) if form[0] == "quadratic spring"
+                          else (LR_DAMPER, float(form[2]), 0.0))
         elif form[0] == "generalized force":       # Q = Gᵀ F(t): one table column per row of G
             _, gmat, fun = form
             gmat = np.atleast_2d(np.asarray(gmat, dtype=float))
@@ -552,7 +563,9 @@ def _pack(scene):
     loads = (np.asarray(spr_idx, dtype=np.int64), np.asarray(spr_k, dtype=float), np.asarray(spr_p, dtype=np.int64),
              np.asarray(pf_map, dtype=np.int64), np.asarray(pf_col, dtype=np.int64),
              np.asarray(gf_ptr, dtype=np.int64), np.asarray(gf_idx, dtype=np.int64), np.asarray(gf_coef, dtype=float),
-             np.asarray(gf_col, dtype=np.int64))
+             np.asarray(gf_col, dtype=np.int64), np.asarray(lr_ptr, dtype=np.int64),
+             np.asarray(lr_idx, dtype=np.int64), np.asarray(lr_coef, dtype=float),
+             np.asarray(lr_par, dtype=float).reshape(len(lr_par), 3))
     # momenta (module docstring of _momentum_layout) and the probes the loop records
     bodies = tuple(np.concatenate(parts) if parts else np.zeros(0) for parts in momentum) + \
         (np.asarray(probe_maps, dtype=np.int64),)
@@ -630,6 +643,10 @@ def _newton_pattern(scene, packed):
         for kd, o in zip(group or (), offsets):
             rows = np.repeat(np.arange(kd.n), np.diff(kd.pat_ptr))
             pat[o + rows, o + kd.pat_idx] = True
+    lr_ptr, lr_idx = packed[7][9], packed[7][10]
+    for j in range(lr_ptr.size - 1):            # torsion springs and dampers couple their coordinates
+        idx_r = lr_idx[lr_ptr[j]:lr_ptr[j + 1]]
+        pat[np.ix_(idx_r, idx_r)] = True
     for idx_c, rows_c in scene.constraint_layout:
         pat[np.ix_(n + np.asarray(rows_c), idx_c)] = True
         pat[np.ix_(idx_c, n + np.asarray(rows_c))] = True
@@ -837,12 +854,44 @@ def _add_springs(loads, q0, q1, h, gp, floor, mat, fpos):
         if ia >= 0:
             mat[ia, ia] += tan
         floor[i] += abs(tan) * (abs(u0) + abs(u1))
+    lr_ptr, lr_idx, lr_coef, lr_par = loads[9], loads[10], loads[11], loads[12]
+    for j in range(lr_par.shape[0]):            # V = ½ k (g·q + c)²: the midpoint gradient is exact
+        if lr_par[j, 0] != LR_SPRING:
+            continue
+        k, s = lr_par[j, 1], lr_par[j, 2]
+        for t in range(lr_ptr[j], lr_ptr[j + 1]):
+            s += lr_coef[t] * 0.5 * (q0[lr_idx[t]] + q1[lr_idx[t]])
+        for a in range(lr_ptr[j], lr_ptr[j + 1]):
+            ia = lr_idx[a]
+            gp[ia] += k * s * lr_coef[a]
+            for b in range(lr_ptr[j], lr_ptr[j + 1]):
+                jb = lr_idx[b]
+                tan = 0.5 * h * k * lr_coef[a] * lr_coef[b]
+                floor[ia] += abs(tan) * (abs(q0[jb]) + abs(q1[jb]))
+                if fpos[ia] >= 0 and fpos[jb] >= 0:
+                    mat[fpos[ia], fpos[jb]] += tan
 
 
 @numba.njit(cache=True, _nrt=False)
-def _add_loads(maps, loads, q0, dq, trow, h, ext, mat, fpos, jac, f, qmid):
-    """The loads at the mid-point: Q(q0 + Δq/2, t_m) into ``ext``, −(Δt/2) ∂Q/∂q into ``mat`` (``jac``,
-    ``f``, ``qmid``: (2, nb), (2,) and (nb,) to work in)."""
+def _add_loads(maps, loads, q0, dq, z, dz, trow, h, ext, mat, fpos, jac, f, qmid):
+    """The loads at the mid-point: Q(q0 + Δq/2, z/Δt, t_m) into ``ext``, −((Δt/2) ∂Q/∂q + ∂Q/∂v diag(dz/dΔq))
+    into ``mat`` (``jac``, ``f``, ``qmid``: (2, nb), (2,) and (nb,) to work in)."""
+    lr_ptr, lr_idx, lr_coef, lr_par = loads[9], loads[10], loads[11], loads[12]
+    for j in range(lr_par.shape[0]):            # dampers Q = −c (g·v̄) g
+        if lr_par[j, 0] != LR_DAMPER:
+            continue
+        c, rate = lr_par[j, 1], 0.0
+        for t in range(lr_ptr[j], lr_ptr[j + 1]):
+            rate += lr_coef[t] * z[lr_idx[t]] / h
+        for a in range(lr_ptr[j], lr_ptr[j + 1]):
+            ia = lr_idx[a]
+            ext[ia] -= c * rate * lr_coef[a]
+            if fpos[ia] < 0:
+                continue
+            for b in range(lr_ptr[j], lr_ptr[j + 1]):
+                jb = lr_idx[b]
+                if fpos[jb] >= 0:
+                    mat[fpos[ia], fpos[jb]] += c * lr_coef[a] * lr_coef[b] * dz[jb]
     pf_map, pf_col, gf_ptr, gf_idx, gf_coef, gf_col = loads[3], loads[4], loads[5], loads[6], loads[7], loads[8]
     for j in range(pf_map.size):
         k = pf_map[j]
@@ -1050,7 +1099,7 @@ def _evaluate(system, x):
             if jb >= 0:
                 mat[ia, jb] += (2.0 / h) * dat[t] * dz[idx[t]]
     ext[:] = 0.0
-    _add_loads(maps, loads, q0, dq, trow, h, ext, mat, fpos, ws[7][0], ws[6][0], ws[7][2][0])
+    _add_loads(maps, loads, q0, dq, z, dz, trow, h, ext, mat, fpos, ws[7][0], ws[6][0], ws[7][2][0])
     scale = max(scale, h * max_abs(ext))
     for i in range(n):
         r[i] = (p1[i] - p0[i]) + r[i] - h * ext[i]
@@ -1116,6 +1165,13 @@ def _derived(packed, q, v, p, rv):
     spr_idx, spr_k, spr_p = loads[0], loads[1], loads[2]
     for j in range(spr_idx.size):
         pot += 0.5 * spr_k[j] * q[spr_idx[j]] ** spr_p[j]
+    lr_ptr, lr_idx, lr_coef, lr_par = loads[9], loads[10], loads[11], loads[12]
+    for j in range(lr_par.shape[0]):
+        if lr_par[j, 0] == LR_SPRING:
+            s = lr_par[j, 2]
+            for t in range(lr_ptr[j], lr_ptr[j + 1]):
+                s += lr_coef[t] * q[lr_idx[t]]
+            pot += 0.5 * lr_par[j, 1] * s * s
     gmaps, gvec = gravity
     for i in range(gmaps.size):
         k = gmaps[i]
@@ -1562,6 +1618,21 @@ def _add_conservative_at(maps, gravity, loads, q1, h, grad, mat, fpos, jac, f):
         ia = fpos[i]
         if ia >= 0 and p >= 2:
             mat[ia, ia] += h * 0.5 * spr_k[j] * p * (p - 1) * u ** (p - 2)
+    lr_ptr, lr_idx, lr_coef, lr_par = loads[9], loads[10], loads[11], loads[12]
+    for j in range(lr_par.shape[0]):            # V = ½ k (g·q + c)²
+        if lr_par[j, 0] != LR_SPRING:
+            continue
+        k, s = lr_par[j, 1], lr_par[j, 2]
+        for t in range(lr_ptr[j], lr_ptr[j + 1]):
+            s += lr_coef[t] * q1[lr_idx[t]]
+        for a in range(lr_ptr[j], lr_ptr[j + 1]):
+            ia = lr_idx[a]
+            grad[ia] += k * s * lr_coef[a]
+            if fpos[ia] < 0:
+                continue
+            for b in range(lr_ptr[j], lr_ptr[j + 1]):
+                if fpos[lr_idx[b]] >= 0:
+                    mat[fpos[ia], fpos[lr_idx[b]]] += h * k * lr_coef[a] * lr_coef[b]
     gmaps, gvec = gravity
     for i in range(gmaps.size):             # V = −g · ∫ r dm: ∇V = −Jᵀ g, ∇²V = −∂(Jᵀ g)/∂q
         k = gmaps[i]
@@ -1575,8 +1646,24 @@ def _add_conservative_at(maps, gravity, loads, q1, h, grad, mat, fpos, jac, f):
 
 
 @numba.njit(cache=True, _nrt=False)
-def _loads_at(maps, loads, q1, trow, h, ext, mat, fpos, jac, f):
-    """The loads at the step's end: Q(q1, t1) into ``ext``; −h ∂Q/∂q into ``mat`` unless h = 0."""
+def _loads_at(maps, loads, q1, v1, trow, h, c_v, ext, mat, fpos, jac, f):
+    """The loads at the step's end: Q(q1, v1, t1) into ``ext``; −h (∂Q/∂q + c_v ∂Q/∂v) into ``mat`` unless
+    h = 0."""
+    lr_ptr, lr_idx, lr_coef, lr_par = loads[9], loads[10], loads[11], loads[12]
+    for j in range(lr_par.shape[0]):            # dampers Q = −c (g·v) g
+        if lr_par[j, 0] != LR_DAMPER:
+            continue
+        c, rate = lr_par[j, 1], 0.0
+        for t in range(lr_ptr[j], lr_ptr[j + 1]):
+            rate += lr_coef[t] * v1[lr_idx[t]]
+        for a in range(lr_ptr[j], lr_ptr[j + 1]):
+            ia = lr_idx[a]
+            ext[ia] -= c * rate * lr_coef[a]
+            if h == 0.0 or fpos[ia] < 0:
+                continue
+            for b in range(lr_ptr[j], lr_ptr[j + 1]):
+                if fpos[lr_idx[b]] >= 0:
+                    mat[fpos[ia], fpos[lr_idx[b]]] += h * c_v * c * lr_coef[a] * lr_coef[b]
     pf_map, pf_col, gf_ptr, gf_idx, gf_coef, gf_col = loads[3], loads[4], loads[5], loads[6], loads[7], loads[8]
     for j in range(pf_map.size):
         k = pf_map[j]
@@ -1676,7 +1763,7 @@ def _evaluate_newmark(system, x):
     _add_conservative_at(maps, gravity, loads, q1, h, grad, mat, fpos, ws[7][0], ws[6][0])
     scale = max(max_abs(inertia), max_abs(grad), c_a * max_abs(mterms), max_abs(qv))
     ext[:] = 0.0
-    _loads_at(maps, loads, q1, trow, h, ext, mat, fpos, ws[7][0], ws[6][0])
+    _loads_at(maps, loads, q1, v1, trow, h, c_v, ext, mat, fpos, ws[7][0], ws[6][0])
     scale = h * max(scale, max_abs(ext))
     for i in range(n):
         r[i] = h * (inertia[i] + grad[i] - qv[i] - ext[i])
@@ -1754,7 +1841,7 @@ def _run_newmark(packed, q_start, v_start, acc_start, pseudo_start, t, hs, qp, v
     lam, reaction = lam_start.copy(), reaction_start.copy()
     # the loads and Φ_t at the chunk's start (the work of a step uses both ends)
     ext0 = np.zeros(n)
-    _loads_at(maps, loads, q, table[0], 0.0, ext0, ws[1], fpos, ws[7][0], ws[6][0])
+    _loads_at(maps, loads, q, v, table[0], 0.0, 0.0, ext0, ws[1], fpos, ws[7][0], ws[6][0])
     phit0 = np.zeros(m)
     if rheonomic:
         _constraint_terms_at(maps, constraints, q, v, np.zeros(m), table[0], ws[1], fpos, ws, cv)
