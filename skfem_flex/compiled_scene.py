@@ -5,7 +5,8 @@ runs the energy-momentum scheme and the Newmark family (trapezoidal, generalized
 Newmark step" at the end) for the small (dense) scenes beyond that: point masses and rigid
 bodies, floating-frame bodies (a :class:`~skfem_flex.bodies.FloatingBeam` or a reduced
 :class:`~skfem_flex.bodies.ModalBody`), geometrically exact beams (Cayley rotation rates), gravity,
-coordinate springs, global point forces and moments and the exact beam's loads, pins, revolute
+coordinate springs, torsion springs and dampers, global point forces and moments and the exact beam's
+loads, pins, revolute
 joints, welds, distance constraints, drivers, sliders and prismatic joints on ground lines,
 prescribed coordinates — every catalogue mechanism. A scene is *packed* once into flat arrays
 through public interfaces of its parts (no type checks):
@@ -999,6 +1000,15 @@ def _strain_energy(frames, frame_off, strains, strain_off, q):
 
 
 @numba.njit(cache=True, _nrt=False)
+def _max_int(a):
+    """Largest entry of an integer array (0 if empty)."""
+    m = 0
+    for x in a:
+        m = max(m, x)
+    return m
+
+
+@numba.njit(cache=True, _nrt=False)
 def _dot(a, b):
     s = 0.0
     for i in range(a.size):
@@ -1192,23 +1202,48 @@ def _derived(packed, q, v, p, rv):
 
 
 @numba.njit(cache=True)
+def _mechanism_buffers(packed, n_rec, n, npr):
+    """The record arrays of a chunk: :func:`~skfem_flex.compiled_loop.record_buffers`, λ, the derived
+    values (T, V, p (2), L, ‖Φ‖∞, ‖Φ_q v + Φ_t‖∞) and the probe maps' positions."""
+    return (record_buffers(n_rec, n, npr), np.empty((n_rec, packed[5][7])), np.empty((n_rec, 7)),
+            np.empty((n_rec, packed[6][7].size, 2)))
+
+
+@numba.njit(cache=True)
+def _record_mechanism(packed, i, q, v, p, lam, phi, phi_t, cq, rec_lam, rec_derived, rec_probe, rv):
+    """Row i of the mechanism records at the state (q, v) with momentum p, multipliers λ and the
+    constraint terms Φ, Φ_t, Φ_q of that state (``rv``: a 2-vector to work in)."""
+    maps, probe_maps = packed[3], packed[6][7]
+    rec_lam[i] = lam
+    tk, vk, px, py, ang = _derived(packed, q, v, p, rv)
+    rec_derived[i, 0] = tk
+    rec_derived[i, 1] = vk
+    rec_derived[i, 2] = px
+    rec_derived[i, 3] = py
+    rec_derived[i, 4] = ang
+    vres = 0.0
+    for r in range(phi.size):
+        vres = max(vres, abs(_dot(cq[r], v) + phi_t[r]))
+    rec_derived[i, 5] = max_abs(phi)
+    rec_derived[i, 6] = vres
+    for j in range(probe_maps.size):
+        kp = probe_maps[j]
+        o = maps[1][kp]
+        _position_into(maps, kp, q[o:o + maps[2][kp]], rv)
+        rec_probe[i, j, 0] = rv[0]
+        rec_probe[i, j, 1] = rv[1]
+
+
+@numba.njit(cache=True)
 def _run(packed, q_start, v_start, acc_start, t, hs, qp, table, pres, free, fpos, lam_start, reaction_start, rtol,
          ctol, etol, max_iterations, line_search, work, first_step, record_every, n_steps):
     mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain, plan = packed
     n, ns, npr, m = q_start.size, hs.size, pres.size, constraints[7]
     n_rec = record_count(first_step, ns, record_every, n_steps)
-    buffers = record_buffers(n_rec, n, npr)
-    rec_lam = np.empty((n_rec, m))
-    # T, V, p (2), L, ‖Φ‖∞, ‖Φ_q v + Φ_t‖∞
-    rec_derived = np.empty((n_rec, 7))
-    probe_maps = bodies[7]
-    rec_probe = np.empty((n_rec, probe_maps.size, 2))
+    buffers, rec_lam, rec_derived, rec_probe = _mechanism_buffers(packed, n_rec, n, npr)
     its_total = 0
-    nbmax = 1
-    for k in range(maps[2].size):
-        nbmax = max(nbmax, maps[2][k])
     nf = free.size
-    ws = _workspace(n, m, nf + m, nbmax)
+    ws = _workspace(n, m, nf + m, max(1, _max_int(maps[2])))
     wn = ws[2]
     dq_base, cay = wn[_DQ_BASE], strain[2]
     dq, q1, v1, p1, r, ext = wn[_DQ], wn[_Q1], wn[_V1], wn[_P1], wn[_R], wn[_EXT]
@@ -1287,24 +1322,7 @@ def _run(packed, q_start, v_start, acc_start, t, hs, qp, table, pres, free, fpos
         s = first_step + k
         if is_recorded(s, record_every, n_steps):
             record_step(buffers, i_rec, t, q, v, work, its, reaction)
-            rec_lam[i_rec] = lam
-            tk, vk, px, py, ang = _derived(packed, q, v, p, rv)
-            rec_derived[i_rec, 0] = tk
-            rec_derived[i_rec, 1] = vk
-            rec_derived[i_rec, 2] = px
-            rec_derived[i_rec, 3] = py
-            rec_derived[i_rec, 4] = ang
-            vres = 0.0
-            for i in range(m):
-                vres = max(vres, abs(_dot(cq[i], v) + phi_t[i]))
-            rec_derived[i_rec, 5] = max_abs(phi)
-            rec_derived[i_rec, 6] = vres
-            for j in range(probe_maps.size):
-                kp = probe_maps[j]
-                o = maps[1][kp]
-                _position_into(maps, kp, q[o:o + maps[2][kp]], rv)
-                rec_probe[i_rec, j, 0] = rv[0]
-                rec_probe[i_rec, j, 1] = rv[1]
+            _record_mechanism(packed, i_rec, q, v, p, lam, phi, phi_t, cq, rec_lam, rec_derived, rec_probe, rv)
             i_rec += 1
     return OK, ns, t, q, v, acc, lam, reaction, work, its_total, i_rec, buffers, rec_lam, rec_derived, rec_probe
 
@@ -1821,17 +1839,10 @@ def _run_newmark(packed, q_start, v_start, acc_start, pseudo_start, t, hs, qp, v
     mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain, plan = packed
     n, ns, npr, m = q_start.size, hs.size, pres.size, constraints[7]
     n_rec = record_count(first_step, ns, record_every, n_steps)
-    buffers = record_buffers(n_rec, n, npr)
-    rec_lam = np.empty((n_rec, m))
-    rec_derived = np.empty((n_rec, 7))
-    probe_maps = bodies[7]
-    rec_probe = np.empty((n_rec, probe_maps.size, 2))
+    buffers, rec_lam, rec_derived, rec_probe = _mechanism_buffers(packed, n_rec, n, npr)
     its_total = 0
-    nbmax = 1
-    for k in range(maps[2].size):
-        nbmax = max(nbmax, maps[2][k])
     nf = free.size
-    ws = _workspace(n, m, nf + m, nbmax)
+    ws = _workspace(n, m, nf + m, max(1, _max_int(maps[2])))
     wn = ws[2]
     dq_base, dq, q1, v1, r, ext = wn[_DQ_BASE], wn[_DQ], wn[_Q1], wn[_V1], wn[_R], wn[_EXT]
     a1, acc1 = wn[_Z], wn[_RATIO]
@@ -1913,25 +1924,8 @@ def _run_newmark(packed, q_start, v_start, acc_start, pseudo_start, t, hs, qp, v
         s = first_step + k
         if is_recorded(s, record_every, n_steps):
             record_step(buffers, i_rec, t, q, v, work, its, reaction)
-            rec_lam[i_rec] = lam
             p = _scene_momentum(mass, frames, frame_off, q, v)
-            tk, vk, px, py, ang = _derived(packed, q, v, p, rv)
-            rec_derived[i_rec, 0] = tk
-            rec_derived[i_rec, 1] = vk
-            rec_derived[i_rec, 2] = px
-            rec_derived[i_rec, 3] = py
-            rec_derived[i_rec, 4] = ang
-            vres = 0.0
-            for i in range(m):
-                vres = max(vres, abs(_dot(cq[i], v) + phi_t[i]))
-            rec_derived[i_rec, 5] = max_abs(phi)
-            rec_derived[i_rec, 6] = vres
-            for j in range(probe_maps.size):
-                kp = probe_maps[j]
-                o = maps[1][kp]
-                _position_into(maps, kp, q[o:o + maps[2][kp]], rv)
-                rec_probe[i_rec, j, 0] = rv[0]
-                rec_probe[i_rec, j, 1] = rv[1]
+            _record_mechanism(packed, i_rec, q, v, p, lam, phi, phi_t, cq, rec_lam, rec_derived, rec_probe, rv)
             i_rec += 1
     return (OK, ns, t, q, v, acc, pseudo, lam, reaction, work, its_total, i_rec, buffers, rec_lam, rec_derived,
             rec_probe)
