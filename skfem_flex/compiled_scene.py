@@ -5,9 +5,9 @@ runs the energy-momentum scheme and the Newmark family (trapezoidal, generalized
 Newmark step" at the end) for the small (dense) scenes beyond that: point masses and rigid
 bodies, floating-frame bodies (a :class:`~skfem_flex.bodies.FloatingBeam` or a reduced
 :class:`~skfem_flex.bodies.ModalBody`), geometrically exact beams (Cayley rotation rates), gravity,
-coordinate springs, torsion springs and dampers, point forces (global or following the body) and
-moments and the exact beam's loads, pins, revolute joints, welds, distance constraints, drivers,
-sliders and prismatic joints on ground lines,
+coordinate springs, torsion springs and dampers, global point forces and moments and the exact beam's
+loads, pins, revolute
+joints, welds, distance constraints, drivers, sliders and prismatic joints on ground lines,
 prescribed coordinates — every catalogue mechanism. A scene is *packed* once into flat arrays
 through public interfaces of its parts (no type checks):
 
@@ -426,7 +426,6 @@ def _pack(scene):
     pf_map, pf_col = [], []
     gf_ptr, gf_idx, gf_coef, gf_col = [0], [], [], []
     lr_ptr, lr_idx, lr_coef, lr_par = [0], [], [], []
-    pa_ptr, pa_idx, pa_coef, pa_off = [0], [], [], []
     for f in scene.forces:
         form = _call(f, "compiled_form")
         if form is None:
@@ -442,8 +441,8 @@ def _pack(scene):
             spr_idx.append(int(idx[i]))
             spr_k.append(float(k))
             spr_p.append(int(power))
-        elif form[0] in ("point force", "follower force"):
-            point, fun = form[1], form[-1]
+        elif form[0] == "point force":
+            _, point, fun = form
             cm = _call(point, "compiled_map")
             if cm is None:
                 return None, (), ()
@@ -451,13 +450,6 @@ def _pack(scene):
             pf_map.append(_map_of(cm, sl.start, sl.stop - sl.start, store))
             pf_col.append(len(table))
             table += [("mid", fun, 0), ("mid", fun, 1)]
-            if form[0] == "follower force":            # the point's angle g · q + c (NaN: a global force)
-                grad = np.asarray(form[2], dtype=float)
-                nz = np.flatnonzero(grad)
-                pa_idx.extend(idx[nz])
-                pa_coef.extend(grad[nz])
-            pa_ptr.append(len(pa_idx))
-            pa_off.append(float(form[3]) if form[0] == "follower force" else np.nan)
         elif form[0] in ("quadratic spring", "linear damper"):    # a row g over the element's coordinates
             grad = np.asarray(form[1], dtype=float)
             nz = np.flatnonzero(grad)
@@ -574,8 +566,7 @@ def _pack(scene):
              np.asarray(gf_ptr, dtype=np.int64), np.asarray(gf_idx, dtype=np.int64), np.asarray(gf_coef, dtype=float),
              np.asarray(gf_col, dtype=np.int64), np.asarray(lr_ptr, dtype=np.int64),
              np.asarray(lr_idx, dtype=np.int64), np.asarray(lr_coef, dtype=float),
-             np.asarray(lr_par, dtype=float).reshape(len(lr_par), 3), np.asarray(pa_ptr, dtype=np.int64),
-             np.asarray(pa_idx, dtype=np.int64), np.asarray(pa_coef, dtype=float), np.asarray(pa_off, dtype=float))
+             np.asarray(lr_par, dtype=float).reshape(len(lr_par), 3))
     # momenta (module docstring of _momentum_layout) and the probes the loop records
     bodies = tuple(np.concatenate(parts) if parts else np.zeros(0) for parts in momentum) + \
         (np.asarray(probe_maps, dtype=np.int64),)
@@ -653,15 +644,10 @@ def _newton_pattern(scene, packed):
         for kd, o in zip(group or (), offsets):
             rows = np.repeat(np.arange(kd.n), np.diff(kd.pat_ptr))
             pat[o + rows, o + kd.pat_idx] = True
-    loads, maps = packed[7], packed[3]
-    lr_ptr, lr_idx = loads[9], loads[10]
+    lr_ptr, lr_idx = packed[7][9], packed[7][10]
     for j in range(lr_ptr.size - 1):            # torsion springs and dampers couple their coordinates
         idx_r = lr_idx[lr_ptr[j]:lr_ptr[j + 1]]
         pat[np.ix_(idx_r, idx_r)] = True
-    pf_map, pa_ptr, pa_idx = loads[3], loads[13], loads[14]
-    for j in range(pf_map.size):                # a follower force: its body block over its point's angle
-        o, nb = maps[1][pf_map[j]], maps[2][pf_map[j]]
-        pat[np.ix_(np.arange(o, o + nb), pa_idx[pa_ptr[j]:pa_ptr[j + 1]])] = True
     for idx_c, rows_c in scene.constraint_layout:
         pat[np.ix_(n + np.asarray(rows_c), idx_c)] = True
         pat[np.ix_(idx_c, n + np.asarray(rows_c))] = True
@@ -888,45 +874,6 @@ def _add_springs(loads, q0, q1, h, gp, floor, mat, fpos):
 
 
 @numba.njit(cache=True, _nrt=False)
-def _add_point_force(maps, loads, j, qa, qb, wb, trow, scale, ext, mat, fpos, jac, f, qblk):
-    """Point force j at the state q = qa + wb qb (the mid-point q0 + Δq/2, or q1 with wb = 0): Q = Jᵀ f into
-    ``ext`` and scale · ∂Q/∂q into ``mat`` (nothing for scale = 0), with f = F(t) in the global frame or,
-    for a follower force, f = A(ϑ) F(t) with the point's angle ϑ = g · q + c, so that
-    ∂Q/∂q = ∂(Jᵀ f)/∂q|_f + Jᵀ E f gᵀ (``jac``, ``f``, ``qblk``: (2, nb), (2,), (nb,) to work in)."""
-    pf_map, pf_col, aptr, aidx, acoef, aoff = loads[3], loads[4], loads[13], loads[14], loads[15], loads[16]
-    k = pf_map[j]
-    o, nb = maps[1][k], maps[2][k]
-    qm = qblk[:nb]
-    for a in range(nb):
-        qm[a] = qa[o + a] + wb * qb[o + a]
-    _jacobian_into(maps, k, qm, jac)
-    fx, fy = trow[pf_col[j]], trow[pf_col[j] + 1]
-    follower = not np.isnan(aoff[j])
-    if follower:
-        th = aoff[j]
-        for t in range(aptr[j], aptr[j + 1]):
-            th += acoef[t] * (qa[aidx[t]] + wb * qb[aidx[t]])
-        C, S = np.cos(th), np.sin(th)
-        fx, fy = C * fx - S * fy, S * fx + C * fy
-    f[0], f[1] = fx, fy
-    for a in range(nb):
-        ext[o + a] += jac[0, a] * fx + jac[1, a] * fy
-    if scale == 0.0:
-        return
-    _add_hessian_product(maps, k, qm, f, scale, mat, fpos)
-    if follower:
-        for a in range(nb):
-            ia = fpos[o + a]
-            if ia < 0:
-                continue
-            w = -jac[0, a] * fy + jac[1, a] * fx           # (Jᵀ E f)_a, E f = (−f_y, f_x)
-            for t in range(aptr[j], aptr[j + 1]):
-                jb = fpos[aidx[t]]
-                if jb >= 0:
-                    mat[ia, jb] += scale * w * acoef[t]
-
-
-@numba.njit(cache=True, _nrt=False)
 def _add_loads(maps, loads, q0, dq, z, dz, trow, h, ext, mat, fpos, jac, f, qmid):
     """The loads at the mid-point: Q(q0 + Δq/2, z/Δt, t_m) into ``ext``, −((Δt/2) ∂Q/∂q + ∂Q/∂v diag(dz/dΔq))
     into ``mat`` (``jac``, ``f``, ``qmid``: (2, nb), (2,) and (nb,) to work in)."""
@@ -946,9 +893,18 @@ def _add_loads(maps, loads, q0, dq, z, dz, trow, h, ext, mat, fpos, jac, f, qmid
                 jb = lr_idx[b]
                 if fpos[jb] >= 0:
                     mat[fpos[ia], fpos[jb]] += c * lr_coef[a] * lr_coef[b] * dz[jb]
-    gf_ptr, gf_idx, gf_coef, gf_col = loads[5], loads[6], loads[7], loads[8]
-    for j in range(loads[3].size):
-        _add_point_force(maps, loads, j, q0, dq, 0.5, trow, -0.5 * h, ext, mat, fpos, jac, f, qmid)
+    pf_map, pf_col, gf_ptr, gf_idx, gf_coef, gf_col = loads[3], loads[4], loads[5], loads[6], loads[7], loads[8]
+    for j in range(pf_map.size):
+        k = pf_map[j]
+        o, nb = maps[1][k], maps[2][k]
+        qm = qmid[:nb]
+        for a in range(nb):
+            qm[a] = q0[o + a] + 0.5 * dq[o + a]
+        _jacobian_into(maps, k, qm, jac)
+        f[0], f[1] = trow[pf_col[j]], trow[pf_col[j] + 1]
+        for a in range(nb):
+            ext[o + a] += jac[0, a] * f[0] + jac[1, a] * f[1]
+        _add_hessian_product(maps, k, qm, f, -0.5 * h, mat, fpos)
     for j in range(gf_col.size):
         val = trow[gf_col[j]]
         for t in range(gf_ptr[j], gf_ptr[j + 1]):
@@ -1708,7 +1664,7 @@ def _add_conservative_at(maps, gravity, loads, q1, h, grad, mat, fpos, jac, f):
 
 
 @numba.njit(cache=True, _nrt=False)
-def _loads_at(maps, loads, q1, v1, trow, h, c_v, ext, mat, fpos, jac, f, qblk):
+def _loads_at(maps, loads, q1, v1, trow, h, c_v, ext, mat, fpos, jac, f):
     """The loads at the step's end: Q(q1, v1, t1) into ``ext``; −h (∂Q/∂q + c_v ∂Q/∂v) into ``mat`` unless
     h = 0."""
     lr_ptr, lr_idx, lr_coef, lr_par = loads[9], loads[10], loads[11], loads[12]
@@ -1726,9 +1682,17 @@ def _loads_at(maps, loads, q1, v1, trow, h, c_v, ext, mat, fpos, jac, f, qblk):
             for b in range(lr_ptr[j], lr_ptr[j + 1]):
                 if fpos[lr_idx[b]] >= 0:
                     mat[fpos[ia], fpos[lr_idx[b]]] += h * c_v * c * lr_coef[a] * lr_coef[b]
-    gf_ptr, gf_idx, gf_coef, gf_col = loads[5], loads[6], loads[7], loads[8]
-    for j in range(loads[3].size):
-        _add_point_force(maps, loads, j, q1, q1, 0.0, trow, -h, ext, mat, fpos, jac, f, qblk)
+    pf_map, pf_col, gf_ptr, gf_idx, gf_coef, gf_col = loads[3], loads[4], loads[5], loads[6], loads[7], loads[8]
+    for j in range(pf_map.size):
+        k = pf_map[j]
+        o, nb = maps[1][k], maps[2][k]
+        qb = q1[o:o + nb]
+        _jacobian_into(maps, k, qb, jac)
+        f[0], f[1] = trow[pf_col[j]], trow[pf_col[j] + 1]
+        for a in range(nb):
+            ext[o + a] += jac[0, a] * f[0] + jac[1, a] * f[1]
+        if h != 0.0:
+            _add_hessian_product(maps, k, qb, f, -h, mat, fpos)
     for j in range(gf_col.size):
         val = trow[gf_col[j]]
         for t in range(gf_ptr[j], gf_ptr[j + 1]):
@@ -1817,7 +1781,7 @@ def _evaluate_newmark(system, x):
     _add_conservative_at(maps, gravity, loads, q1, h, grad, mat, fpos, ws[7][0], ws[6][0])
     scale = max(max_abs(inertia), max_abs(grad), c_a * max_abs(mterms), max_abs(qv))
     ext[:] = 0.0
-    _loads_at(maps, loads, q1, v1, trow, h, c_v, ext, mat, fpos, ws[7][0], ws[6][0], ws[7][2][0])
+    _loads_at(maps, loads, q1, v1, trow, h, c_v, ext, mat, fpos, ws[7][0], ws[6][0])
     scale = h * max(scale, max_abs(ext))
     for i in range(n):
         r[i] = h * (inertia[i] + grad[i] - qv[i] - ext[i])
@@ -1888,7 +1852,7 @@ def _run_newmark(packed, q_start, v_start, acc_start, pseudo_start, t, hs, qp, v
     lam, reaction = lam_start.copy(), reaction_start.copy()
     # the loads and Φ_t at the chunk's start (the work of a step uses both ends)
     ext0 = np.zeros(n)
-    _loads_at(maps, loads, q, v, table[0], 0.0, 0.0, ext0, ws[1], fpos, ws[7][0], ws[6][0], ws[7][2][0])
+    _loads_at(maps, loads, q, v, table[0], 0.0, 0.0, ext0, ws[1], fpos, ws[7][0], ws[6][0])
     phit0 = np.zeros(m)
     if rheonomic:
         _constraint_terms_at(maps, constraints, q, v, np.zeros(m), table[0], ws[1], fpos, ws, cv)

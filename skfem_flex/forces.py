@@ -63,8 +63,6 @@ class ForceElement:
 
         ``("gravity", g)``; ``("coordinate spring", i, k, p)`` for V = ½ k q_i^p (i over the element's
         own coordinates); ``("point force", point, F)`` for Q = r_qᵀ F(t) (F in the global frame);
-        ``("follower force", point, g, c, F)`` for Q = r_qᵀ A(g · q + c) F(t) (F in the point's frame, its
-        angle linear in q);
         ``("generalized force", G, F)`` for Q = Gᵀ F(t) (G constant, (k, the element's coordinates),
         F(t) of k values); ``("quadratic spring", g, c, k)`` for V = ½ k (g · q + c)²;
         ``("linear damper", g, c)`` for Q = −c (g · v) g.
@@ -626,11 +624,8 @@ class PointForce(ForceElement):
         return jac.T @ f, fq, None
 
     def compiled_form(self):
-        if not keeps_methods(self, PointForce, ("generalized_force", "global_force")):
+        if self.follower or not keeps_methods(self, PointForce, ("generalized_force", "global_force")):
             return None
-        if self.follower:                # the point's angle ϑ = g · q + c is linear in q
-            g = self._angle.grad.copy()
-            return "follower force", self.point, g, float(self._angle.fun(np.zeros(g.size))), self.force
         return "point force", self.point, self.force
 
 

@@ -377,6 +377,11 @@ def _ineligible_scenes():
         sf.Scene([bar, guide], constraints=[sf.Slider(bar.point((0.5, 0.0))), sf.Pin(guide.point((-0.5, 0.0)))],
                  forces=[sf.Gravity()]))
     m = sf.PointMass(1.0, [1.0, 0.0])
+    follower = sf.PointForce(bar.point((0.5, 0.0)), (0.0, 1.0), follower=True)
+    scenes["follower force"] = (
+        sf.Scene([bar], constraints=[sf.Pin(bar.point((-0.5, 0.0)))], forces=[follower]),
+        sf.Scene([bar], constraints=[sf.Pin(bar.point((-0.5, 0.0)))], forces=[sf.PointForce(bar.point((0.5, 0.0)),
+                                                                                             (0.0, 1.0))]))
     m2 = sf.PointMass(1.0, [1.0, 0.0])
     user = sf.UserConstraint([m2], lambda q, t: np.array([0.5 * (q @ q - 1.0)]), lambda q, t: q[None, :])
     scenes["user constraint"] = (sf.Scene([m2], constraints=[user], forces=[sf.Gravity()]), None)
@@ -607,28 +612,3 @@ def test_torsion_springs_and_dampers_compiled_equal_python(scheme):
     dev = assert_same_run(a, b, tol=None if scheme == "energy-momentum" else dict(energy_balance=np.inf))
     assert abs(dev["energy_balance"] - dev["energy_balance_python"]) <= 1e-9
     assert a.external_work[-1] < -1e-3                   # the damper took energy out
-
-
-def _follower_scene():
-    """A pinned bar and a flexible beam hinged to its tip, each with a follower force (constant on the
-    bar, varying in time on the beam's tip section), and gravity."""
-    bar = _bar()
-    lk = link("beam", 1.0, sf.Section(EA=1e5, EI=50.0, kGA=3e4, rhoA=1.0, rhoI=1e-3), 4, name="arm",
-              position=(1.0, 0.0))
-    return sf.Scene([bar, lk.body], constraints=[sf.Pin(bar.point((-0.5, 0.0))), sf.Revolute(bar.point((0.5, 0.0)),
-                                                                                               lk.root)],
-                    forces=[sf.PointForce(bar.point((0.5, 0.0)), (0.0, 2.0), follower=True),
-                            sf.PointForce(lk.tip, lambda t: (0.5 * t, -1.0 + np.sin(3.0 * t)), follower=True),
-                            sf.Gravity()])
-
-
-@pytest.mark.parametrize("scheme", ["energy-momentum", "trapezoidal", "generalized-alpha"])
-def test_follower_forces_compiled_equal_python(scheme):
-    """Follower point forces (f = A(ϑ) F(t) in the point's frame; ∂Q/∂q with the term Jᵀ E f ∇ϑᵀ) on a rigid
-    bar and on a beam's tip section: the compiled loops give the Python step's run under each scheme, with
-    energy-momentum the exact balance E − E₀ = W."""
-    assert compiled_scene.eligible(_follower_scene(), make_integrator(scheme))
-    a, b = run_both(_follower_scene, t_end=0.3, dt=5e-3, integrator=scheme)
-    dev = assert_same_run(a, b, tol=None if scheme == "energy-momentum" else dict(energy_balance=np.inf))
-    assert abs(dev["energy_balance"] - dev["energy_balance_python"]) <= 1e-9
-    assert abs(a.external_work[-1]) > 1e-3               # the forces did work
