@@ -5,8 +5,7 @@ runs the energy-momentum scheme and the Newmark family (trapezoidal, generalized
 Newmark step" at the end) for the small (dense) scenes beyond that: point masses and rigid
 bodies, floating-frame bodies (a :class:`~skfem_flex.bodies.FloatingBeam` or a reduced
 :class:`~skfem_flex.bodies.ModalBody`), geometrically exact beams (Cayley rotation rates), gravity,
-coordinate springs, torsion springs and dampers, global point forces and moments and the exact beam's
-loads, pins, revolute
+coordinate springs, global point forces and moments and the exact beam's loads, pins, revolute
 joints, welds, distance constraints, drivers, sliders and prismatic joints on ground lines,
 prescribed coordinates — every catalogue mechanism. A scene is *packed* once into flat arrays
 through public interfaces of its parts (no type checks):
@@ -64,8 +63,6 @@ _TINY = 1e-300
 OK = CONVERGED
 #: kinds of position maps
 LINEAR, FRAME = 0, 1
-#: kinds of linear rows g · q of force elements: V = ½ k (g · q + c)², Q = −c (g · v) g
-LR_SPRING, LR_DAMPER = 0, 1
 #: kinds of constraint blocks: Σ sign r(point) − c (2 rows), its projection on a constant normal
 #: (1 row), g · q + c − x(t) (1 row), ½(|r − a|² − l²) (1 row)
 POINTS, PROJECTED, LINEAR_ROW, DISTANCE = 0, 1, 2, 3
@@ -425,7 +422,6 @@ def _pack(scene):
     spr_idx, spr_k, spr_p = [], [], []
     pf_map, pf_col = [], []
     gf_ptr, gf_idx, gf_coef, gf_col = [0], [], [], []
-    lr_ptr, lr_idx, lr_coef, lr_par = [0], [], [], []
     for f in scene.forces:
         form = _call(f, "compiled_form")
         if form is None:
@@ -450,14 +446,6 @@ def _pack(scene):
             pf_map.append(_map_of(cm, sl.start, sl.stop - sl.start, store))
             pf_col.append(len(table))
             table += [("mid", fun, 0), ("mid", fun, 1)]
-        elif form[0] in ("quadratic spring", "linear damper"):    # a row g over the element's coordinates
-            grad = np.asarray(form[1], dtype=float)
-            nz = np.flatnonzero(grad)
-            lr_idx.extend(idx[nz])
-            lr_coef.extend(grad[nz])
-            lr_ptr.append(len(lr_idx))
-            lr_par.append((LR_SPRING, float(form[3]), float(form[2])) if form[0] == "quadratic spring"
-                          else (LR_DAMPER, float(form[2]), 0.0))
         elif form[0] == "generalized force":       # Q = Gᵀ F(t): one table column per row of G
             _, gmat, fun = form
             gmat = np.atleast_2d(np.asarray(gmat, dtype=float))
@@ -564,9 +552,7 @@ def _pack(scene):
     loads = (np.asarray(spr_idx, dtype=np.int64), np.asarray(spr_k, dtype=float), np.asarray(spr_p, dtype=np.int64),
              np.asarray(pf_map, dtype=np.int64), np.asarray(pf_col, dtype=np.int64),
              np.asarray(gf_ptr, dtype=np.int64), np.asarray(gf_idx, dtype=np.int64), np.asarray(gf_coef, dtype=float),
-             np.asarray(gf_col, dtype=np.int64), np.asarray(lr_ptr, dtype=np.int64),
-             np.asarray(lr_idx, dtype=np.int64), np.asarray(lr_coef, dtype=float),
-             np.asarray(lr_par, dtype=float).reshape(len(lr_par), 3))
+             np.asarray(gf_col, dtype=np.int64))
     # momenta (module docstring of _momentum_layout) and the probes the loop records
     bodies = tuple(np.concatenate(parts) if parts else np.zeros(0) for parts in momentum) + \
         (np.asarray(probe_maps, dtype=np.int64),)
@@ -644,10 +630,6 @@ def _newton_pattern(scene, packed):
         for kd, o in zip(group or (), offsets):
             rows = np.repeat(np.arange(kd.n), np.diff(kd.pat_ptr))
             pat[o + rows, o + kd.pat_idx] = True
-    lr_ptr, lr_idx = packed[7][9], packed[7][10]
-    for j in range(lr_ptr.size - 1):            # torsion springs and dampers couple their coordinates
-        idx_r = lr_idx[lr_ptr[j]:lr_ptr[j + 1]]
-        pat[np.ix_(idx_r, idx_r)] = True
     for idx_c, rows_c in scene.constraint_layout:
         pat[np.ix_(n + np.asarray(rows_c), idx_c)] = True
         pat[np.ix_(idx_c, n + np.asarray(rows_c))] = True
@@ -855,44 +837,12 @@ def _add_springs(loads, q0, q1, h, gp, floor, mat, fpos):
         if ia >= 0:
             mat[ia, ia] += tan
         floor[i] += abs(tan) * (abs(u0) + abs(u1))
-    lr_ptr, lr_idx, lr_coef, lr_par = loads[9], loads[10], loads[11], loads[12]
-    for j in range(lr_par.shape[0]):            # V = ½ k (g·q + c)²: the midpoint gradient is exact
-        if lr_par[j, 0] != LR_SPRING:
-            continue
-        k, s = lr_par[j, 1], lr_par[j, 2]
-        for t in range(lr_ptr[j], lr_ptr[j + 1]):
-            s += lr_coef[t] * 0.5 * (q0[lr_idx[t]] + q1[lr_idx[t]])
-        for a in range(lr_ptr[j], lr_ptr[j + 1]):
-            ia = lr_idx[a]
-            gp[ia] += k * s * lr_coef[a]
-            for b in range(lr_ptr[j], lr_ptr[j + 1]):
-                jb = lr_idx[b]
-                tan = 0.5 * h * k * lr_coef[a] * lr_coef[b]
-                floor[ia] += abs(tan) * (abs(q0[jb]) + abs(q1[jb]))
-                if fpos[ia] >= 0 and fpos[jb] >= 0:
-                    mat[fpos[ia], fpos[jb]] += tan
 
 
 @numba.njit(cache=True, _nrt=False)
-def _add_loads(maps, loads, q0, dq, z, dz, trow, h, ext, mat, fpos, jac, f, qmid):
-    """The loads at the mid-point: Q(q0 + Δq/2, z/Δt, t_m) into ``ext``, −((Δt/2) ∂Q/∂q + ∂Q/∂v diag(dz/dΔq))
-    into ``mat`` (``jac``, ``f``, ``qmid``: (2, nb), (2,) and (nb,) to work in)."""
-    lr_ptr, lr_idx, lr_coef, lr_par = loads[9], loads[10], loads[11], loads[12]
-    for j in range(lr_par.shape[0]):            # dampers Q = −c (g·v̄) g
-        if lr_par[j, 0] != LR_DAMPER:
-            continue
-        c, rate = lr_par[j, 1], 0.0
-        for t in range(lr_ptr[j], lr_ptr[j + 1]):
-            rate += lr_coef[t] * z[lr_idx[t]] / h
-        for a in range(lr_ptr[j], lr_ptr[j + 1]):
-            ia = lr_idx[a]
-            ext[ia] -= c * rate * lr_coef[a]
-            if fpos[ia] < 0:
-                continue
-            for b in range(lr_ptr[j], lr_ptr[j + 1]):
-                jb = lr_idx[b]
-                if fpos[jb] >= 0:
-                    mat[fpos[ia], fpos[jb]] += c * lr_coef[a] * lr_coef[b] * dz[jb]
+def _add_loads(maps, loads, q0, dq, trow, h, ext, mat, fpos, jac, f, qmid):
+    """The loads at the mid-point: Q(q0 + Δq/2, t_m) into ``ext``, −(Δt/2) ∂Q/∂q into ``mat`` (``jac``,
+    ``f``, ``qmid``: (2, nb), (2,) and (nb,) to work in)."""
     pf_map, pf_col, gf_ptr, gf_idx, gf_coef, gf_col = loads[3], loads[4], loads[5], loads[6], loads[7], loads[8]
     for j in range(pf_map.size):
         k = pf_map[j]
@@ -1000,15 +950,6 @@ def _strain_energy(frames, frame_off, strains, strain_off, q):
 
 
 @numba.njit(cache=True, _nrt=False)
-def _max_int(a):
-    """Largest entry of an integer array (0 if empty)."""
-    m = 0
-    for x in a:
-        m = max(m, x)
-    return m
-
-
-@numba.njit(cache=True, _nrt=False)
 def _dot(a, b):
     s = 0.0
     for i in range(a.size):
@@ -1109,7 +1050,7 @@ def _evaluate(system, x):
             if jb >= 0:
                 mat[ia, jb] += (2.0 / h) * dat[t] * dz[idx[t]]
     ext[:] = 0.0
-    _add_loads(maps, loads, q0, dq, z, dz, trow, h, ext, mat, fpos, ws[7][0], ws[6][0], ws[7][2][0])
+    _add_loads(maps, loads, q0, dq, trow, h, ext, mat, fpos, ws[7][0], ws[6][0], ws[7][2][0])
     scale = max(scale, h * max_abs(ext))
     for i in range(n):
         r[i] = (p1[i] - p0[i]) + r[i] - h * ext[i]
@@ -1175,13 +1116,6 @@ def _derived(packed, q, v, p, rv):
     spr_idx, spr_k, spr_p = loads[0], loads[1], loads[2]
     for j in range(spr_idx.size):
         pot += 0.5 * spr_k[j] * q[spr_idx[j]] ** spr_p[j]
-    lr_ptr, lr_idx, lr_coef, lr_par = loads[9], loads[10], loads[11], loads[12]
-    for j in range(lr_par.shape[0]):
-        if lr_par[j, 0] == LR_SPRING:
-            s = lr_par[j, 2]
-            for t in range(lr_ptr[j], lr_ptr[j + 1]):
-                s += lr_coef[t] * q[lr_idx[t]]
-            pot += 0.5 * lr_par[j, 1] * s * s
     gmaps, gvec = gravity
     for i in range(gmaps.size):
         k = gmaps[i]
@@ -1202,48 +1136,23 @@ def _derived(packed, q, v, p, rv):
 
 
 @numba.njit(cache=True)
-def _mechanism_buffers(packed, n_rec, n, npr):
-    """The record arrays of a chunk: :func:`~skfem_flex.compiled_loop.record_buffers`, λ, the derived
-    values (T, V, p (2), L, ‖Φ‖∞, ‖Φ_q v + Φ_t‖∞) and the probe maps' positions."""
-    return (record_buffers(n_rec, n, npr), np.empty((n_rec, packed[5][7])), np.empty((n_rec, 7)),
-            np.empty((n_rec, packed[6][7].size, 2)))
-
-
-@numba.njit(cache=True)
-def _record_mechanism(packed, i, q, v, p, lam, phi, phi_t, cq, rec_lam, rec_derived, rec_probe, rv):
-    """Row i of the mechanism records at the state (q, v) with momentum p, multipliers λ and the
-    constraint terms Φ, Φ_t, Φ_q of that state (``rv``: a 2-vector to work in)."""
-    maps, probe_maps = packed[3], packed[6][7]
-    rec_lam[i] = lam
-    tk, vk, px, py, ang = _derived(packed, q, v, p, rv)
-    rec_derived[i, 0] = tk
-    rec_derived[i, 1] = vk
-    rec_derived[i, 2] = px
-    rec_derived[i, 3] = py
-    rec_derived[i, 4] = ang
-    vres = 0.0
-    for r in range(phi.size):
-        vres = max(vres, abs(_dot(cq[r], v) + phi_t[r]))
-    rec_derived[i, 5] = max_abs(phi)
-    rec_derived[i, 6] = vres
-    for j in range(probe_maps.size):
-        kp = probe_maps[j]
-        o = maps[1][kp]
-        _position_into(maps, kp, q[o:o + maps[2][kp]], rv)
-        rec_probe[i, j, 0] = rv[0]
-        rec_probe[i, j, 1] = rv[1]
-
-
-@numba.njit(cache=True)
 def _run(packed, q_start, v_start, acc_start, t, hs, qp, table, pres, free, fpos, lam_start, reaction_start, rtol,
          ctol, etol, max_iterations, line_search, work, first_step, record_every, n_steps):
     mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain, plan = packed
     n, ns, npr, m = q_start.size, hs.size, pres.size, constraints[7]
     n_rec = record_count(first_step, ns, record_every, n_steps)
-    buffers, rec_lam, rec_derived, rec_probe = _mechanism_buffers(packed, n_rec, n, npr)
+    buffers = record_buffers(n_rec, n, npr)
+    rec_lam = np.empty((n_rec, m))
+    # T, V, p (2), L, ‖Φ‖∞, ‖Φ_q v + Φ_t‖∞
+    rec_derived = np.empty((n_rec, 7))
+    probe_maps = bodies[7]
+    rec_probe = np.empty((n_rec, probe_maps.size, 2))
     its_total = 0
+    nbmax = 1
+    for k in range(maps[2].size):
+        nbmax = max(nbmax, maps[2][k])
     nf = free.size
-    ws = _workspace(n, m, nf + m, max(1, _max_int(maps[2])))
+    ws = _workspace(n, m, nf + m, nbmax)
     wn = ws[2]
     dq_base, cay = wn[_DQ_BASE], strain[2]
     dq, q1, v1, p1, r, ext = wn[_DQ], wn[_Q1], wn[_V1], wn[_P1], wn[_R], wn[_EXT]
@@ -1322,7 +1231,24 @@ def _run(packed, q_start, v_start, acc_start, t, hs, qp, table, pres, free, fpos
         s = first_step + k
         if is_recorded(s, record_every, n_steps):
             record_step(buffers, i_rec, t, q, v, work, its, reaction)
-            _record_mechanism(packed, i_rec, q, v, p, lam, phi, phi_t, cq, rec_lam, rec_derived, rec_probe, rv)
+            rec_lam[i_rec] = lam
+            tk, vk, px, py, ang = _derived(packed, q, v, p, rv)
+            rec_derived[i_rec, 0] = tk
+            rec_derived[i_rec, 1] = vk
+            rec_derived[i_rec, 2] = px
+            rec_derived[i_rec, 3] = py
+            rec_derived[i_rec, 4] = ang
+            vres = 0.0
+            for i in range(m):
+                vres = max(vres, abs(_dot(cq[i], v) + phi_t[i]))
+            rec_derived[i_rec, 5] = max_abs(phi)
+            rec_derived[i_rec, 6] = vres
+            for j in range(probe_maps.size):
+                kp = probe_maps[j]
+                o = maps[1][kp]
+                _position_into(maps, kp, q[o:o + maps[2][kp]], rv)
+                rec_probe[i_rec, j, 0] = rv[0]
+                rec_probe[i_rec, j, 1] = rv[1]
             i_rec += 1
     return OK, ns, t, q, v, acc, lam, reaction, work, its_total, i_rec, buffers, rec_lam, rec_derived, rec_probe
 
@@ -1636,21 +1562,6 @@ def _add_conservative_at(maps, gravity, loads, q1, h, grad, mat, fpos, jac, f):
         ia = fpos[i]
         if ia >= 0 and p >= 2:
             mat[ia, ia] += h * 0.5 * spr_k[j] * p * (p - 1) * u ** (p - 2)
-    lr_ptr, lr_idx, lr_coef, lr_par = loads[9], loads[10], loads[11], loads[12]
-    for j in range(lr_par.shape[0]):            # V = ½ k (g·q + c)²
-        if lr_par[j, 0] != LR_SPRING:
-            continue
-        k, s = lr_par[j, 1], lr_par[j, 2]
-        for t in range(lr_ptr[j], lr_ptr[j + 1]):
-            s += lr_coef[t] * q1[lr_idx[t]]
-        for a in range(lr_ptr[j], lr_ptr[j + 1]):
-            ia = lr_idx[a]
-            grad[ia] += k * s * lr_coef[a]
-            if fpos[ia] < 0:
-                continue
-            for b in range(lr_ptr[j], lr_ptr[j + 1]):
-                if fpos[lr_idx[b]] >= 0:
-                    mat[fpos[ia], fpos[lr_idx[b]]] += h * k * lr_coef[a] * lr_coef[b]
     gmaps, gvec = gravity
     for i in range(gmaps.size):             # V = −g · ∫ r dm: ∇V = −Jᵀ g, ∇²V = −∂(Jᵀ g)/∂q
         k = gmaps[i]
@@ -1664,24 +1575,8 @@ def _add_conservative_at(maps, gravity, loads, q1, h, grad, mat, fpos, jac, f):
 
 
 @numba.njit(cache=True, _nrt=False)
-def _loads_at(maps, loads, q1, v1, trow, h, c_v, ext, mat, fpos, jac, f):
-    """The loads at the step's end: Q(q1, v1, t1) into ``ext``; −h (∂Q/∂q + c_v ∂Q/∂v) into ``mat`` unless
-    h = 0."""
-    lr_ptr, lr_idx, lr_coef, lr_par = loads[9], loads[10], loads[11], loads[12]
-    for j in range(lr_par.shape[0]):            # dampers Q = −c (g·v) g
-        if lr_par[j, 0] != LR_DAMPER:
-            continue
-        c, rate = lr_par[j, 1], 0.0
-        for t in range(lr_ptr[j], lr_ptr[j + 1]):
-            rate += lr_coef[t] * v1[lr_idx[t]]
-        for a in range(lr_ptr[j], lr_ptr[j + 1]):
-            ia = lr_idx[a]
-            ext[ia] -= c * rate * lr_coef[a]
-            if h == 0.0 or fpos[ia] < 0:
-                continue
-            for b in range(lr_ptr[j], lr_ptr[j + 1]):
-                if fpos[lr_idx[b]] >= 0:
-                    mat[fpos[ia], fpos[lr_idx[b]]] += h * c_v * c * lr_coef[a] * lr_coef[b]
+def _loads_at(maps, loads, q1, trow, h, ext, mat, fpos, jac, f):
+    """The loads at the step's end: Q(q1, t1) into ``ext``; −h ∂Q/∂q into ``mat`` unless h = 0."""
     pf_map, pf_col, gf_ptr, gf_idx, gf_coef, gf_col = loads[3], loads[4], loads[5], loads[6], loads[7], loads[8]
     for j in range(pf_map.size):
         k = pf_map[j]
@@ -1781,7 +1676,7 @@ def _evaluate_newmark(system, x):
     _add_conservative_at(maps, gravity, loads, q1, h, grad, mat, fpos, ws[7][0], ws[6][0])
     scale = max(max_abs(inertia), max_abs(grad), c_a * max_abs(mterms), max_abs(qv))
     ext[:] = 0.0
-    _loads_at(maps, loads, q1, v1, trow, h, c_v, ext, mat, fpos, ws[7][0], ws[6][0])
+    _loads_at(maps, loads, q1, trow, h, ext, mat, fpos, ws[7][0], ws[6][0])
     scale = h * max(scale, max_abs(ext))
     for i in range(n):
         r[i] = h * (inertia[i] + grad[i] - qv[i] - ext[i])
@@ -1839,10 +1734,17 @@ def _run_newmark(packed, q_start, v_start, acc_start, pseudo_start, t, hs, qp, v
     mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain, plan = packed
     n, ns, npr, m = q_start.size, hs.size, pres.size, constraints[7]
     n_rec = record_count(first_step, ns, record_every, n_steps)
-    buffers, rec_lam, rec_derived, rec_probe = _mechanism_buffers(packed, n_rec, n, npr)
+    buffers = record_buffers(n_rec, n, npr)
+    rec_lam = np.empty((n_rec, m))
+    rec_derived = np.empty((n_rec, 7))
+    probe_maps = bodies[7]
+    rec_probe = np.empty((n_rec, probe_maps.size, 2))
     its_total = 0
+    nbmax = 1
+    for k in range(maps[2].size):
+        nbmax = max(nbmax, maps[2][k])
     nf = free.size
-    ws = _workspace(n, m, nf + m, max(1, _max_int(maps[2])))
+    ws = _workspace(n, m, nf + m, nbmax)
     wn = ws[2]
     dq_base, dq, q1, v1, r, ext = wn[_DQ_BASE], wn[_DQ], wn[_Q1], wn[_V1], wn[_R], wn[_EXT]
     a1, acc1 = wn[_Z], wn[_RATIO]
@@ -1852,7 +1754,7 @@ def _run_newmark(packed, q_start, v_start, acc_start, pseudo_start, t, hs, qp, v
     lam, reaction = lam_start.copy(), reaction_start.copy()
     # the loads and Φ_t at the chunk's start (the work of a step uses both ends)
     ext0 = np.zeros(n)
-    _loads_at(maps, loads, q, v, table[0], 0.0, 0.0, ext0, ws[1], fpos, ws[7][0], ws[6][0])
+    _loads_at(maps, loads, q, table[0], 0.0, ext0, ws[1], fpos, ws[7][0], ws[6][0])
     phit0 = np.zeros(m)
     if rheonomic:
         _constraint_terms_at(maps, constraints, q, v, np.zeros(m), table[0], ws[1], fpos, ws, cv)
@@ -1924,8 +1826,25 @@ def _run_newmark(packed, q_start, v_start, acc_start, pseudo_start, t, hs, qp, v
         s = first_step + k
         if is_recorded(s, record_every, n_steps):
             record_step(buffers, i_rec, t, q, v, work, its, reaction)
+            rec_lam[i_rec] = lam
             p = _scene_momentum(mass, frames, frame_off, q, v)
-            _record_mechanism(packed, i_rec, q, v, p, lam, phi, phi_t, cq, rec_lam, rec_derived, rec_probe, rv)
+            tk, vk, px, py, ang = _derived(packed, q, v, p, rv)
+            rec_derived[i_rec, 0] = tk
+            rec_derived[i_rec, 1] = vk
+            rec_derived[i_rec, 2] = px
+            rec_derived[i_rec, 3] = py
+            rec_derived[i_rec, 4] = ang
+            vres = 0.0
+            for i in range(m):
+                vres = max(vres, abs(_dot(cq[i], v) + phi_t[i]))
+            rec_derived[i_rec, 5] = max_abs(phi)
+            rec_derived[i_rec, 6] = vres
+            for j in range(probe_maps.size):
+                kp = probe_maps[j]
+                o = maps[1][kp]
+                _position_into(maps, kp, q[o:o + maps[2][kp]], rv)
+                rec_probe[i_rec, j, 0] = rv[0]
+                rec_probe[i_rec, j, 1] = rv[1]
             i_rec += 1
     return (OK, ns, t, q, v, acc, pseudo, lam, reaction, work, its_total, i_rec, buffers, rec_lam, rec_derived,
             rec_probe)

@@ -64,8 +64,7 @@ class ForceElement:
         ``("gravity", g)``; ``("coordinate spring", i, k, p)`` for V = ½ k q_i^p (i over the element's
         own coordinates); ``("point force", point, F)`` for Q = r_qᵀ F(t) (F in the global frame);
         ``("generalized force", G, F)`` for Q = Gᵀ F(t) (G constant, (k, the element's coordinates),
-        F(t) of k values); ``("quadratic spring", g, c, k)`` for V = ½ k (g · q + c)²;
-        ``("linear damper", g, c)`` for Q = −c (g · v) g.
+        F(t) of k values).
         """
         return None
 
@@ -536,13 +535,6 @@ class RotationalSpring(_Rotational):
         mean = 0.5 * (self.relative_angle(q0) + self.relative_angle(q1))
         return self.k * (mean - self.rest_angle) * self.grad, 0.5 * self.k * np.outer(self.grad, self.grad)
 
-    def compiled_form(self):
-        """("quadratic spring", g, c, k): V = ½ k (g · q + c)² on the element's coordinates, with g the
-        gradient of the relative angle and c = ϑ(0) − ϑ₀ (the angles are linear in q)."""
-        if not keeps_methods(self, RotationalSpring, CONSERVATIVE + ("relative_angle",)):
-            return None
-        return "quadratic spring", self.grad.copy(), self.relative_angle(np.zeros(self.n)) - self.rest_angle, self.k
-
 
 class RotationalDamper(_Rotational):
     """Torsion damper: moment −c (ϑ̇_a − ϑ̇_b) on point a (the opposite on b).
@@ -567,12 +559,6 @@ class RotationalDamper(_Rotational):
     def generalized_force(self, q, v, t):
         rate = float(self.grad @ v)
         return -self.c * rate * self.grad, None, -self.c * np.outer(self.grad, self.grad)
-
-    def compiled_form(self):
-        """("linear damper", g, c): Q = −c (g · v) g on the element's coordinates."""
-        if not keeps_methods(self, RotationalDamper, ("generalized_force",)):
-            return None
-        return "linear damper", self.grad.copy(), self.c
 
 
 class PointForce(ForceElement):
