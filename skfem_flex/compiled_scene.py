@@ -64,8 +64,16 @@ OK = CONVERGED
 #: kinds of position maps
 LINEAR, FRAME = 0, 1
 #: kinds of constraint blocks: Σ sign r(point) − c (2 rows), its projection on a constant normal
-#: (1 row), g · q + c − x(t) (1 row), ½(|r − a|² − l²) (1 row)
-POINTS, PROJECTED, LINEAR_ROW, DISTANCE = 0, 1, 2, 3
+#: (1 row), g · q + c − x(t) (1 row), ½(|r − a|² − l²) (1 row), the projection on a normal A(g · q + c) n_loc
+#: that turns with a body (1 row; g in the linear rows' arrays, c in ``length``, n_loc in ``nrm``)
+POINTS, PROJECTED, LINEAR_ROW, DISTANCE, ROTATED = 0, 1, 2, 3, 4
+#: kinds of force elements, with their integers | floats in the packed ``loads``: V = ½ k q_i^p (i, p | k);
+#: Q = J_rᵀ F(t) (map, table column | ); Q = g F(t) (column, indices | g); V = ½ k (g·q + c)² (indices |
+#: k, c, g); Q = −c (g·v) g (indices | c, g); Q = J_rᵀ A(g·q + c) F(t) (map, column, indices | c, g);
+#: V = ½ k (|d| − l₀)² and the damper along d, d = r_a − r_b (map a, map b or −1 for the ground | k, l₀, ground
+#: point; c, ground point)
+COORD_SPRING, POINT_FORCE, GENERALIZED_FORCE, ROW_SPRING, ROW_DAMPER, FOLLOWER_FORCE, TWO_POINT_SPRING, \
+    TWO_POINT_DAMPER = range(8)
 
 
 
@@ -419,43 +427,69 @@ def _pack(scene):
     table = []
     force_index = {id(f): i for f, i in scene.conservative_forces + scene.loads}
     grav_maps, grav_g = [], []
-    spr_idx, spr_k, spr_p = [], [], []
-    pf_map, pf_col = [], []
-    gf_ptr, gf_idx, gf_coef, gf_col = [0], [], [], []
+    e_kind, e_ptr, e_int, e_float = [], [(0, 0)], [], []
+
+    def add_element(kind, ints, floats):
+        e_kind.append(kind)
+        e_int.extend(int(i) for i in ints)
+        e_float.extend(float(x) for x in floats)
+        e_ptr.append((len(e_int), len(e_float)))
+
+    def point_map(point):
+        cm = _call(point, "compiled_map")
+        if cm is None:
+            return None
+        sl = scene.slice(point.body)
+        return _map_of(cm, sl.start, sl.stop - sl.start, store)
+
     for f in scene.forces:
         form = _call(f, "compiled_form")
         if form is None:
             return None, (), ()
         idx = np.asarray(force_index[id(f)], dtype=np.int64)
-        if form[0] == "gravity":
+        name = form[0]
+        if name == "gravity":
             for b in (f.bodies if f.bodies is not None else scene.bodies):
                 sl = scene.slice(b)
                 grav_maps.append(_map_of(first_moment[id(b)], sl.start, sl.stop - sl.start, store))
                 grav_g.append(np.asarray(form[1], dtype=float))
-        elif form[0] == "coordinate spring":
+        elif name == "coordinate spring":
             _, i, k, power = form
-            spr_idx.append(int(idx[i]))
-            spr_k.append(float(k))
-            spr_p.append(int(power))
-        elif form[0] == "point force":
-            _, point, fun = form
-            cm = _call(point, "compiled_map")
-            if cm is None:
+            add_element(COORD_SPRING, (idx[i], power), (k,))
+        elif name in ("point force", "follower force"):
+            k = point_map(form[1])
+            if k is None:
                 return None, (), ()
-            sl = scene.slice(point.body)
-            pf_map.append(_map_of(cm, sl.start, sl.stop - sl.start, store))
-            pf_col.append(len(table))
-            table += [("mid", fun, 0), ("mid", fun, 1)]
-        elif form[0] == "generalized force":       # Q = Gᵀ F(t): one table column per row of G
-            _, gmat, fun = form
-            gmat = np.atleast_2d(np.asarray(gmat, dtype=float))
-            for comp, grad in enumerate(gmat):
+            if name == "point force":
+                add_element(POINT_FORCE, (k, len(table)), ())
+            else:
+                grad = np.asarray(form[2], dtype=float)
                 nz = np.flatnonzero(grad)
-                gf_idx.extend(idx[nz])
-                gf_coef.extend(grad[nz])
-                gf_ptr.append(len(gf_idx))
-                gf_col.append(len(table))
+                add_element(FOLLOWER_FORCE, [k, len(table)] + list(idx[nz]), [form[3]] + list(grad[nz]))
+            table += [("mid", form[-1], 0), ("mid", form[-1], 1)]
+        elif name == "generalized force":        # Q = Gᵀ F(t): one table column per row of G
+            _, gmat, fun = form
+            for comp, grad in enumerate(np.atleast_2d(np.asarray(gmat, dtype=float))):
+                nz = np.flatnonzero(grad)
+                add_element(GENERALIZED_FORCE, [len(table)] + list(idx[nz]), grad[nz])
                 table.append(("mid", fun, comp))
+        elif name in ("quadratic spring", "linear damper"):
+            grad = np.asarray(form[1], dtype=float)
+            nz = np.flatnonzero(grad)
+            if name == "quadratic spring":
+                add_element(ROW_SPRING, idx[nz], [form[3], form[2]] + list(grad[nz]))
+            else:
+                add_element(ROW_DAMPER, idx[nz], [form[2]] + list(grad[nz]))
+        elif name in ("two-point spring", "two-point damper"):
+            ka = point_map(form[1])
+            kb = -1 if form[2] is None else point_map(form[2])
+            if ka is None or kb is None:
+                return None, (), ()
+            anchor = np.zeros(2) if form[3] is None else np.asarray(form[3], dtype=float).reshape(2)
+            if name == "two-point spring":
+                add_element(TWO_POINT_SPRING, (ka, kb), [form[4], form[5]] + list(anchor))
+            else:
+                add_element(TWO_POINT_DAMPER, (ka, kb), [form[4]] + list(anchor))
         else:
             return None, (), ()
     # constraints: blocks of rows (module docstring)
@@ -491,6 +525,13 @@ def _pack(scene):
                 kind, const = POINTS, add_points(term)
             elif term[0] == "projected":
                 kind, nrm, const = PROJECTED, np.asarray(term[1], dtype=float).reshape(2), add_points(term[2])
+            elif term[0] == "rotated projected":
+                _, grad, length, nrm, points = term
+                kind, nrm, const = ROTATED, np.asarray(nrm, dtype=float).reshape(2), add_points(points)
+                grad = np.asarray(grad, dtype=float)
+                nz = np.flatnonzero(grad)
+                lin_idx.extend(np.asarray(idx)[nz])
+                lin_coef.extend(grad[nz])
             elif term[0] == "linear":
                 kind = LINEAR_ROW
                 grad = np.asarray(term[1], dtype=float)
@@ -548,11 +589,13 @@ def _pack(scene):
                    np.asarray(con_len, dtype=float), int(scene.n_constraints), float(scene.length_scale),
                    np.asarray(con_l0, dtype=np.int64), np.asarray(lin_idx, dtype=np.int64),
                    np.asarray(lin_coef, dtype=float), np.asarray(con_nrm, dtype=float).reshape(nc, 2),
-                   np.asarray(con_law, dtype=np.int64))
-    loads = (np.asarray(spr_idx, dtype=np.int64), np.asarray(spr_k, dtype=float), np.asarray(spr_p, dtype=np.int64),
-             np.asarray(pf_map, dtype=np.int64), np.asarray(pf_col, dtype=np.int64),
-             np.asarray(gf_ptr, dtype=np.int64), np.asarray(gf_idx, dtype=np.int64), np.asarray(gf_coef, dtype=float),
-             np.asarray(gf_col, dtype=np.int64))
+                   np.asarray(con_law, dtype=np.int64),
+                   np.flatnonzero(np.asarray(con_kind) == ROTATED).astype(np.int64) if ROTATED in con_kind else None)
+    # None without force elements (beyond gravity), as the ROTATED blocks' list without lines on moving
+    # bodies: the functions of these parts begin with a None test Numba prunes, so a scene without them
+    # never compiles their code
+    loads = (np.asarray(e_kind, dtype=np.int64), np.asarray(e_ptr, dtype=np.int64).reshape(-1, 2),
+             np.asarray(e_int, dtype=np.int64), np.asarray(e_float, dtype=float)) if e_kind else None
     # momenta (module docstring of _momentum_layout) and the probes the loop records
     bodies = tuple(np.concatenate(parts) if parts else np.zeros(0) for parts in momentum) + \
         (np.asarray(probe_maps, dtype=np.int64),)
@@ -612,6 +655,34 @@ def _pattern_positions(kernels, offsets, fpos, nx):
             np.asarray(ptr, dtype=np.int64))
 
 
+def _element_coordinates(maps, loads):
+    """For each force element that couples coordinates in the Newton matrix, the coordinates it couples:
+    the blocks of the bodies its points are on and the coordinates of its rows g."""
+    if loads is None:
+        return []
+    kind, ptr, ints, _ = loads
+    off, nb = maps[1], maps[2]
+    out = []
+    for e in range(kind.size):
+        own = ints[ptr[e, 0]:ptr[e + 1, 0]]
+        if kind[e] in (ROW_SPRING, ROW_DAMPER):
+            out.append(own)
+        elif kind[e] == FOLLOWER_FORCE:
+            out.append(np.concatenate([off[own[0]] + np.arange(nb[own[0]]), own[2:]]))
+        elif kind[e] in (TWO_POINT_SPRING, TWO_POINT_DAMPER):
+            out.append(np.concatenate([off[k] + np.arange(nb[k]) for k in own if k >= 0]))
+    return out
+
+
+def _rotated_coordinates(maps, constraints):
+    """For each line on a moving body (kind ROTATED), the coordinates its ∂(Φ_qᵀ μ)/∂q couples: the blocks
+    of its points' bodies and the guiding angle's coordinates."""
+    t0, term_map, l0, lin_idx, lines = constraints[2], constraints[3], constraints[9], constraints[10], constraints[14]
+    off, nb = maps[1], maps[2]
+    return [np.concatenate([off[k] + np.arange(nb[k]) for k in term_map[t0[i]:t0[i + 1]]]
+                           + [lin_idx[l0[i]:l0[i + 1]]]) for i in (lines if lines is not None else ())]
+
+
 def _newton_pattern(scene, packed):
     """Where the bordered Newton matrix (free coordinates, then multipliers) can be nonzero, from the
     structure of the packed scene: the constant masses, the floating-frame and exact beams' kernel
@@ -630,6 +701,10 @@ def _newton_pattern(scene, packed):
         for kd, o in zip(group or (), offsets):
             rows = np.repeat(np.arange(kd.n), np.diff(kd.pat_ptr))
             pat[o + rows, o + kd.pat_idx] = True
+    for coords in _element_coordinates(packed[3], packed[7]):
+        pat[np.ix_(coords, coords)] = True
+    for coords in _rotated_coordinates(packed[3], packed[5]):
+        pat[np.ix_(coords, coords)] = True
     for idx_c, rows_c in scene.constraint_layout:
         pat[np.ix_(n + np.asarray(rows_c), idx_c)] = True
         pat[np.ix_(idx_c, n + np.asarray(rows_c))] = True
@@ -721,7 +796,7 @@ def _scene_momentum(mass, frames, frame_off, q, v):
 
 
 #: rows of the workspace's (n,) vectors ``ws[2]``
-_DQ_BASE, _DQ, _Q1, _V1, _P1, _R, _EXT, _GK, _GP, _FLOOR, _DTMU, _Z, _RATIO, _DRATIO, _DZ = range(15)
+_DQ_BASE, _DQ, _Q1, _V1, _P1, _R, _EXT, _GK, _GP, _FLOOR, _DTMU, _Z, _RATIO, _DRATIO, _DZ, _QM, _VM = range(17)
 
 
 @numba.njit(cache=True)
@@ -730,21 +805,123 @@ def _workspace(n, m, nx, nbmax):
     a few small kernel outputs are allocated), as few arrays as possible (each array of a tuple costs
     compile time wherever the tuple goes): the Newton residual and matrix; the (n,) vectors Δq_base,
     Δq, q1, v1, p1, r, Q, g_kin, g_V, floor, Dᵀμ, z (Δq with the Cayley parameter 2 tan(Δψ/2) on
-    Cayley coordinates), Δψ/w, d(Δψ/w)/dΔψ, dz/dΔq (rows of ``ws[2]``, names ``_DQ`` …); Φ, Φ_t, μ
-    (rows of ``ws[3]``); Φ_q, D; three 2-vectors; three (2, nb) map blocks; and a flag set when an
-    evaluation met a state the Python step refuses (a folded element, a turn ≥ MAX_INCREMENT)."""
-    wn = np.zeros((15, n))
+    Cayley coordinates), Δψ/w, d(Δψ/w)/dΔψ, dz/dΔq, the mid-point q0 + Δq/2 and z/Δt (rows of ``ws[2]``,
+    names ``_DQ`` …); Φ, Φ_t, μ (rows of ``ws[3]``); Φ_q, D; three 2-vectors; six (2, 2 nb) map blocks
+    (two-point elements span two bodies); and a flag set when an evaluation met a state the Python step
+    refuses (a folded element, a turn ≥ MAX_INCREMENT)."""
+    wn = np.zeros((17, n))
     wn[_RATIO, :] = 1.0
     wn[_DZ, :] = 1.0
     return (np.zeros(nx), np.zeros((nx, nx)), wn, np.zeros((3, m)), np.zeros((m, n)), np.zeros((m, n)),
-            np.zeros((3, 2)), np.zeros((3, 2, nbmax)), np.zeros(1, dtype=np.int64))
+            np.zeros((3, 2)), np.zeros((6, 2, 2 * nbmax)), np.zeros(1, dtype=np.int64))
+
+
+@numba.njit(cache=True, _nrt=False)
+def _rotated_row(maps, constraints, i, q0, q1, v1, mu, scale, cq, d, cv, mat, fpos, ws):
+    """Block i of kind ROTATED, a line on a moving body: Φ = n(ϑ) · e with n = A(ϑ) n_loc, ϑ = g · q + c the
+    angle of the guiding body's point and e = Σ s r − c_e (:class:`~skfem_flex.point_terms.Dot` of a
+    :class:`~skfem_flex.point_terms.Rotated` normal and a point difference). Returns Φ(q1); adds Φ_q(q1)
+    to row r of ``cq``; if ``d`` has rows, the exact discrete gradient ē · D_n + n̄ · D_e (D_n =
+    sinc(Δϑ/2) E A(ϑ_m) n_loc ⊗ g) to row r of ``d``; if ``cv`` has rows, ∂(Φ_q v1)/∂q1 to its row r; and
+    scale · μ · ∂Dᵀ/∂q1 to ``mat``. At q0 = q1, D = Φ_q and ∂D/∂q1 is half the Hessian: the Newmark step
+    calls this with scale = 2."""
+    kind, row, t0, term_map, term_sign, const, length, m, _, l0, lin_idx, lin_coef, nrm, law, _ = constraints
+    r0 = row[i]
+    f, rv = ws[6][0], ws[6][2]
+    jac, dk, scratch, vj = ws[7][0], ws[7][1], ws[7][2], ws[7][3]
+    nb_, off_ = maps[2], maps[1]
+    no_floor = ws[0][:0]
+    th0, th1, gv = length[i], length[i], 0.0
+    for t in range(l0[i], l0[i + 1]):
+        th0 += lin_coef[t] * q0[lin_idx[t]]
+        th1 += lin_coef[t] * q1[lin_idx[t]]
+        gv += lin_coef[t] * v1[lin_idx[t]]
+    e0x, e0y, e1x, e1y = -const[i, 0], -const[i, 1], -const[i, 0], -const[i, 1]
+    for t in range(t0[i], t0[i + 1]):
+        k, s = term_map[t], term_sign[t]
+        o, nb = off_[k], nb_[k]
+        _position_into(maps, k, q0[o:o + nb], rv)
+        e0x += s * rv[0]
+        e0y += s * rv[1]
+        _position_into(maps, k, q1[o:o + nb], rv)
+        e1x += s * rv[0]
+        e1y += s * rv[1]
+    lx, ly = nrm[i, 0], nrm[i, 1]
+    n0x, n0y = np.cos(th0) * lx - np.sin(th0) * ly, np.sin(th0) * lx + np.cos(th0) * ly
+    n1x, n1y = np.cos(th1) * lx - np.sin(th1) * ly, np.sin(th1) * lx + np.cos(th1) * ly
+    tm = 0.5 * (th0 + th1)
+    amx, amy = np.cos(tm) * lx - np.sin(tm) * ly, np.sin(tm) * lx + np.cos(tm) * ly    # A(ϑ_m) n_loc
+    sig, dsig = sinc_half(th1 - th0)
+    ebx, eby = 0.5 * (e0x + e1x), 0.5 * (e0y + e1y)
+    nbx, nby = 0.5 * (n0x + n1x), 0.5 * (n0y + n1y)
+    mus = scale * mu
+    use_d, use_cv = d.shape[0] > 0, cv.shape[0] > 0
+    ang_cq = -e1x * n1y + e1y * n1x                     # e1 · E n1
+    ang_d = sig * (-ebx * amy + eby * amx)              # σ ē · E a_m
+    # the rotation's own term of ∂(μ Dᵀ)/∂q1: μ (dσ/dΔϑ ē · E a_m − ½ σ ē · a_m) g ⊗ g
+    cgg = mus * (dsig * (-ebx * amy + eby * amx) - 0.5 * sig * (ebx * amx + eby * amy))
+    for a in range(l0[i], l0[i + 1]):
+        ia = lin_idx[a]
+        cq[r0, ia] += ang_cq * lin_coef[a]
+        if use_d:
+            d[r0, ia] += ang_d * lin_coef[a]
+        if fpos[ia] >= 0:
+            for b in range(l0[i], l0[i + 1]):
+                if fpos[lin_idx[b]] >= 0:
+                    mat[fpos[ia], fpos[lin_idx[b]]] += cgg * lin_coef[a] * lin_coef[b]
+    jevx, jevy = 0.0, 0.0
+    for t in range(t0[i], t0[i + 1]):
+        k, s = term_map[t], term_sign[t]
+        o, nb = off_[k], nb_[k]
+        qb0, qb1 = q0[o:o + nb], q1[o:o + nb]
+        _jacobian_into(maps, k, qb1, jac)
+        _dgrad_into(maps, k, qb0, qb1, dk)
+        if use_cv:
+            _velocity_jacobian_into(maps, k, qb1, v1[o:o + nb], vj)
+        for j in range(nb):
+            cq[r0, o + j] += s * (n1x * jac[0, j] + n1y * jac[1, j])
+            if use_d:
+                d[r0, o + j] += s * (nbx * dk[0, j] + nby * dk[1, j])
+            if use_cv:
+                cv[r0, o + j] += s * (n1x * vj[0, j] + n1y * vj[1, j]) + gv * s * (-n1y * jac[0, j] + n1x * jac[1, j])
+                jevx += s * jac[0, j] * v1[o + j]
+                jevy += s * jac[1, j] * v1[o + j]
+        f[0], f[1] = s * mus * nbx, s * mus * nby       # μ n̄ · ∂D_e/∂q1
+        _add_dgrad_jacobian(maps, k, qb0, qb1, f, 1.0, mat, fpos, no_floor, scratch)
+        # ½ μ (D_nᵀ J_e1 + D_eᵀ J_n1), J_n1 = E n1 ⊗ g
+        for j in range(nb):
+            jb = fpos[o + j]
+            dn_je = 0.5 * mus * sig * s * (-amy * jac[0, j] + amx * jac[1, j])
+            de_jn = 0.5 * mus * s * (-n1y * dk[0, j] + n1x * dk[1, j])
+            for a in range(l0[i], l0[i + 1]):
+                ia = fpos[lin_idx[a]]
+                if ia >= 0 and jb >= 0:
+                    mat[ia, jb] += dn_je * lin_coef[a]
+                    mat[jb, ia] += de_jn * lin_coef[a]
+    if use_cv:                                          # (J_e v)·E n1 g − (g·v)(e1·n1) g
+        c_g = -jevx * n1y + jevy * n1x - gv * (e1x * n1x + e1y * n1y)
+        for a in range(l0[i], l0[i + 1]):
+            cv[r0, lin_idx[a]] += c_g * lin_coef[a]
+    return n1x * e1x + n1y * e1y
+
+
+@numba.njit(cache=True, _nrt=False)
+def _add_rotated_rows(maps, constraints, lines, q0, q1, v1, mu, scale, cq, d, cv, mat, fpos, ws):
+    """The blocks of kind ROTATED (:func:`_rotated_row`; ``lines``, their indices, is None in scenes without
+    them, and Numba prunes this function's body there)."""
+    if lines is None:
+        return
+    phi = ws[3][0]
+    for i in lines:
+        r0 = constraints[1][i]
+        phi[r0] = _rotated_row(maps, constraints, i, q0, q1, v1, mu[r0], scale, cq, d, cv, mat, fpos, ws)
 
 
 @numba.njit(cache=True, _nrt=False)
 def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, mat, fpos, ws):
     """Φ(q1, t1), Φ_t, Φ_q(q1) and D into the workspace, ∂(Dᵀμ)/∂q1 added to ``mat`` (the
     Newton matrix). ``trow`` is the step's row of the time table (drivers' x(t1), ẋ(t1))."""
-    kind, row, t0, term_map, term_sign, const, length, m, _, l0, lin_idx, lin_coef, nrm, law = constraints
+    kind, row, t0, term_map, term_sign, const, length, m, _, l0, lin_idx, lin_coef, nrm, law, _ = constraints
     phi, phi_t, cq, d = ws[3][0], ws[3][1], ws[4], ws[5]
     f, acc, rv, jac, dk = ws[6][0], ws[6][1], ws[6][2], ws[7][0], ws[7][1]
     nb_, off_ = maps[2], maps[1]
@@ -783,6 +960,8 @@ def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, mat, fpos, ws):
                 phi[r0] = nrm[i, 0] * acc[0] + nrm[i, 1] * acc[1]
             else:
                 phi[r0], phi[r0 + 1] = acc[0], acc[1]
+        elif kind[i] == ROTATED:                  # after the loop (_add_rotated_rows)
+            continue
         elif kind[i] == LINEAR_ROW:               # g · q + c − x(t1): D = Φ_q = g
             val = const[i, 0]
             for t in range(l0[i], l0[i + 1]):
@@ -816,49 +995,294 @@ def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, mat, fpos, ws):
                     jb = fpos[o + j]
                     if jb >= 0:
                         mat[ia, jb] += 0.5 * mu[r0] * (jac[0, a] * jac[0, j] + jac[1, a] * jac[1, j])
+    _add_rotated_rows(maps, constraints, constraints[14], q0, q1, q1, mu, 1.0, cq, d, cq[:0], mat, fpos, ws)
 
+
+# ==================================================================== force elements
+# The packed ``loads`` = (kind, ptr, ints, floats): element e's integers are ints[ptr[e, 0]:ptr[e + 1, 0]],
+# its floats floats[ptr[e, 1]:ptr[e + 1, 1]] (the layout of each kind at the constants above). One array
+# set for all kinds: a new kind adds a branch, not arrays that every function unpacking the scene pays
+# for in compile time and reference counting.
+@numba.njit(cache=True, _nrt=False)
+def _pair_distance(maps, ints, fl, i0, f0, q, rv):
+    """d = r_a − r_b (b: map ints[i0 + 1] or, if −1, the ground point fl[f0:f0 + 2]) at q, m."""
+    ka, kb = ints[i0], ints[i0 + 1]
+    o = maps[1][ka]
+    _position_into(maps, ka, q[o:o + maps[2][ka]], rv)
+    dx, dy = rv[0], rv[1]
+    if kb < 0:
+        return dx - fl[f0], dy - fl[f0 + 1]
+    o = maps[1][kb]
+    _position_into(maps, kb, q[o:o + maps[2][kb]], rv)
+    return dx - rv[0], dy - rv[1]
 
 @numba.njit(cache=True, _nrt=False)
-def _add_springs(loads, q0, q1, h, gp, floor, mat, fpos):
-    """Coordinate springs V = ½ k u^p: their exact divided difference (no cancellation) into ``gp``,
-    tangent and round-off floor."""
-    spr_idx, spr_k, spr_p = loads[0], loads[1], loads[2]
-    for j in range(spr_idx.size):
-        i, p = spr_idx[j], spr_p[j]
-        u0, u1 = q0[i], q1[i]
-        g, tan = 0.0, 0.0
-        for a in range(p):
-            g += u1 ** a * u0 ** (p - 1 - a)
-            if a >= 1:
-                tan += a * u1 ** (a - 1) * u0 ** (p - 1 - a)
-        gp[i] += 0.5 * spr_k[j] * g
-        tan *= 0.5 * spr_k[j] * h
-        ia = fpos[i]
-        if ia >= 0:
-            mat[ia, ia] += tan
-        floor[i] += abs(tan) * (abs(u0) + abs(u1))
-
-
-@numba.njit(cache=True, _nrt=False)
-def _add_loads(maps, loads, q0, dq, trow, h, ext, mat, fpos, jac, f, qmid):
-    """The loads at the mid-point: Q(q0 + Δq/2, t_m) into ``ext``, −(Δt/2) ∂Q/∂q into ``mat`` (``jac``,
-    ``f``, ``qmid``: (2, nb), (2,) and (nb,) to work in)."""
-    pf_map, pf_col, gf_ptr, gf_idx, gf_coef, gf_col = loads[3], loads[4], loads[5], loads[6], loads[7], loads[8]
-    for j in range(pf_map.size):
-        k = pf_map[j]
+def _pair_matrix(maps, ints, i0, q0, q1, v, which, block, out):
+    """out[:, :slots] = ∂d/∂q (``which`` 0, at q1), the exact discrete gradient of d (1, from q0 to q1) or
+    ∂(J_d v)/∂q (2, at q1) of a two-point element over its slots (map a's block, then map b's); returns
+    the number of slots. ``block``: (2, ≥ nb) to work in."""
+    ns = 0
+    for side in range(2):
+        k = ints[i0 + side]
+        if k < 0:
+            break
         o, nb = maps[1][k], maps[2][k]
-        qm = qmid[:nb]
-        for a in range(nb):
-            qm[a] = q0[o + a] + 0.5 * dq[o + a]
-        _jacobian_into(maps, k, qm, jac)
-        f[0], f[1] = trow[pf_col[j]], trow[pf_col[j] + 1]
-        for a in range(nb):
-            ext[o + a] += jac[0, a] * f[0] + jac[1, a] * f[1]
-        _add_hessian_product(maps, k, qm, f, -0.5 * h, mat, fpos)
-    for j in range(gf_col.size):
-        val = trow[gf_col[j]]
-        for t in range(gf_ptr[j], gf_ptr[j + 1]):
-            ext[gf_idx[t]] += gf_coef[t] * val
+        if which == 0:
+            _jacobian_into(maps, k, q1[o:o + nb], block)
+        elif which == 1:
+            _dgrad_into(maps, k, q0[o:o + nb], q1[o:o + nb], block)
+        else:
+            _velocity_jacobian_into(maps, k, q1[o:o + nb], v[o:o + nb], block)
+        sign = 1.0 if side == 0 else -1.0
+        for a in range(2):
+            for j in range(nb):
+                out[a, ns + j] = sign * block[a, j]
+        ns += nb
+    return ns
+
+
+@numba.njit(cache=True, _nrt=False)
+def _slot(maps, ints, i0, s):
+    """The scene coordinate of slot s of a two-point element."""
+    ka = ints[i0]
+    if s < maps[2][ka]:
+        return maps[1][ka] + s
+    return maps[1][ints[i0 + 1]] + s - maps[2][ka]
+
+
+@numba.njit(cache=True, _nrt=False)
+def _add_conservative(maps, gravity, loads, q0, q1, th, gp, floor, mat, fpos, ws):
+    """The exact discrete gradients of gravity and the conservative force elements from q0 to q1 into
+    ``gp``, th ∂/∂q1 of them into ``mat`` and, if ``floor`` is not empty, their round-off floor
+    |th ∂g/∂q1| (|q0| + |q1|). At q0 = q1 the discrete gradient is ∇V and its ∂/∂q1 half the Hessian
+    (the discrete gradients are symmetric in q0, q1): the Newmark step calls this with th = 2h."""
+    f = ws[6][0]
+    dk, scratch = ws[7][1], ws[7][2]
+    gmaps, gvec = gravity
+    for i in range(gmaps.size):          # V = −g · ∫ r dm
+        k = gmaps[i]
+        o, nb = maps[1][k], maps[2][k]
+        if maps[0][k] == LINEAR:          # constant gradient −gᵀΓ, no tangent, no floor
+            for j in range(nb):
+                gp[o + j] -= gvec[i, 0] * maps[6][maps[7][k] + j] + gvec[i, 1] * maps[6][maps[7][k] + nb + j]
+            continue
+        qb0, qb1 = q0[o:o + nb], q1[o:o + nb]
+        _dgrad_into(maps, k, qb0, qb1, dk)
+        f[0], f[1] = -gvec[i, 0], -gvec[i, 1]
+        for j in range(nb):
+            gp[o + j] += f[0] * dk[0, j] + f[1] * dk[1, j]
+        _add_dgrad_jacobian(maps, k, qb0, qb1, f, th, mat, fpos, floor, scratch)
+    _add_spring_elements(maps, loads, q0, q1, th, gp, floor, mat, fpos, ws)
+
+
+@numba.njit(cache=True, _nrt=False)
+def _add_spring_elements(maps, loads, q0, q1, th, gp, floor, mat, fpos, ws):
+    """The conservative force elements' part of :func:`_add_conservative` (``loads`` None: pruned)."""
+    if loads is None:
+        return
+    kind, ptr, ints, fl = loads
+    f, rv = ws[6][0], ws[6][2]
+    jac, scratch, jd, dd = ws[7][0], ws[7][2], ws[7][3], ws[7][4]
+    use_floor = floor.size > 0
+    for e in range(kind.size):
+        i0, f0, i1, f1 = ptr[e, 0], ptr[e, 1], ptr[e + 1, 0], ptr[e + 1, 1]
+        if kind[e] == COORD_SPRING:       # V = ½ k u^p: its exact divided difference (no cancellation)
+            i, p, k = ints[i0], ints[i0 + 1], fl[f0]
+            u0, u1 = q0[i], q1[i]
+            g, tan = 0.0, 0.0
+            for a in range(p):
+                g += u1 ** a * u0 ** (p - 1 - a)
+                if a >= 1:
+                    tan += a * u1 ** (a - 1) * u0 ** (p - 1 - a)
+            gp[i] += 0.5 * k * g
+            tan *= 0.5 * k * th
+            if fpos[i] >= 0:
+                mat[fpos[i], fpos[i]] += tan
+            if use_floor:
+                floor[i] += abs(tan) * (abs(u0) + abs(u1))
+        elif kind[e] == ROW_SPRING:       # V = ½ k (g·q + c)²: the mid-point gradient is exact
+            k, s = fl[f0], fl[f0 + 1]
+            for t in range(i0, i1):
+                s += fl[f0 + 2 + t - i0] * 0.5 * (q0[ints[t]] + q1[ints[t]])
+            for a in range(i0, i1):
+                ia, ga = ints[a], fl[f0 + 2 + a - i0]
+                gp[ia] += k * s * ga
+                for b in range(i0, i1):
+                    jb = ints[b]
+                    tan = 0.5 * th * k * ga * fl[f0 + 2 + b - i0]
+                    if use_floor:
+                        floor[ia] += abs(tan) * (abs(q0[jb]) + abs(q1[jb]))
+                    if fpos[ia] >= 0 and fpos[jb] >= 0:
+                        mat[fpos[ia], fpos[jb]] += tan
+        elif kind[e] == TWO_POINT_SPRING:
+            # V(s) = ½ k (√s − l₀)², s = d·d: divided difference κ = ½ k (1 − 2 l₀/(l_0 + l_1)) times the exact
+            # discrete gradient (d0 + d1)ᵀ D of s; ∂/∂q1 = κ (2 ∂(Dᵀ d̄)/∂q1 + Dᵀ J1) + (k l₀/(2 l1 Σl²)) ds ⊗ ∇s1
+            k, lr = fl[f0], fl[f0 + 1]
+            d0x, d0y = _pair_distance(maps, ints, fl, i0, f0 + 2, q0, rv)
+            d1x, d1y = _pair_distance(maps, ints, fl, i0, f0 + 2, q1, rv)
+            l0, l1 = np.hypot(d0x, d0y), np.hypot(d1x, d1y)
+            kap = 0.5 * k * (1.0 - 2.0 * lr / (l0 + l1)) if lr > 0.0 else 0.5 * k
+            c2 = k * lr / (2.0 * l1 * (l0 + l1) ** 2) if lr > 0.0 else 0.0
+            sx, sy = d0x + d1x, d0y + d1y
+            ns = _pair_matrix(maps, ints, i0, q0, q1, q1, 1, jac, dd)
+            _pair_matrix(maps, ints, i0, q0, q1, q1, 0, jac, jd)
+            for a in range(ns):
+                ia = _slot(maps, ints, i0, a)
+                dsa = sx * dd[0, a] + sy * dd[1, a]
+                gp[ia] += kap * dsa
+                for b in range(ns):
+                    jb = _slot(maps, ints, i0, b)
+                    tan = th * (kap * (dd[0, a] * jd[0, b] + dd[1, a] * jd[1, b])
+                                + c2 * dsa * 2.0 * (d1x * jd[0, b] + d1y * jd[1, b]))
+                    if use_floor:
+                        floor[ia] += abs(tan) * (abs(q0[jb]) + abs(q1[jb]))
+                    if fpos[ia] >= 0 and fpos[jb] >= 0:
+                        mat[fpos[ia], fpos[jb]] += tan
+            for side in range(2):
+                kk = ints[i0 + side]
+                if kk < 0:
+                    break
+                sign = 1.0 if side == 0 else -1.0
+                o, nb = maps[1][kk], maps[2][kk]
+                f[0], f[1] = sign * kap * sx, sign * kap * sy
+                _add_dgrad_jacobian(maps, kk, q0[o:o + nb], q1[o:o + nb], f, th, mat, fpos, floor, scratch)
+
+
+@numba.njit(cache=True, _nrt=False)
+def _add_loads(maps, loads, q, v, trow, cq, cv, dz, ext, mat, fpos, ws):
+    """The non-conservative force elements Q(q, v, t) into ``ext`` and −(cq ∂Q/∂q + cv ∂Q/∂v diag(dz)) into
+    ``mat`` (``trow``: the time table's row at t). The energy-momentum step evaluates them at the mid-point
+    (q0 + Δq/2, z/Δt) with cq = Δt/2, cv = 1, dz = dz/dΔq; the Newmark step at (q1, v1) with cq = Δt,
+    cv = Δt c_v, dz = 1. ``loads`` None (no force elements): nothing, and Numba prunes the body."""
+    if loads is None:
+        return
+    kind, ptr, ints, fl = loads
+    f, rv = ws[6][0], ws[6][2]
+    jac, scratch, jd, vj, tmp = ws[7][0], ws[7][2], ws[7][3], ws[7][4], ws[7][5]
+    for e in range(kind.size):
+        i0, f0, i1, f1 = ptr[e, 0], ptr[e, 1], ptr[e + 1, 0], ptr[e + 1, 1]
+        ke = kind[e]
+        if ke == POINT_FORCE or ke == FOLLOWER_FORCE:   # Q = Jᵀ f, f = F(t) or A(ϑ) F(t), ϑ = g·q + c
+            k, col = ints[i0], ints[i0 + 1]
+            o, nb = maps[1][k], maps[2][k]
+            qb = q[o:o + nb]
+            _jacobian_into(maps, k, qb, jac)
+            f[0], f[1] = trow[col], trow[col + 1]
+            if ke == FOLLOWER_FORCE:
+                ang = fl[f0]
+                for t in range(i0 + 2, i1):
+                    ang += fl[f0 + 1 + t - i0 - 2] * q[ints[t]]
+                C, S = np.cos(ang), np.sin(ang)
+                f[0], f[1] = C * trow[col] - S * trow[col + 1], S * trow[col] + C * trow[col + 1]
+                for a in range(nb):             # ∂(Jᵀ A F)/∂ϑ ⊗ g = Jᵀ E f ⊗ g
+                    ia = fpos[o + a]
+                    if ia < 0:
+                        continue
+                    jef = -jac[0, a] * f[1] + jac[1, a] * f[0]
+                    for t in range(i0 + 2, i1):
+                        jb = fpos[ints[t]]
+                        if jb >= 0:
+                            mat[ia, jb] -= cq * jef * fl[f0 + 1 + t - i0 - 2]
+            for a in range(nb):
+                ext[o + a] += jac[0, a] * f[0] + jac[1, a] * f[1]
+            _add_hessian_product(maps, k, qb, f, -cq, mat, fpos)
+        elif ke == GENERALIZED_FORCE:           # Q = g F_c(t)
+            val = trow[ints[i0]]
+            for t in range(i0 + 1, i1):
+                ext[ints[t]] += fl[f0 + t - i0 - 1] * val
+        elif ke == ROW_DAMPER:                  # Q = −c (g·v) g
+            c, rate = fl[f0], 0.0
+            for t in range(i0, i1):
+                rate += fl[f0 + 1 + t - i0] * v[ints[t]]
+            for a in range(i0, i1):
+                ia, ga = ints[a], fl[f0 + 1 + a - i0]
+                ext[ia] -= c * rate * ga
+                if fpos[ia] < 0:
+                    continue
+                for b in range(i0, i1):
+                    jb = ints[b]
+                    if fpos[jb] >= 0:
+                        mat[fpos[ia], fpos[jb]] += cv * c * ga * fl[f0 + 1 + b - i0] * dz[jb]
+        elif ke == TWO_POINT_DAMPER:
+            # Q = −c (u·w) J_dᵀ u, u = d/l, w = J_d v; ∂Q/∂q = −c (J_dᵀu ⊗ ∂(u·w)/∂q + (u·w)(∂(J_dᵀ u)/∂q|_u
+            # + J_dᵀ ∂u/∂q)), ∂u/∂q = (I − u uᵀ) J_d / l, ∂(u·w)/∂q = wᵀ ∂u/∂q + uᵀ ∂(J_d v)/∂q
+            c = fl[f0]
+            dx, dy = _pair_distance(maps, ints, fl, i0, f0 + 1, q, rv)
+            ln = np.hypot(dx, dy)
+            if ln == 0.0:                       # the direction is undefined: the Python step raises
+                ext[0] = np.nan
+                return
+            ux, uy = dx / ln, dy / ln
+            ns = _pair_matrix(maps, ints, i0, q, q, v, 0, jac, jd)
+            _pair_matrix(maps, ints, i0, q, q, v, 2, jac, vj)
+            wx, wy = 0.0, 0.0
+            for a in range(ns):
+                va = v[_slot(maps, ints, i0, a)]
+                wx += jd[0, a] * va
+                wy += jd[1, a] * va
+            rate = ux * wx + uy * wy
+            jtu, drate = tmp[0], tmp[1]
+            for a in range(ns):
+                jtu[a] = jd[0, a] * ux + jd[1, a] * uy
+                # wᵀ (I − u uᵀ) J_d / l = (w − (u·w) u)ᵀ J_d / l
+                drate[a] = ((wx - rate * ux) * jd[0, a] + (wy - rate * uy) * jd[1, a]) / ln \
+                    + ux * vj[0, a] + uy * vj[1, a]
+            for a in range(ns):
+                ia = _slot(maps, ints, i0, a)
+                ext[ia] -= c * rate * jtu[a]
+                if fpos[ia] < 0:
+                    continue
+                for b in range(ns):
+                    jb = _slot(maps, ints, i0, b)
+                    if fpos[jb] < 0:
+                        continue
+                    # J_dᵀ ∂u/∂q = J_dᵀ (I − u uᵀ) J_d / l
+                    jdu = (jd[0, a] * jd[0, b] + jd[1, a] * jd[1, b] - jtu[a] * jtu[b]) / ln
+                    fq = -c * (jtu[a] * drate[b] + rate * jdu)
+                    fv = -c * jtu[a] * jtu[b]
+                    mat[fpos[ia], fpos[jb]] -= cq * fq + cv * fv * dz[jb]
+            for side in range(2):               # −c (u·w) ∂(J_dᵀ u)/∂q at fixed u
+                kk = ints[i0 + side]
+                if kk < 0:
+                    break
+                sign = 1.0 if side == 0 else -1.0
+                o, nb = maps[1][kk], maps[2][kk]
+                f[0], f[1] = sign * ux, sign * uy
+                _add_hessian_product(maps, kk, q[o:o + nb], f, cq * c * rate, mat, fpos)
+
+
+@numba.njit(cache=True, _nrt=False)
+def _add_loads_mid(maps, loads, q0, dq, z, dz, trow, h, ext, mat, fpos, ws):
+    """:func:`_add_loads` at the energy-momentum step's mid-point (q0 + Δq/2, z/Δt)."""
+    if loads is None:
+        return
+    qm, vm = ws[2][_QM], ws[2][_VM]
+    for i in range(q0.size):
+        qm[i] = q0[i] + 0.5 * dq[i]
+        vm[i] = z[i] / h
+    _add_loads(maps, loads, qm, vm, trow, 0.5 * h, 1.0, dz, ext, mat, fpos, ws)
+
+
+@numba.njit(cache=True, _nrt=False)
+def _element_potential(maps, loads, q, rv):
+    """V(q) of the conservative force elements, J."""
+    if loads is None:
+        return 0.0
+    kind, ptr, ints, fl = loads
+    pot = 0.0
+    for e in range(kind.size):
+        i0, f0, i1 = ptr[e, 0], ptr[e, 1], ptr[e + 1, 0]
+        if kind[e] == COORD_SPRING:
+            pot += 0.5 * fl[f0] * q[ints[i0]] ** ints[i0 + 1]
+        elif kind[e] == ROW_SPRING:
+            s = fl[f0 + 1]
+            for t in range(i0, i1):
+                s += fl[f0 + 2 + t - i0] * q[ints[t]]
+            pot += 0.5 * fl[f0] * s * s
+        elif kind[e] == TWO_POINT_SPRING:
+            dx, dy = _pair_distance(maps, ints, fl, i0, f0 + 2, q, rv)
+            pot += 0.5 * fl[f0] * (np.hypot(dx, dy) - fl[f0 + 1]) ** 2
+    return pot
 
 
 @numba.njit(cache=True)
@@ -1000,25 +1424,10 @@ def _evaluate(system, x):
     gp[:] = 0.0
     floor[:] = 0.0
     _add_frame_terms(frames, frame_off, strain[3], q0, q1, v0, v1, h, p1, gk, gp, floor, mat)
-    _add_springs(loads, q0, q1, h, gp, floor, mat, fpos)
     if not _add_strain_terms(strains, strain_off, strain[4], q0, q1, h, gp, floor, mat):
         ws[8][0] = 1
         return np.nan
-    gmaps, gvec = gravity
-    dk = ws[7][1]
-    for i in range(gmaps.size):
-        k = gmaps[i]
-        o, nb = maps[1][k], maps[2][k]
-        if maps[0][k] == LINEAR:          # constant gradient −gᵀΓ, no tangent, no floor
-            for j in range(nb):
-                gp[o + j] -= gvec[i, 0] * maps[6][maps[7][k] + j] + gvec[i, 1] * maps[6][maps[7][k] + nb + j]
-            continue
-        qb0, qb1 = q0[o:o + nb], q1[o:o + nb]
-        _dgrad_into(maps, k, qb0, qb1, dk)
-        f[0], f[1] = -gvec[i, 0], -gvec[i, 1]
-        for j in range(nb):
-            gp[o + j] += f[0] * dk[0, j] + f[1] * dk[1, j]
-        _add_dgrad_jacobian(maps, k, qb0, qb1, f, h, mat, fpos, floor, ws[7][2])
+    _add_conservative(maps, gravity, loads, q0, q1, h, gp, floor, mat, fpos, ws)
     for i in range(n):                  # the discrete-gradient forces (Dᵀμ added below)
         r[i] = h * gp[i] - h * gk[i]
     scale = max(max_abs(p1), p0_inf)
@@ -1050,7 +1459,7 @@ def _evaluate(system, x):
             if jb >= 0:
                 mat[ia, jb] += (2.0 / h) * dat[t] * dz[idx[t]]
     ext[:] = 0.0
-    _add_loads(maps, loads, q0, dq, trow, h, ext, mat, fpos, ws[7][0], ws[6][0], ws[7][2][0])
+    _add_loads_mid(maps, loads, q0, dq, z, dz, trow, h, ext, mat, fpos, ws)
     scale = max(scale, h * max_abs(ext))
     for i in range(n):
         r[i] = (p1[i] - p0[i]) + r[i] - h * ext[i]
@@ -1112,10 +1521,7 @@ def _derived(packed, q, v, p, rv):
     """(T, V, p_x, p_y, L about the origin) of the scene at (q, v) with momentum p (``rv``: a 2-vector to
     work in)."""
     mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain, plan = packed
-    pot = _strain_energy(frames, frame_off, strain[0], strain[1], q)
-    spr_idx, spr_k, spr_p = loads[0], loads[1], loads[2]
-    for j in range(spr_idx.size):
-        pot += 0.5 * spr_k[j] * q[spr_idx[j]] ** spr_p[j]
+    pot = _strain_energy(frames, frame_off, strain[0], strain[1], q) + _element_potential(maps, loads, q, rv)
     gmaps, gvec = gravity
     for i in range(gmaps.size):
         k = gmaps[i]
@@ -1449,7 +1855,7 @@ def _velocity_jacobian_into(maps, k, q, v, out):
 def _constraint_terms_at(maps, constraints, q1, v1, mu, trow, mat, fpos, ws, cv):
     """Φ(q1, t1), Φ_t and Φ_q(q1) into the workspace, ∂(Φ_qᵀ μ)/∂q1 added to ``mat`` and ∂(Φ_q v1)/∂q1 into
     ``cv`` (m × n). ``trow``: the time table's row at t1 (drivers' x(t1), ẋ(t1))."""
-    kind, row, t0, term_map, term_sign, const, length, m, _, l0, lin_idx, lin_coef, nrm, law = constraints
+    kind, row, t0, term_map, term_sign, const, length, m, _, l0, lin_idx, lin_coef, nrm, law, _ = constraints
     phi, phi_t, cq = ws[3][0], ws[3][1], ws[4]
     f, acc, rv, jac, vj = ws[6][0], ws[6][1], ws[6][2], ws[7][0], ws[7][1]
     nb_, off_ = maps[2], maps[1]
@@ -1489,6 +1895,8 @@ def _constraint_terms_at(maps, constraints, q1, v1, mu, trow, mat, fpos, ws, cv)
                 phi[r0] = nrm[i, 0] * acc[0] + nrm[i, 1] * acc[1]
             else:
                 phi[r0], phi[r0 + 1] = acc[0], acc[1]
+        elif kind[i] == ROTATED:                  # after the loop (_add_rotated_rows)
+            continue
         elif kind[i] == LINEAR_ROW:               # g · q + c − x(t1): Φ_q = g
             val = const[i, 0]
             for t in range(l0[i], l0[i + 1]):
@@ -1521,7 +1929,7 @@ def _constraint_terms_at(maps, constraints, q1, v1, mu, trow, mat, fpos, ws, cv)
                     jb = fpos[o + j]
                     if jb >= 0:
                         mat[ia, jb] += mu[r0] * (jac[0, a] * jac[0, j] + jac[1, a] * jac[1, j])
-
+    _add_rotated_rows(maps, constraints, constraints[14], q1, q1, v1, mu, 2.0, cq, cq[:0], cv, mat, fpos, ws)
 
 @numba.njit(cache=True)
 def _add_strain_potential(strains, strain_off, strain_pos, q1, h, grad, mat):
@@ -1549,49 +1957,6 @@ def _add_strain_potential(strains, strain_off, strain_pos, q1, h, grad, mat):
             if k >= 0:
                 flat[k] += 2.0 * h * data[t]
     return True
-
-
-@numba.njit(cache=True, _nrt=False)
-def _add_conservative_at(maps, gravity, loads, q1, h, grad, mat, fpos, jac, f):
-    """∇V(q1) of gravity and the coordinate springs into ``grad``, h ∇²V(q1) into ``mat``."""
-    spr_idx, spr_k, spr_p = loads[0], loads[1], loads[2]
-    for j in range(spr_idx.size):           # V = ½ k u^p
-        i, p = spr_idx[j], spr_p[j]
-        u = q1[i]
-        grad[i] += 0.5 * spr_k[j] * p * u ** (p - 1)
-        ia = fpos[i]
-        if ia >= 0 and p >= 2:
-            mat[ia, ia] += h * 0.5 * spr_k[j] * p * (p - 1) * u ** (p - 2)
-    gmaps, gvec = gravity
-    for i in range(gmaps.size):             # V = −g · ∫ r dm: ∇V = −Jᵀ g, ∇²V = −∂(Jᵀ g)/∂q
-        k = gmaps[i]
-        o, nb = maps[1][k], maps[2][k]
-        qb = q1[o:o + nb]
-        _jacobian_into(maps, k, qb, jac)
-        for j in range(nb):
-            grad[o + j] -= gvec[i, 0] * jac[0, j] + gvec[i, 1] * jac[1, j]
-        f[0], f[1] = -gvec[i, 0], -gvec[i, 1]
-        _add_hessian_product(maps, k, qb, f, h, mat, fpos)
-
-
-@numba.njit(cache=True, _nrt=False)
-def _loads_at(maps, loads, q1, trow, h, ext, mat, fpos, jac, f):
-    """The loads at the step's end: Q(q1, t1) into ``ext``; −h ∂Q/∂q into ``mat`` unless h = 0."""
-    pf_map, pf_col, gf_ptr, gf_idx, gf_coef, gf_col = loads[3], loads[4], loads[5], loads[6], loads[7], loads[8]
-    for j in range(pf_map.size):
-        k = pf_map[j]
-        o, nb = maps[1][k], maps[2][k]
-        qb = q1[o:o + nb]
-        _jacobian_into(maps, k, qb, jac)
-        f[0], f[1] = trow[pf_col[j]], trow[pf_col[j] + 1]
-        for a in range(nb):
-            ext[o + a] += jac[0, a] * f[0] + jac[1, a] * f[1]
-        if h != 0.0:
-            _add_hessian_product(maps, k, qb, f, -h, mat, fpos)
-    for j in range(gf_col.size):
-        val = trow[gf_col[j]]
-        for t in range(gf_ptr[j], gf_ptr[j + 1]):
-            ext[gf_idx[t]] += gf_coef[t] * val
 
 
 @numba.njit(cache=True)
@@ -1673,10 +2038,10 @@ def _evaluate_newmark(system, x):
     if not _add_strain_potential(strain[0], strain[1], strain[4], q1, h, grad, mat):
         ws[8][0] = 1                    # a folded element: the step goes to Python
         return np.nan
-    _add_conservative_at(maps, gravity, loads, q1, h, grad, mat, fpos, ws[7][0], ws[6][0])
+    _add_conservative(maps, gravity, loads, q1, q1, 2.0 * h, grad, ws[0][:0], mat, fpos, ws)
     scale = max(max_abs(inertia), max_abs(grad), c_a * max_abs(mterms), max_abs(qv))
     ext[:] = 0.0
-    _loads_at(maps, loads, q1, trow, h, ext, mat, fpos, ws[7][0], ws[6][0])
+    _add_loads(maps, loads, q1, v1, trow, h, h * c_v, wn[_DZ], ext, mat, fpos, ws)
     scale = h * max(scale, max_abs(ext))
     for i in range(n):
         r[i] = h * (inertia[i] + grad[i] - qv[i] - ext[i])
@@ -1754,7 +2119,7 @@ def _run_newmark(packed, q_start, v_start, acc_start, pseudo_start, t, hs, qp, v
     lam, reaction = lam_start.copy(), reaction_start.copy()
     # the loads and Φ_t at the chunk's start (the work of a step uses both ends)
     ext0 = np.zeros(n)
-    _loads_at(maps, loads, q, table[0], 0.0, ext0, ws[1], fpos, ws[7][0], ws[6][0])
+    _add_loads(maps, loads, q, v, table[0], 0.0, 0.0, wn[_DZ], ext0, ws[1], fpos, ws)
     phit0 = np.zeros(m)
     if rheonomic:
         _constraint_terms_at(maps, constraints, q, v, np.zeros(m), table[0], ws[1], fpos, ws, cv)

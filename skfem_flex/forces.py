@@ -64,7 +64,11 @@ class ForceElement:
         ``("gravity", g)``; ``("coordinate spring", i, k, p)`` for V = ½ k q_i^p (i over the element's
         own coordinates); ``("point force", point, F)`` for Q = r_qᵀ F(t) (F in the global frame);
         ``("generalized force", G, F)`` for Q = Gᵀ F(t) (G constant, (k, the element's coordinates),
-        F(t) of k values).
+        F(t) of k values); ``("follower force", point, g, c, F)`` for Q = r_qᵀ A(g · q + c) F(t);
+        ``("quadratic spring", g, c, k)`` for V = ½ k (g · q + c)²; ``("linear damper", g, c)`` for
+        Q = −c (g · v) g; ``("two-point spring", a, b, anchor, k, l₀)`` for V = ½ k (|r_a − r_b| − l₀)²
+        and ``("two-point damper", a, b, anchor, c)`` for the damper along r_a − r_b (b None: the
+        ground point ``anchor``). Vectors g are over the element's own coordinates.
         """
         return None
 
@@ -417,6 +421,11 @@ class LinearSpring(_TwoPoint):
             h = h + (self.k * lr / (2.0 * l1 * ssum ** 2)) * np.outer(ds, self._s.jacobian(q1)[0])
         return g, h
 
+    def compiled_form(self):
+        if not keeps_methods(self, LinearSpring, CONSERVATIVE + ("length", "_dvds")):
+            return None
+        return "two-point spring", self.points[0], self.points[1], self.anchor, self.k, self.rest_length
+
 
 class LinearDamper(_TwoPoint):
     """Linear damper along the line of two body points (or a body point and the ground).
@@ -464,6 +473,11 @@ class LinearDamper(_TwoPoint):
         fq = -self.c * (np.outer(jtu, drate) + rate * (self._d.hessian(q, u) + jd.T @ du))
         fv = -self.c * np.outer(jtu, jtu)
         return f, fq, fv
+
+    def compiled_form(self):
+        if not keeps_methods(self, LinearDamper, ("generalized_force",)):
+            return None
+        return "two-point damper", self.points[0], self.points[1], self.anchor, self.c
 
 
 class _Rotational(ForceElement):
@@ -535,6 +549,13 @@ class RotationalSpring(_Rotational):
         mean = 0.5 * (self.relative_angle(q0) + self.relative_angle(q1))
         return self.k * (mean - self.rest_angle) * self.grad, 0.5 * self.k * np.outer(self.grad, self.grad)
 
+    def compiled_form(self):
+        # the angles are linear in q: ϑ_a − ϑ_b − ϑ₀ = g · q + c with c its value at q = 0
+        if not keeps_methods(self, RotationalSpring, CONSERVATIVE + ("relative_angle",)):
+            return None
+        return ("quadratic spring", self.grad.copy(), self.relative_angle(np.zeros(self.n)) - self.rest_angle,
+                self.k)
+
 
 class RotationalDamper(_Rotational):
     """Torsion damper: moment −c (ϑ̇_a − ϑ̇_b) on point a (the opposite on b).
@@ -559,6 +580,11 @@ class RotationalDamper(_Rotational):
     def generalized_force(self, q, v, t):
         rate = float(self.grad @ v)
         return -self.c * rate * self.grad, None, -self.c * np.outer(self.grad, self.grad)
+
+    def compiled_form(self):
+        if not keeps_methods(self, RotationalDamper, ("generalized_force",)):
+            return None
+        return "linear damper", self.grad.copy(), self.c
 
 
 class PointForce(ForceElement):
@@ -610,8 +636,11 @@ class PointForce(ForceElement):
         return jac.T @ f, fq, None
 
     def compiled_form(self):
-        if self.follower or not keeps_methods(self, PointForce, ("generalized_force", "global_force")):
+        if not keeps_methods(self, PointForce, ("generalized_force", "global_force")):
             return None
+        if self.follower:
+            n = self.layout.n
+            return "follower force", self.point, self._angle.grad.copy(), float(self._angle.fun(np.zeros(n))), self.force
         return "point force", self.point, self.force
 
 

@@ -173,7 +173,9 @@ class Term:
 
         ``("constant", c)``; ``("points", [(point, sign), ...], c)`` for Σ sign · r(point) − c;
         ``("linear", g, c)`` for g · q + c (g over the local coordinates);
-        ``("projected", nrm, points)`` for nrm · (a ``"points"`` form), a constant normal.
+        ``("projected", nrm, points)`` for nrm · (a ``"points"`` form), a constant normal;
+        ``("rotated", g, c, n_loc)`` for A(g · q + c) n_loc; ``("rotated projected", g, c, n_loc, points)``
+        for that normal times a ``"points"`` form.
         """
         return None
 
@@ -483,6 +485,10 @@ class Rotated(Term):
         half, am = self._half(q0, q1)
         return np.outer(sinc(half) * (am @ (E_MATRIX @ self.local)), self.g)
 
+    def compiled_form(self):
+        # the angle is affine in q: ϑ = g · q + ϑ(0)
+        return "rotated", self.g.copy(), float(self.angle.value(np.zeros(self.n))[0]), self.local.copy()
+
     def dgrad_jacobian(self, q0, q1, f):
         half, am = self._half(q0, q1)
         c = 0.5 * (dsinc(half) * float(f @ (am @ (E_MATRIX @ self.local))) - sinc(half) * float(f @ (am @ self.local)))
@@ -533,9 +539,13 @@ class Dot(Term):
         return f[0] * out
 
     def compiled_form(self):
-        # a constant normal on a point difference (a slider on a ground line); others run in Python
+        # a constant or turning normal on a point difference (a slider on a ground line or on a body)
         for a, b in ((self.u, self.v), (self.v, self.u)):
             fa, fb = a.compiled_form(), b.compiled_form()
-            if fa is not None and fb is not None and fa[0] == "constant" and fb[0] == "points" and fa[1].size == 2:
+            if fa is None or fb is None or fb[0] != "points":
+                continue
+            if fa[0] == "constant" and fa[1].size == 2:
                 return "projected", fa[1], fb
+            if fa[0] == "rotated":
+                return ("rotated projected",) + fa[1:] + (fb,)
         return None
