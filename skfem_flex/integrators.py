@@ -34,7 +34,7 @@ itself, so that v_{n+1} keeps its digits as q grows; see
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields
 
 import numpy as np
 import scipy.sparse as sps
@@ -45,7 +45,7 @@ from .newton import NewtonSettings, newton_solve, predicted_increment, roundoff_
 from .rotations import MAX_INCREMENT, cayley, cayley_derivative, cayley_ratio, cayley_ratio_derivative
 from .scene import add_matrices
 
-__all__ = ["SimulationError", "ConvergenceError", "NewtonSettings", "State", "Integrator", "newton_solve", "linear_solve",
+__all__ = ["SimulationError", "ConvergenceError", "NewtonSettings", "State", "NewmarkState", "Integrator", "newton_solve", "linear_solve",
            "EnergyMomentum", "predictor_acceleration", "Newmark", "Trapezoidal", "GeneralizedAlpha", "make_integrator", "INTEGRATORS"]
 
 _TINY = 1e-300
@@ -53,7 +53,7 @@ _TINY = 1e-300
 
 @dataclass
 class State:
-    """Integrator state at one instant.
+    """Integrator state at one instant: what every scheme carries (:class:`EnergyMomentum`'s state).
 
     Attributes
     ----------
@@ -62,10 +62,8 @@ class State:
     q, v : ndarray
         Coordinates and velocities (global vectors).
     acc : ndarray
-        Acceleration q̈: consistent at the start, then the Newmark schemes' q̈_{n+1} and the
-        energy-momentum step's mean acceleration (v_{n+1} − v_n)/Δt (its Newton start).
-    pseudo : ndarray
-        Generalized-α's algorithmic acceleration a.
+        Acceleration q̈: consistent at the start, then the energy-momentum step's mean acceleration
+        (v_{n+1} − v_n)/Δt (its Newton start) or the Newmark schemes' q̈_{n+1}.
     lam : ndarray
         Lagrange multipliers λ (for the energy scheme the mean over the last step).
     prescribed_force : ndarray
@@ -76,9 +74,22 @@ class State:
     q: np.ndarray
     v: np.ndarray
     acc: np.ndarray = None
-    pseudo: np.ndarray = None
     lam: np.ndarray = field(default_factory=lambda: np.zeros(0))
     prescribed_force: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+
+@dataclass
+class NewmarkState(State):
+    """The state of the Newmark family (:class:`Newmark`, :class:`Trapezoidal`, :class:`GeneralizedAlpha`):
+    :class:`State` and the algorithmic acceleration.
+
+    Attributes
+    ----------
+    pseudo : ndarray
+        Generalized-α's algorithmic acceleration a (m/s², rad/s²); q̈ itself for α_m = α_f = 0.
+    """
+
+    pseudo: np.ndarray = None
 
 
 @dataclass
@@ -145,6 +156,9 @@ class Integrator:
 
     name = "integrator"
 
+    #: the dataclass of this scheme's state
+    state_type = State
+
     def __init__(self, newton=None):
         self.newton = NewtonSettings() if newton is None else newton
         if not isinstance(self.newton, NewtonSettings):
@@ -194,7 +208,14 @@ class Integrator:
             if m:
                 full = full + (cq.T @ lam if not sps.issparse(cq) else cq.T @ lam)
             reaction = full[pres]
-        return replace(state, acc=acc, pseudo=acc.copy(), lam=lam, prescribed_force=reaction)
+        return self.make_state(state.t, state.q, state.v, acc=acc, pseudo=acc.copy(), lam=lam,
+                               prescribed_force=reaction)
+
+    def make_state(self, t, q, v, **values):
+        """This scheme's state (:attr:`state_type`) at time ``t`` (s) from (q, v) and the named values it
+        carries; values it does not carry (``pseudo`` for energy-momentum) are left out."""
+        names = {f.name for f in fields(self.state_type)}
+        return self.state_type(float(t), q, v, **{k: x for k, x in values.items() if k in names})
 
     # ---------------------------------------------------------------- Newton
     def _newton(self, fun, x0, where, x_scale=0.0):
@@ -396,6 +417,7 @@ class Newmark(Integrator):
     """
 
     name = "newmark"
+    state_type = NewmarkState
 
     def __init__(self, alpha_m=0.0, alpha_f=0.0, beta=0.25, gamma=0.5, newton=None, constraint_level="position"):
         super().__init__(newton)
@@ -407,6 +429,9 @@ class Newmark(Integrator):
     def step(self, scene, state, dt):
         am, af, beta, gamma = self.alpha_m, self.alpha_f, self.beta, self.gamma
         q0, v0, t0 = state.q, state.v, state.t
+        if getattr(state, "pseudo", None) is None:
+            raise ValueError(f"a {self.name} step needs a NewmarkState with its algorithmic acceleration (from "
+                             f"start()), got {type(state).__name__}")
         a0, x0acc = state.pseudo, state.acc
         t1 = t0 + dt
         free, pres = scene.free_index, scene.prescribed_index
@@ -502,7 +527,7 @@ class Newmark(Integrator):
                 phit0 = scene.constraint_time_derivative(q0, t0)
                 lam_prev = state.lam if state.lam.size == m else lam1
                 work += 0.5 * dt * float(lam_prev @ phit0 + lam1 @ phit1)
-        new = State(t1, q1, v1, acc=acc1, pseudo=a1, lam=lam1, prescribed_force=reaction)
+        new = NewmarkState(t1, q1, v1, acc=acc1, pseudo=a1, lam=lam1, prescribed_force=reaction)
         return new, StepInfo(its, work, vres)
 
 

@@ -296,8 +296,9 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
     else:
         fs = prior.final_state
         # acc and pseudo are saved empty for the schemes that carry none
-        state = State(float(fs["t"]), *(np.array(fs[k], dtype=float) if np.size(fs.get(k, ())) or k in ("lam", "prescribed_force")
-                                         else None for k in ("q", "v", "acc", "pseudo", "lam", "prescribed_force")))
+        state = scheme.make_state(float(fs["t"]), **{
+            k: np.array(fs[k], dtype=float) if np.size(fs.get(k, ())) or k in ("lam", "prescribed_force") else None
+            for k in ("q", "v", "acc", "pseudo", "lam", "prescribed_force")})
         step, work, halvings = int(fs["step"]), float(fs["work"]), int(fs["halvings"])
         rec.prefill(prior)
         for s in sinks:
@@ -340,7 +341,7 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
             bar.update(n)
 
     def result(**extra):
-        fs = {k: np.zeros(0) if getattr(state, k) is None else np.array(getattr(state, k), dtype=float)
+        fs = {k: np.zeros(0) if getattr(state, k, None) is None else np.array(getattr(state, k), dtype=float)
               for k in ("q", "v", "acc", "pseudo", "lam", "prescribed_force")}
         fs.update(t=np.float64(state.t), work=np.float64(work), step=np.int64(step), halvings=np.int64(halvings))
         if not resumable:
@@ -383,8 +384,8 @@ def simulate(scene, t_end, dt, integrator="energy-momentum", rho_inf=None, newto
                         rec.record_block(_first_records(recs, bad + 1))
                         guard.check_energy(float(recs["t"][bad]), *rec.last_energy())
                 if out["done"]:
-                    state = State(out["t"], out["q"], out["v"], acc=out["acc"], pseudo=out.get("pseudo"),
-                                  lam=out["lam"], prescribed_force=out["reaction"])
+                    state = scheme.make_state(out["t"], out["q"], out["v"], acc=out["acc"], pseudo=out.get("pseudo"),
+                                              lam=out["lam"], prescribed_force=out["reaction"])
                     work = out["work"]
                     step += out["done"]
                     advanced(out["done"], out["iterations"])

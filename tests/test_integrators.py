@@ -263,3 +263,22 @@ def test_predictor_saves_a_newton_iteration_on_the_pendulum(compiled):
     assert res.newton_iterations[1:].mean() <= 2.1
     e = res.total_energy - res.external_work
     assert np.abs(e - e[0]).max() <= 1e-10 * abs(res.kinetic).max()
+
+
+def test_each_scheme_carries_its_own_state():
+    """Energy-momentum carries State (no algorithmic acceleration), the Newmark family NewmarkState with
+    generalized-α's a (equal to q̈ at the start); a Newmark step refuses a state without it."""
+    import skfem_flex as sf
+    from skfem_flex.integrators import NewmarkState, State
+    scene = sf.scenes.get("pendulum")()
+    q, v = scene.initial_state()
+    em = sf.EnergyMomentum().start(scene, State(0.0, q, v))
+    assert type(em) is State and not hasattr(em, "pseudo")
+    for scheme in (sf.GeneralizedAlpha(rho_inf=0.8), sf.Trapezoidal()):
+        s0 = scheme.start(scene, State(0.0, q, v))
+        assert type(s0) is NewmarkState and np.array_equal(s0.pseudo, s0.acc)
+        s1, _ = scheme.step(scene, s0, 1e-3)
+        assert type(s1) is NewmarkState
+        with pytest.raises(ValueError, match="NewmarkState"):
+            scheme.step(scene, em, 1e-3)
+    assert np.array_equal(em.acc, s0.acc)             # the same consistent start
