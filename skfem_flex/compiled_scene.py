@@ -1,13 +1,14 @@
-r"""Compiled (Numba) time loops for small scenes: bodies, joints, drivers, springs and loads.
+r"""Compiled (Numba) time loops for scenes of bodies, joints, drivers, springs, dampers and loads.
 
 :mod:`skfem_flex.compiled_loop` runs one floating-frame body without joints or loads. This module
 runs the energy-momentum scheme and the Newmark family (trapezoidal, generalized-α; the section "the
-Newmark step" at the end) for the small (dense) scenes beyond that: point masses and rigid
-bodies, floating-frame bodies (a :class:`~skfem_flex.bodies.FloatingBeam` or a reduced
-:class:`~skfem_flex.bodies.ModalBody`), geometrically exact beams (Cayley rotation rates), gravity,
-coordinate springs, global point forces and moments and the exact beam's loads, pins, revolute
-joints, welds, distance constraints, drivers, sliders and prismatic joints on ground lines,
-prescribed coordinates — every catalogue mechanism. A scene is *packed* once into flat arrays
+Newmark step" at the end) for every other scene of up to :data:`SIZE_LIMIT` coordinates: point masses
+and rigid bodies, floating-frame bodies (a :class:`~skfem_flex.bodies.FloatingBeam` or a
+:class:`~skfem_flex.bodies.ModalBody`, reduced or not), geometrically exact beams (Cayley rotation
+rates), gravity, coordinate, two-point and torsion springs, two-point and torsion dampers, global and
+follower point forces, moments and the exact beam's loads, pins, revolute joints, welds, distance
+constraints, drivers, sliders and prismatic joints on ground lines and on moving bodies, prescribed
+coordinates — every catalogue mechanism. A scene is *packed* once into flat arrays
 through public interfaces of its parts (no type checks):
 
 * a body with constant mass gives its mass matrix and the first moment of its mass
@@ -45,7 +46,7 @@ import numpy as np
 import scipy.sparse as sps
 
 from .bodies import exact_kernel
-from .bodies.base import to_dense
+from .bodies.base import COMPILED_SIZE_LIMIT, to_dense
 from .bodies.floating_kernel import energy_momentum_terms, momentum, newmark_terms, potential_energy, sinc_half
 from .compiled_loop import chunk_records, chunk_schedule, is_recorded, record_buffers, record_count, record_step
 from .integrators import EnergyMomentum, GeneralizedAlpha, Newmark, Trapezoidal, predictor_acceleration
@@ -61,6 +62,10 @@ __all__ = ["run_loop", "eligible", "run_chunk", "chunk_steps", "pack", "pack_map
 _TINY = 1e-300
 #: status of :func:`run_chunk` when every step was done
 OK = CONVERGED
+#: most coordinates of a scene this loop runs (its Newton matrix is stored dense; larger scenes run on the
+#: Python path with sparse matrices, a single floating-frame body under energy-momentum on the banded
+#: :mod:`skfem_flex.compiled_loop`)
+SIZE_LIMIT = COMPILED_SIZE_LIMIT
 #: kinds of position maps
 LINEAR, FRAME = 0, 1
 #: kinds of constraint blocks: Σ sign r(point) − c (2 rows), its projection on a constant normal
@@ -385,7 +390,7 @@ def _packed(scene):
 
 
 def _pack(scene):
-    if type(scene) is not Scene or not scene.dense:
+    if type(scene) is not Scene or scene.n > SIZE_LIMIT:
         return None, (), ()
     n = scene.n
     store = {k: [] for k in ("kind", "off", "nb", "m_r", "c", "y0", "g", "gptr", "y", "yptr")}
@@ -758,7 +763,7 @@ NEWMARK_SCHEMES = (Newmark, Trapezoidal, GeneralizedAlpha)
 def eligible(scene, scheme):
     """True if ``simulate`` may run ``scene`` with ``scheme`` through this loop: the
     :class:`~skfem_flex.integrators.EnergyMomentum` class itself or one of :data:`NEWMARK_SCHEMES`, on a
-    plain dense scene (at most ``DENSE_LIMIT`` coordinates) whose bodies, force elements, constraints and
+    plain scene of at most :data:`SIZE_LIMIT` coordinates whose bodies, force elements, constraints and
     joint points all have compiled forms (module docstring)."""
     if type(scheme) is not EnergyMomentum and type(scheme) not in NEWMARK_SCHEMES:
         return False

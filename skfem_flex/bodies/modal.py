@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sps
 
-from .base import DENSE_LIMIT, BodyGeometry, check_finite_vector
+from .base import COMPILED_SIZE_LIMIT, BodyGeometry, check_finite_vector
 from . import floating_kernel as fk
 from .ffr import FloatingFrame, FramePoint
 from .modal_kernel import pack_quartic
@@ -267,12 +267,12 @@ class ModalBody(FloatingFrame):
     def compiled_kernel_data(self):
         """The packed arrays on which the compiled floating-frame kernels (:mod:`.floating_kernel`, with the
         quartic energy of :mod:`.modal_kernel`) evaluate this body; built on the first call. None above
-        ``DENSE_LIMIT`` coordinates (an unreduced body: its dense n × n tangent is no band).
+        ``COMPILED_SIZE_LIMIT`` coordinates (an unreduced body: its dense n × n tangent is no band).
 
         The tangent goes into the full n × n pattern (the data reshapes to the dense matrix). This
         body's own methods stay in numpy: they are the kernels' reference (tests/test_modal_kernel.py),
         and the compiled energy-momentum loop (:mod:`skfem_flex.compiled_loop`) uses the kernels."""
-        if self.n_dofs > DENSE_LIMIT:
+        if self.n_dofs > COMPILED_SIZE_LIMIT:
             return None
         if self._kd is None:
             n, nf = self.n_dofs, self.n_elastic
