@@ -483,6 +483,20 @@ def test_subclasses_that_redefine_the_equations_run_in_python():
     assert not compiled_scene.eligible(sf.Scene([bar], constraints=[FastDriver(bar, law, coordinate="theta")]), em)
     assert compiled_scene.eligible(sf.Scene([bar], constraints=[sf.Driver(bar, law, coordinate="theta")]), em)
 
+    class SoftSpring(sf.LinearSpring):
+        def potential_energy(self, q):
+            return 0.5 * super().potential_energy(q)
+
+    class ViscousHinge(sf.RotationalDamper):
+        def generalized_force(self, q, v, t):
+            f, fq, fv = super().generalized_force(q, v, t)
+            return 2.0 * f, fq, 2.0 * fv
+    for spring, damper in ((sf.LinearSpring, sf.RotationalDamper), (SoftSpring, sf.RotationalDamper),
+                           (sf.LinearSpring, ViscousHinge)):
+        scene = sf.Scene([bar], forces=[spring(bar.point((0.5, 0.0)), (1.0, 1.0), 10.0),
+                                        damper(bar.point(), damping=0.1)])
+        assert compiled_scene.eligible(scene, em) == (spring is sf.LinearSpring and damper is sf.RotationalDamper)
+
 
 def test_block_energy_guard_stops_where_the_record_by_record_guard_does():
     """first_energy_violation on a block equals check_energy applied record by record (scale window
