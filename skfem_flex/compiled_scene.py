@@ -1158,7 +1158,8 @@ def _add_loads(maps, loads, q, v, trow, cq, cv, dz, ext, mat, fpos, ws):
     """The non-conservative force elements Q(q, v, t) into ``ext`` and −(cq ∂Q/∂q + cv ∂Q/∂v diag(dz)) into
     ``mat`` (``trow``: the time table's row at t). The energy-momentum step evaluates them at the mid-point
     (q0 + Δq/2, z/Δt) with cq = Δt/2, cv = 1, dz = dz/dΔq; the Newmark step at (q1, v1) with cq = Δt,
-    cv = Δt c_v, dz = 1. ``loads`` None (no force elements): nothing, and Numba prunes the body."""
+    cv = Δt c_v, dz = 1. ``loads`` None (no force elements): nothing, and Numba prunes the body. A damper
+    whose two points coincide sets the workspace's flag: the step goes to Python, which raises."""
     if loads is None:
         return
     kind, ptr, ints, fl = loads
@@ -1215,7 +1216,7 @@ def _add_loads(maps, loads, q, v, trow, cq, cv, dz, ext, mat, fpos, ws):
             dx, dy = _pair_distance(maps, ints, fl, i0, f0 + 1, q, rv)
             ln = np.hypot(dx, dy)
             if ln == 0.0:                       # the direction is undefined: the Python step raises
-                ext[0] = np.nan
+                ws[8][0] = 1
                 return
             ux, uy = dx / ln, dy / ln
             ns = _pair_matrix(maps, ints, i0, q, q, v, 0, jac, jd)

@@ -760,3 +760,16 @@ def test_scenes_above_the_dense_limit_compiled_equal_python(params, scheme):
         # on both paths (41 against 42 in all): positions agree to the Newton tolerance, 1.1e-10
         tol.update(q=3e-10, probes=3e-10)
     assert_same_run(a, b, tol=tol)
+
+
+def test_a_damper_whose_points_coincide_sends_the_step_to_python():
+    """The direction of a two-point damper is undefined when its points coincide: the compiled evaluation
+    flags the step (the loop hands it to Python), and the Python step raises the damper's error."""
+    scene = spring_mechanism()
+    q0, v0 = scene.initial_state()
+    q0[3:5] = (1.0, -0.4)                       # the free bar's centre on its damper's ground point
+    system, x0 = compiled_scene.newton_system(scene, q0, v0, 1e-2)
+    compiled_scene._evaluate(system, np.zeros_like(x0))
+    assert system[2][8][0] == 1
+    with pytest.raises(ValueError, match="coincide"):
+        scene.external_force(q0, v0, 0.0)
