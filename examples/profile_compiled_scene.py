@@ -1,8 +1,9 @@
 """Where a step of the compiled mechanism loop spends its time (``skfem_flex.compiled_scene``).
 
 Times, in compiled loops, one residual evaluation (with its Newton matrix), one solve of that
-matrix and one evaluation of the constraint terms for a catalogue scene at its initial state, and
-the average Newton iterations per step of a short run. Usage::
+matrix and one evaluation of the constraint terms for a catalogue scene at its initial state, the
+average Newton iterations per step of a short run, and the cost per step of the same run on the Python
+path (``compiled=False``). Usage::
 
     python examples/profile_compiled_scene.py [SCENE] [--n-elements 16] [--dt 1e-3]
 """
@@ -61,12 +62,14 @@ def main(argv=None):
     sf.simulate(scene, 5 * h, h)
     res = sf.simulate(scene, 200 * h, h, record_every=10 ** 6)
     res_all = sf.simulate(scene, 200 * h, h)
+    res_py = sf.simulate(scene, 20 * h, h, record_every=10 ** 6, compiled=False)
     print(f"{args.scene}: {n} coordinates, {m} multipliers, Newton matrix {free.size + m} × {free.size + m}")
     print(f"one residual evaluation with its Newton matrix: {1e6 * t_eval:.1f} µs")
     print(f"one solve of the Newton matrix (as the loop):   {1e6 * t_solve:.1f} µs")
     print(f"Newton iterations per step:                     {res_all.newton_iterations[1:].mean():.2f}")
     print(f"per step, nothing recorded:                     {1e6 * res.wall_time / res.steps:.1f} µs")
     print(f"per step, every step recorded:                  {1e6 * res_all.wall_time / res_all.steps:.1f} µs")
+    print(f"per step on the Python path, nothing recorded:  {1e6 * res_py.wall_time / res_py.steps:.1f} µs")
 
 
 if __name__ == "__main__":

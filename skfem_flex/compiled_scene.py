@@ -402,7 +402,7 @@ def _pack(scene):
     rng = np.random.default_rng(0)
     for b in scene.bodies:
         sl = scene.slice(b)
-        off, nb = sl.start, sl.stop - sl.start
+        off = sl.start
         kd = _call(b, "compiled_kernel_data")
         if kd is not None:
             moment = _call(b, "mass_moment_map")
@@ -1090,7 +1090,7 @@ def _add_spring_elements(maps, loads, q0, q1, th, gp, floor, mat, fpos, ws):
     jac, scratch, jd, dd = ws[7][0], ws[7][2], ws[7][3], ws[7][4]
     use_floor = floor.size > 0
     for e in range(kind.size):
-        i0, f0, i1, f1 = ptr[e, 0], ptr[e, 1], ptr[e + 1, 0], ptr[e + 1, 1]
+        i0, f0, i1 = ptr[e, 0], ptr[e, 1], ptr[e + 1, 0]
         if kind[e] == COORD_SPRING:       # V = ½ k u^p: its exact divided difference (no cancellation)
             i, p, k = ints[i0], ints[i0 + 1], fl[f0]
             u0, u1 = q0[i], q1[i]
@@ -1164,9 +1164,9 @@ def _add_loads(maps, loads, q, v, trow, cq, cv, dz, ext, mat, fpos, ws):
         return
     kind, ptr, ints, fl = loads
     f, rv = ws[6][0], ws[6][2]
-    jac, scratch, jd, vj, tmp = ws[7][0], ws[7][2], ws[7][3], ws[7][4], ws[7][5]
+    jac, jd, vj, tmp = ws[7][0], ws[7][3], ws[7][4], ws[7][5]
     for e in range(kind.size):
-        i0, f0, i1, f1 = ptr[e, 0], ptr[e, 1], ptr[e + 1, 0], ptr[e + 1, 1]
+        i0, f0, i1 = ptr[e, 0], ptr[e, 1], ptr[e + 1, 0]
         ke = kind[e]
         if ke == POINT_FORCE or ke == FOLLOWER_FORCE:   # Q = Jᵀ f, f = F(t) or A(ϑ) F(t), ϑ = g·q + c
             k, col = ints[i0], ints[i0 + 1]
@@ -1404,7 +1404,7 @@ def _evaluate(system, x):
     dq_base, dq, q1, v1, p1, r, ext, gk, gp, floor = (wn[_DQ_BASE], wn[_DQ], wn[_Q1], wn[_V1], wn[_P1], wn[_R],
                                                       wn[_EXT], wn[_GK], wn[_GP], wn[_FLOOR])
     dtmu, z, ratio, dratio, dz = wn[_DTMU], wn[_Z], wn[_RATIO], wn[_DRATIO], wn[_DZ]
-    phi, cq, d, f = ws[3][0], ws[4], ws[5], ws[6][0]
+    phi, cq, d = ws[3][0], ws[4], ws[5]
     strains, strain_off, cay = strain[0], strain[1], strain[2]
     n, nf = q0.size, free.size
     m = constraints[7]
@@ -1548,27 +1548,68 @@ def _derived(packed, q, v, p, rv):
 
 
 @numba.njit(cache=True)
+def _chunk_workspace(packed, n, nf):
+    """:func:`_workspace` of a chunk: n coordinates, nf of them free, the packed scene's multipliers and
+    largest body block."""
+    maps = packed[3]
+    nbmax = 1
+    for k in range(maps[2].size):
+        nbmax = max(nbmax, maps[2][k])
+    m = packed[5][7]
+    return _workspace(n, m, nf + m, nbmax)
+
+
+@numba.njit(cache=True)
+def _mechanism_records(packed, n, npr, n_rec):
+    """The record arrays of a chunk of n_rec records: the buffers of
+    :func:`~skfem_flex.compiled_loop.record_step`, λ, the derived values (T, V, p_x, p_y, L, ‖Φ‖∞,
+    ‖Φ_q v + Φ_t‖∞) and the probes' positions."""
+    return (record_buffers(n_rec, n, npr), np.empty((n_rec, packed[5][7])), np.empty((n_rec, 7)),
+            np.empty((n_rec, packed[6][7].size, 2)))
+
+
+@numba.njit(cache=True, _nrt=False)
+def _record_mechanism(packed, records, i_rec, t, q, v, p, work, its, reaction, lam, ws):
+    """Record i_rec of a step of either mechanism loop: state, work, iterations, reactions, λ, the derived
+    values from the step's last evaluation (Φ, Φ_q, Φ_t in the workspace) and the probes."""
+    buffers, rec_lam, rec_derived, rec_probe = records
+    maps, probe_maps = packed[3], packed[6][7]
+    phi, phi_t, cq, rv = ws[3][0], ws[3][1], ws[4], ws[6][2]
+    record_step(buffers, i_rec, t, q, v, work, its, reaction)
+    for i in range(lam.size):
+        rec_lam[i_rec, i] = lam[i]
+    tk, vk, px, py, ang = _derived(packed, q, v, p, rv)
+    rec_derived[i_rec, 0] = tk
+    rec_derived[i_rec, 1] = vk
+    rec_derived[i_rec, 2] = px
+    rec_derived[i_rec, 3] = py
+    rec_derived[i_rec, 4] = ang
+    vres = 0.0
+    for i in range(cq.shape[0]):
+        vres = max(vres, abs(_dot(cq[i], v) + phi_t[i]))
+    rec_derived[i_rec, 5] = max_abs(phi)
+    rec_derived[i_rec, 6] = vres
+    for j in range(probe_maps.size):
+        kp = probe_maps[j]
+        o = maps[1][kp]
+        _position_into(maps, kp, q[o:o + maps[2][kp]], rv)
+        rec_probe[i_rec, j, 0] = rv[0]
+        rec_probe[i_rec, j, 1] = rv[1]
+
+
+@numba.njit(cache=True)
 def _run(packed, q_start, v_start, acc_start, t, hs, qp, table, pres, free, fpos, lam_start, reaction_start, rtol,
          ctol, etol, max_iterations, line_search, work, first_step, record_every, n_steps):
     mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain, plan = packed
     n, ns, npr, m = q_start.size, hs.size, pres.size, constraints[7]
-    n_rec = record_count(first_step, ns, record_every, n_steps)
-    buffers = record_buffers(n_rec, n, npr)
-    rec_lam = np.empty((n_rec, m))
-    # T, V, p (2), L, ‖Φ‖∞, ‖Φ_q v + Φ_t‖∞
-    rec_derived = np.empty((n_rec, 7))
-    probe_maps = bodies[7]
-    rec_probe = np.empty((n_rec, probe_maps.size, 2))
+    records = _mechanism_records(packed, n, npr, record_count(first_step, ns, record_every, n_steps))
     its_total = 0
-    nbmax = 1
-    for k in range(maps[2].size):
-        nbmax = max(nbmax, maps[2][k])
     nf = free.size
-    ws = _workspace(n, m, nf + m, nbmax)
+    ws = _chunk_workspace(packed, n, nf)
     wn = ws[2]
     dq_base, cay = wn[_DQ_BASE], strain[2]
-    dq, q1, v1, p1, r, ext = wn[_DQ], wn[_Q1], wn[_V1], wn[_P1], wn[_R], wn[_EXT]
-    phi, phi_t, mu, cq, d, rv = ws[3][0], ws[3][1], ws[3][2], ws[4], ws[5], ws[6][2]
+    q1, v1, p1, r, ext = wn[_Q1], wn[_V1], wn[_P1], wn[_R], wn[_EXT]
+    mu, d = ws[3][2], ws[5]
     z, ratio = wn[_Z], wn[_RATIO]
     # the state, updated in place after each step (the caller's arrays are not touched)
     q, v, acc = q_start.copy(), v_start.copy(), acc_start.copy()
@@ -1616,8 +1657,7 @@ def _run(packed, q_start, v_start, acc_start, t, hs, qp, table, pres, free, fpos
         if status == OK and not (all_finite(q1) and all_finite(v1)):
             status = NONFINITE_RESIDUAL
         if status != OK:
-            return (status, k, t, q, v, acc, lam, reaction, work, its_total, i_rec, buffers, rec_lam, rec_derived,
-                    rec_probe)
+            return (status, k, t, q, v, acc, lam, reaction, work, its_total, i_rec) + records
         w = _dot(z, ext)
         for i in range(npr):
             reaction[i] = r[pres[i]] / h
@@ -1642,27 +1682,9 @@ def _run(packed, q_start, v_start, acc_start, t, hs, qp, table, pres, free, fpos
         its_total += its
         s = first_step + k
         if is_recorded(s, record_every, n_steps):
-            record_step(buffers, i_rec, t, q, v, work, its, reaction)
-            rec_lam[i_rec] = lam
-            tk, vk, px, py, ang = _derived(packed, q, v, p, rv)
-            rec_derived[i_rec, 0] = tk
-            rec_derived[i_rec, 1] = vk
-            rec_derived[i_rec, 2] = px
-            rec_derived[i_rec, 3] = py
-            rec_derived[i_rec, 4] = ang
-            vres = 0.0
-            for i in range(m):
-                vres = max(vres, abs(_dot(cq[i], v) + phi_t[i]))
-            rec_derived[i_rec, 5] = max_abs(phi)
-            rec_derived[i_rec, 6] = vres
-            for j in range(probe_maps.size):
-                kp = probe_maps[j]
-                o = maps[1][kp]
-                _position_into(maps, kp, q[o:o + maps[2][kp]], rv)
-                rec_probe[i_rec, j, 0] = rv[0]
-                rec_probe[i_rec, j, 1] = rv[1]
+            _record_mechanism(packed, records, i_rec, t, q, v, p, work, its, reaction, lam, ws)
             i_rec += 1
-    return OK, ns, t, q, v, acc, lam, reaction, work, its_total, i_rec, buffers, rec_lam, rec_derived, rec_probe
+    return (OK, ns, t, q, v, acc, lam, reaction, work, its_total, i_rec) + records
 
 
 def time_table(columns, t, hs, at_end=False):
@@ -1732,7 +1754,7 @@ def _system(scene, packed, columns, q0, v0, h, t, lam):
     free = scene.free_index.astype(np.int64)
     p0 = _scene_momentum(packed[0], packed[1], packed[2], q0, v0)
     trow = time_table(columns, float(t), np.array([float(h)]))[0]
-    ws = _workspace(n, m, free.size + m, max(1, int(packed[3][2].max(initial=1))))
+    ws = _chunk_workspace(packed, n, free.size)
     if scene.prescribed_index.size:
         ws[2][_DQ_BASE][scene.prescribed_index] = scene.prescribed_state(t + h)[0] - q0[scene.prescribed_index]
     sc = np.array([float(h), max_abs(p0), abs(0.5 * float(v0 @ p0)), 1e-12, 1e-12, 1e-14])
@@ -2104,22 +2126,14 @@ def _run_newmark(packed, q_start, v_start, acc_start, pseudo_start, t, hs, qp, v
     ``table`` row 0 holds the functions of time at the chunk's start time, row k + 1 at step k's end."""
     mass, frames, frame_off, maps, gravity, constraints, bodies, loads, strain, plan = packed
     n, ns, npr, m = q_start.size, hs.size, pres.size, constraints[7]
-    n_rec = record_count(first_step, ns, record_every, n_steps)
-    buffers = record_buffers(n_rec, n, npr)
-    rec_lam = np.empty((n_rec, m))
-    rec_derived = np.empty((n_rec, 7))
-    probe_maps = bodies[7]
-    rec_probe = np.empty((n_rec, probe_maps.size, 2))
+    records = _mechanism_records(packed, n, npr, record_count(first_step, ns, record_every, n_steps))
     its_total = 0
-    nbmax = 1
-    for k in range(maps[2].size):
-        nbmax = max(nbmax, maps[2][k])
     nf = free.size
-    ws = _workspace(n, m, nf + m, nbmax)
+    ws = _chunk_workspace(packed, n, nf)
     wn = ws[2]
     dq_base, dq, q1, v1, r, ext = wn[_DQ_BASE], wn[_DQ], wn[_Q1], wn[_V1], wn[_R], wn[_EXT]
     a1, acc1 = wn[_Z], wn[_RATIO]
-    phi, phi_t, cq, rv = ws[3][0], ws[3][1], ws[4], ws[6][2]
+    phi_t = ws[3][1]
     cv = np.zeros((m, n))
     q, v, acc, pseudo = q_start.copy(), v_start.copy(), acc_start.copy(), pseudo_start.copy()
     lam, reaction = lam_start.copy(), reaction_start.copy()
@@ -2165,8 +2179,7 @@ def _run_newmark(packed, q_start, v_start, acc_start, pseudo_start, t, hs, qp, v
         if status == OK and not (all_finite(q1) and all_finite(v1)):
             status = NONFINITE_RESIDUAL
         if status != OK:
-            return (status, k, t, q, v, acc, pseudo, lam, reaction, work, its_total, i_rec, buffers, rec_lam,
-                    rec_derived, rec_probe)
+            return (status, k, t, q, v, acc, pseudo, lam, reaction, work, its_total, i_rec) + records
         # work of the loads (trapezoidal in time), of the prescribed laws and of the rheonomic constraints
         w = 0.0
         for i in range(n):
@@ -2196,26 +2209,7 @@ def _run_newmark(packed, q_start, v_start, acc_start, pseudo_start, t, hs, qp, v
         its_total += its
         s = first_step + k
         if is_recorded(s, record_every, n_steps):
-            record_step(buffers, i_rec, t, q, v, work, its, reaction)
-            rec_lam[i_rec] = lam
             p = _scene_momentum(mass, frames, frame_off, q, v)
-            tk, vk, px, py, ang = _derived(packed, q, v, p, rv)
-            rec_derived[i_rec, 0] = tk
-            rec_derived[i_rec, 1] = vk
-            rec_derived[i_rec, 2] = px
-            rec_derived[i_rec, 3] = py
-            rec_derived[i_rec, 4] = ang
-            vres = 0.0
-            for i in range(m):
-                vres = max(vres, abs(_dot(cq[i], v) + phi_t[i]))
-            rec_derived[i_rec, 5] = max_abs(phi)
-            rec_derived[i_rec, 6] = vres
-            for j in range(probe_maps.size):
-                kp = probe_maps[j]
-                o = maps[1][kp]
-                _position_into(maps, kp, q[o:o + maps[2][kp]], rv)
-                rec_probe[i_rec, j, 0] = rv[0]
-                rec_probe[i_rec, j, 1] = rv[1]
+            _record_mechanism(packed, records, i_rec, t, q, v, p, work, its, reaction, lam, ws)
             i_rec += 1
-    return (OK, ns, t, q, v, acc, pseudo, lam, reaction, work, its_total, i_rec, buffers, rec_lam, rec_derived,
-            rec_probe)
+    return (OK, ns, t, q, v, acc, pseudo, lam, reaction, work, its_total, i_rec) + records
