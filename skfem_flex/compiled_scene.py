@@ -1619,7 +1619,7 @@ def _run(packed, q_start, v_start, acc_start, t, hs, qp, table, pres, free, fpos
     sc = np.array([0.0, 0.0, 0.0, rtol, ctol, etol])
     kk = np.zeros(1, dtype=np.int64)
     system = (packed, (q, v, p, free, fpos, sc, table, kk), ws)
-    i_rec = 0
+    i_rec = np.int64(0)                 # not the literal 0: the record helpers compile once, for int64
     for k in range(ns):
         h = hs[k]
         # one energy-momentum step from (q, v, p): the new state is left in the workspace
@@ -2147,7 +2147,7 @@ def _run_newmark(packed, q_start, v_start, acc_start, pseudo_start, t, hs, qp, v
     sc = np.array([0.0, am, af, beta, gamma, rtol, ctol])
     kk = np.zeros(1, dtype=np.int64)
     system = (packed, (q, v, pseudo, acc, free, fpos, sc, by_velocity, vp, ap, pres, table, kk, cv), ws)
-    i_rec = 0
+    i_rec = np.int64(0)                 # not the literal 0: the record helpers compile once, for int64
     for k in range(ns):
         h = hs[k]
         sc[0] = h
