@@ -14,6 +14,7 @@ import time
 
 import numba
 import numpy as np
+import scipy.sparse as sps
 
 import skfem_flex as sf
 from skfem_flex import compiled_scene as cs
@@ -41,7 +42,8 @@ def _residual_and_matrix(system):
     """The residual and matrix of a ``newton_system`` after ``_evaluate`` (flat or (packed, step, workspace))."""
     if len(system) > 19:
         return system[18], system[19]
-    return system[2][0], system[2][1]
+    mat = cs.newton_matrix(system)
+    return system[2][0], (mat.toarray() if sps.issparse(mat) else mat)
 
 
 def newton_matrix(scene, h=1e-3, n_patterns=4, seed=0):

@@ -2,7 +2,7 @@ r"""Compiled (Numba) time loops for scenes of bodies, joints, drivers, springs, 
 
 :mod:`skfem_flex.compiled_loop` runs one floating-frame body without joints or loads. This module
 runs the energy-momentum scheme and the Newmark family (trapezoidal, generalized-α; the section "the
-Newmark step" at the end) for every other scene of up to :data:`SIZE_LIMIT` coordinates: point masses
+Newmark step" at the end) for every other scene: point masses
 and rigid bodies, floating-frame bodies (a :class:`~skfem_flex.bodies.FloatingBeam` or a
 :class:`~skfem_flex.bodies.ModalBody`, reduced or not), geometrically exact beams (Cayley rotation
 rates), gravity, coordinate, two-point and torsion springs, two-point and torsion dampers, global and
@@ -34,7 +34,10 @@ The step is the one of :meth:`~skfem_flex.integrators.EnergyMomentum.step` (same
 scaling, scales, round-off floor, initial guess), on the package's one Newton core
 (:mod:`skfem_flex.newton`); the bordered Newton matrix is solved as a band with a dense border
 (:func:`skfem_flex.linear_solver.bordered_band_solve`) when the scene's pattern makes that cheaper,
-else by LAPACK. On any failure the loop stops before the failing step and ``simulate`` re-runs that
+else by LAPACK. Up to :data:`DENSE_STORAGE_LIMIT` rows the matrix is stored dense; above, as the values
+of its pattern (fixed once per scene from the packed structure, :func:`_newton_pattern`) and solved by
+:func:`skfem_flex.linear_solver.bordered_band_solve_csr`, so that a step's cost grows linearly with the
+mesh (section "the Newton matrix"). On any failure the loop stops before the failing step and ``simulate`` re-runs that
 step on the Python path, as for :mod:`skfem_flex.compiled_loop`.
 """
 from __future__ import annotations
@@ -46,11 +49,12 @@ import numpy as np
 import scipy.sparse as sps
 
 from .bodies import exact_kernel
-from .bodies.base import COMPILED_SIZE_LIMIT, to_dense
+from .bodies.base import COMPILED_SIZE_LIMIT, DENSE_LIMIT
 from .bodies.floating_kernel import energy_momentum_terms, momentum, newmark_terms, potential_energy, sinc_half
 from .compiled_loop import chunk_records, chunk_schedule, is_recorded, record_buffers, record_count, record_step
 from .integrators import EnergyMomentum, GeneralizedAlpha, Newmark, Trapezoidal, predictor_acceleration
-from .linear_solver import MIN_DENSE_BORDERED, bordered_band_solve, dense_bordered_plan
+from .linear_solver import (MAX_BORDER, MIN_DENSE_BORDERED, bordered_band_solve, bordered_band_solve_csr,
+                            dense_bordered_plan, reordered_band_plan)
 from .newton import (CONVERGED, EVALUATE, NONFINITE_RESIDUAL, all_finite, max_abs, newton_evaluated, newton_solved,
                      newton_start, predicted_increment, roundoff_floor)
 from .rotations import SERIES_BELOW, sinc
@@ -62,10 +66,6 @@ __all__ = ["run_loop", "eligible", "run_chunk", "chunk_steps", "pack", "pack_map
 _TINY = 1e-300
 #: status of :func:`run_chunk` when every step was done
 OK = CONVERGED
-#: most coordinates of a scene this loop runs (its Newton matrix is stored dense; larger scenes run on the
-#: Python path with sparse matrices, a single floating-frame body under energy-momentum on the banded
-#: :mod:`skfem_flex.compiled_loop`)
-SIZE_LIMIT = COMPILED_SIZE_LIMIT
 #: kinds of position maps
 LINEAR, FRAME = 0, 1
 #: kinds of constraint blocks: Σ sign r(point) − c (2 rows), its projection on a constant normal
@@ -80,6 +80,102 @@ POINTS, PROJECTED, LINEAR_ROW, DISTANCE, ROTATED = 0, 1, 2, 3, 4
 COORD_SPRING, POINT_FORCE, GENERALIZED_FORCE, ROW_SPRING, ROW_DAMPER, FOLLOWER_FORCE, TWO_POINT_SPRING, \
     TWO_POINT_DAMPER = range(8)
 
+
+
+# ==================================================================== the Newton matrix
+# The step's Newton matrix (free coordinates, then multipliers; nx rows) is a flat float array ``mat``,
+# addressed through an int array ``fpos`` that every kernel writing to it gets anyway: fpos[:n] is the
+# position of each coordinate among the free ones (−1: prescribed), and its last three entries are
+# (n, nx, storage). Dense storage (0): entry (i, j) at mat[i·nx + j]. CSR storage (1, scenes above
+# DENSE_STORAGE_LIMIT): the values of a fixed pattern (_newton_pattern), whose row pointers and column
+# indices follow fpos[:n]; entry (i, j) is found by a binary search of row i. One array instead of three:
+# each array passed between compiled functions costs compile time. ``mat``'s last entry counts the
+# nonzero values written outside the pattern (a pattern that missed an entry: the step goes to Python).
+DENSE, CSR = 0, 1
+
+
+@numba.njit(cache=True, _nrt=False)
+def _entry(fpos, i, j):
+    """Where entry (i, j) of the Newton matrix is stored in ``mat``, or −1 if the pattern lacks it."""
+    size = fpos.size
+    nx = fpos[size - 2]
+    if fpos[size - 1] == DENSE:
+        return i * nx + j
+    n = fpos[size - 3]
+    lo, hi = fpos[n + i], fpos[n + i + 1]
+    cols = n + nx + 1
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        c = fpos[cols + mid]
+        if c < j:
+            lo = mid + 1
+        elif c > j:
+            hi = mid
+        else:
+            return mid
+    return -1
+
+
+@numba.njit(cache=True, _nrt=False)
+def _madd(mat, fpos, i, j, val):
+    """mat[i, j] += val (Newton-matrix numbering; see the section's comment)."""
+    if val == 0.0:                      # a structural zero need not be looked up
+        return
+    t = _entry(fpos, i, j)
+    if t >= 0:
+        mat[t] += val
+    else:
+        mat[mat.size - 1] += 1.0
+
+
+@numba.njit(cache=True, _nrt=False)
+def _mscale_row(mat, fpos, i, ncols, factor):
+    """mat[i, :ncols] *= factor."""
+    size = fpos.size
+    nx = fpos[size - 2]
+    if fpos[size - 1] == DENSE:
+        for j in range(ncols):
+            mat[i * nx + j] *= factor
+        return
+    n = fpos[size - 3]
+    cols = n + nx + 1
+    for t in range(fpos[n + i], fpos[n + i + 1]):
+        if fpos[cols + t] < ncols:
+            mat[t] *= factor
+
+
+def _matrix_index(fpos, nx, pattern=None):
+    """The ``fpos`` array of the section's comment: dense storage, or CSR storage of ``pattern`` (a scipy
+    CSR matrix, nx × nx, sorted indices)."""
+    n = fpos.size
+    if pattern is None:
+        return np.concatenate([fpos, [n, nx, DENSE]]).astype(np.int64)
+    return np.concatenate([fpos, pattern.indptr, pattern.indices, [n, nx, CSR]]).astype(np.int64)
+
+
+def _matrix_size(fpos):
+    """Length of ``mat`` for the index ``fpos``: the stored entries and the count of missed ones."""
+    n, nx, storage = (int(a) for a in fpos[-3:])
+    return (nx * nx if storage == DENSE else int(fpos[n + nx])) + 1
+
+
+def newton_matrix(system):
+    """The Newton matrix of a :func:`newton_system` after an evaluation: a dense array, or a scipy CSR
+    matrix for scenes stored that way (above :data:`DENSE_STORAGE_LIMIT` coordinates)."""
+    packed, ws = system[0], system[2]
+    fpos, mat = packed[9][4], ws[1]
+    n, nx, storage = (int(a) for a in fpos[-3:])
+    if storage == DENSE:
+        return mat[:nx * nx].reshape(nx, nx).copy()
+    ptr = fpos[n:n + nx + 1]
+    nnz = int(ptr[-1])
+    return sps.csr_matrix((mat[:nnz].copy(), fpos[n + nx + 1:n + nx + 1 + nnz], ptr), shape=(nx, nx))
+
+
+def missed_entries(system):
+    """How many nonzero values the last evaluation of a :func:`newton_system` wrote outside the scene's
+    Newton pattern (0 for a complete pattern; always 0 with dense storage)."""
+    return int(system[2][1][-1])
 
 
 # ==================================================================== position maps
@@ -256,22 +352,25 @@ def _add_hessian_product(maps, k, q, f, scale, mat, fpos):
     i2 = fpos[o + 2]
     if i2 < 0:
         return
-    mat[i2, i2] -= scale * (fax * sx + fay * sy)
+    _madd(mat, fpos, i2, i2, -scale * (fax * sx + fay * sy))
     for j in range(ne):
         ij = fpos[o + 3 + j]
         if ij >= 0:
             val = scale * (fay * ydat[y + j] - fax * ydat[y + ne + j])   # (Aᵀf) · E Y_j
-            mat[i2, ij] += val
-            mat[ij, i2] += val
+            if val != 0.0:
+                _madd(mat, fpos, i2, ij, val)
+                _madd(mat, fpos, ij, i2, val)
 
 
 @numba.njit(cache=True)
 def map_hessian_product(maps, k, q, f):
     """∂(Jᵀ f)/∂q (nb, nb) of map k at a fixed vector f (2,), for a map on its own block (offset 0)."""
     n = maps[2][k]
-    h = np.zeros((n, n))
-    _add_hessian_product(maps, k, q, f, 1.0, h, np.arange(n))
-    return h
+    h = np.zeros(n * n + 1)
+    fpos = np.arange(n + 3)
+    fpos[n], fpos[n + 1], fpos[n + 2] = n, n, DENSE
+    _add_hessian_product(maps, k, q, f, 1.0, h, fpos)
+    return h[:n * n].reshape(n, n)
 
 
 @numba.njit(cache=True, _nrt=False)
@@ -287,13 +386,13 @@ def _add_dgrad_jacobian(maps, k, q0, q1, f, scale, mat, fpos, floor, scratch):
     i2 = fpos[o + 2]
     a2 = abs(q0[2]) + abs(q1[2])
     if i2 >= 0:
-        mat[i2, i2] += scale * h22
+        _madd(mat, fpos, i2, i2, scale * h22)
     fl2 = abs(scale * h22) * a2
     for j in range(n - 3):
         ij = fpos[o + 3 + j]
         if ij >= 0 and i2 >= 0:
-            mat[i2, ij] += scale * row[j]
-            mat[ij, i2] += scale * col[j]
+            _madd(mat, fpos, i2, ij, scale * row[j])
+            _madd(mat, fpos, ij, i2, scale * col[j])
         if floor.size:
             fl2 += abs(scale * row[j]) * (abs(q0[3 + j]) + abs(q1[3 + j]))
             floor[o + 3 + j] += abs(scale * col[j]) * a2
@@ -390,11 +489,11 @@ def _packed(scene):
 
 
 def _pack(scene):
-    if type(scene) is not Scene or scene.n > SIZE_LIMIT:
+    if type(scene) is not Scene:
         return None, (), ()
     n = scene.n
     store = {k: [] for k in ("kind", "off", "nb", "m_r", "c", "y0", "g", "gptr", "y", "yptr")}
-    mass = np.zeros((n, n))
+    mass_blocks = []
     frames, frame_off = [], []
     momentum = tuple([] for _ in range(7))
     strains, strain_off = [], []
@@ -416,7 +515,8 @@ def _pack(scene):
                 gam, c = b.mass_moment()
             except NotImplementedError:
                 return None, (), ()
-            mass[sl, sl] = to_dense(b.mass_matrix(np.asarray(b.q0, dtype=float)))
+            block = sps.coo_matrix(b.mass_matrix(np.asarray(b.q0, dtype=float)))
+            mass_blocks.append((block.row + off, block.col + off, block.data))
             first_moment[id(b)] = ("linear", gam, c)
             if b.has_potential:
                 strains.append(b.compiled_strain_data())
@@ -604,7 +704,11 @@ def _pack(scene):
     # momenta (module docstring of _momentum_layout) and the probes the loop records
     bodies = tuple(np.concatenate(parts) if parts else np.zeros(0) for parts in momentum) + \
         (np.asarray(probe_maps, dtype=np.int64),)
-    mass = sps.csr_matrix(mass)
+    rows, cols, vals = (np.concatenate([blk[i] for blk in mass_blocks]) if mass_blocks else np.zeros(0)
+                        for i in range(3))
+    mass = sps.csr_matrix((vals, (rows.astype(np.int64), cols.astype(np.int64))), shape=(n, n))
+    mass.sum_duplicates()
+    mass.eliminate_zeros()
     mass.sort_indices()
     mass = (mass.indptr.astype(np.int64), mass.indices.astype(np.int64), mass.data.astype(float))
     # where each entry of the bodies' kernel patterns lands in the flattened Newton matrix (−1: a row or
@@ -614,7 +718,8 @@ def _pack(scene):
     strain_pos = _pattern_positions(strains, strain_off, fpos, nx)
     strain = (tuple(strains) if strains else None, np.asarray(strain_off, dtype=np.int64),
               np.asarray(scene.cayley_index, dtype=np.int64), frame_pos, strain_pos)
-    dense = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), 0, 0)
+    # no band plan yet, dense storage (_planned decides both, from the Newton pattern)
+    dense = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), 0, 0, _matrix_index(fpos, nx))
     packed = (mass, tuple(frames) if frames else None, np.asarray(frame_off, dtype=np.int64), maps, gravity,
               constraints, bodies, loads, strain, dense)
     return packed, tuple(probe_names), tuple(table)
@@ -625,25 +730,58 @@ _PLANNED = weakref.WeakKeyDictionary()
 #: here instead of searching its border again (1–3 ms for the catalogue's mechanisms)
 _PLANS_BY_PATTERN = {}
 _MAX_PLANS = 64
+#: the Newton matrix is stored as the values of its pattern (CSR) above this many rows when it has a plan
+#: as a band with a dense border (the package's one dense/sparse threshold: the dense matrix is zeroed at
+#: every evaluation and its solve checked with a dense residual, which costs more from about 200 rows on),
+#: else stored dense up to COMPILED_SIZE_LIMIT rows; a larger scene without such a plan runs in Python
+DENSE_STORAGE_LIMIT = DENSE_LIMIT
 
 
 def _planned(scene):
-    """The packed scene with its plan for the Newton solve (a band with a dense border, or dense LU when
-    that is not cheaper), fixed once per scene by the matrix's pattern (made on the first run)."""
-    packed = _PLANNED.get(scene)
-    if packed is None:
-        packed = _packed(scene)[0]
-        if scene.free_index.size + scene.n_constraints >= MIN_DENSE_BORDERED:
-            pattern = _newton_pattern(scene, packed)
-            key = (pattern.shape, np.packbits(pattern).tobytes())
-            if key not in _PLANS_BY_PATTERN:
-                if len(_PLANS_BY_PATTERN) >= _MAX_PLANS:
-                    _PLANS_BY_PATTERN.clear()
-                _PLANS_BY_PATTERN[key] = dense_bordered_plan(pattern)
-            plan = _PLANS_BY_PATTERN[key]
-            if plan is not None:
-                packed = packed[:9] + (plan,)
-        _PLANNED[scene] = packed
+    """The packed scene with its Newton matrix's storage (section "the Newton matrix") and plan for the
+    solve (a band with a dense border, or dense LU when that is not cheaper), fixed once per scene by the
+    matrix's pattern (made on the first run). Above DENSE_STORAGE_LIMIT rows the plan's border holds at
+    most MAX_BORDER coordinates, in the natural order or else after reordering
+    (:func:`~skfem_flex.linear_solver.reordered_band_plan`). None if the scene's matrix has more than
+    COMPILED_SIZE_LIMIT rows and no such plan (it runs in Python, with SuperLU)."""
+    hit = _PLANNED.get(scene)
+    if hit is not None:
+        return hit[0]
+    packed = _packed(scene)[0]
+    nx = scene.free_index.size + scene.n_constraints
+    plan = None
+    if nx >= MIN_DENSE_BORDERED:
+        pattern = _newton_pattern(scene, packed)
+        key = (pattern.shape, pattern.indptr.tobytes(), pattern.indices.tobytes())
+        if key not in _PLANS_BY_PATTERN:
+            if len(_PLANS_BY_PATTERN) >= _MAX_PLANS:
+                _PLANS_BY_PATTERN.clear()
+            _PLANS_BY_PATTERN[key] = dense_bordered_plan(pattern, max_border=MAX_BORDER if nx > DENSE_STORAGE_LIMIT
+                                                          else None)
+        plan = _PLANS_BY_PATTERN[key]
+    fpos = _free_positions(scene)
+    if nx > DENSE_STORAGE_LIMIT and (plan is None or plan[1].size > MAX_BORDER):
+        # no band with a small border in the natural order (a long chain's multipliers): reorder
+        plan = reordered_band_plan(pattern)
+    if nx <= DENSE_STORAGE_LIMIT or (plan is None and nx <= COMPILED_SIZE_LIMIT):
+        empty = np.zeros(0, dtype=np.int64)
+        packed = packed[:9] + ((plan if plan is not None else (empty, empty, 0, 0)) + (_matrix_index(fpos, nx),),)
+    elif plan is None:
+        packed = None
+    else:
+        # the kernels' flat positions i·nx + j become positions among the pattern's stored entries
+        keys = np.repeat(np.arange(nx, dtype=np.int64), np.diff(pattern.indptr)) * nx + pattern.indices
+        strain = packed[8]
+        moved = []
+        for pos, ptr in (strain[3], strain[4]):
+            slot = np.searchsorted(keys, pos)
+            inside = (pos >= 0) & (slot < keys.size)
+            inside[inside] = keys[slot[inside]] == pos[inside]
+            if not np.array_equal(inside, pos >= 0):
+                raise AssertionError("a kernel entry outside the scene's Newton pattern")
+            moved.append((np.where(pos >= 0, slot, -1).astype(np.int64), ptr))
+        packed = packed[:8] + (strain[:3] + tuple(moved), plan + (_matrix_index(fpos, nx, pattern),))
+    _PLANNED[scene] = (packed,)
     return packed
 
 
@@ -660,61 +798,88 @@ def _pattern_positions(kernels, offsets, fpos, nx):
             np.asarray(ptr, dtype=np.int64))
 
 
+def _map_support(maps, k):
+    """The scene coordinates on which map k's position can depend: the columns of G that are not zero
+    (LINEAR), or R, θ and the columns of Y that are not zero (FRAME)."""
+    kind, off, nb, _, _, _, gdat, gptr, ydat, yptr = maps
+    o, n = off[k], nb[k]
+    if kind[k] == LINEAR:
+        cols = np.flatnonzero(gdat[gptr[k]:gptr[k] + 2 * n].reshape(2, n).any(axis=0))
+    else:
+        y = ydat[yptr[k]:yptr[k] + 2 * (n - 3)].reshape(2, n - 3)
+        cols = np.concatenate([[0, 1, 2], 3 + np.flatnonzero(y.any(axis=0))])
+    return o + cols.astype(np.int64)
+
+
 def _element_coordinates(maps, loads):
     """For each force element that couples coordinates in the Newton matrix, the coordinates it couples:
-    the blocks of the bodies its points are on and the coordinates of its rows g."""
+    the supports of its points' maps and the coordinates of its rows g."""
     if loads is None:
         return []
     kind, ptr, ints, _ = loads
-    off, nb = maps[1], maps[2]
     out = []
     for e in range(kind.size):
         own = ints[ptr[e, 0]:ptr[e + 1, 0]]
         if kind[e] in (ROW_SPRING, ROW_DAMPER):
             out.append(own)
         elif kind[e] == FOLLOWER_FORCE:
-            out.append(np.concatenate([off[own[0]] + np.arange(nb[own[0]]), own[2:]]))
+            out.append(np.concatenate([_map_support(maps, own[0]), own[2:]]))
         elif kind[e] in (TWO_POINT_SPRING, TWO_POINT_DAMPER):
-            out.append(np.concatenate([off[k] + np.arange(nb[k]) for k in own if k >= 0]))
+            out.append(np.concatenate([_map_support(maps, k) for k in own[:2] if k >= 0]))
     return out
 
 
-def _rotated_coordinates(maps, constraints):
-    """For each line on a moving body (kind ROTATED), the coordinates its ∂(Φ_qᵀ μ)/∂q couples: the blocks
-    of its points' bodies and the guiding angle's coordinates."""
-    t0, term_map, l0, lin_idx, lines = constraints[2], constraints[3], constraints[9], constraints[10], constraints[14]
-    off, nb = maps[1], maps[2]
-    return [np.concatenate([off[k] + np.arange(nb[k]) for k in term_map[t0[i]:t0[i + 1]]]
-                           + [lin_idx[l0[i]:l0[i + 1]]]) for i in (lines if lines is not None else ())]
+def _constraint_coordinates(maps, constraints):
+    """For each constraint block whose ∂(Φ_qᵀ μ)/∂q couples coordinates beyond a floating frame's rows
+    (which its kernel pattern holds), the coordinates it couples: a line on a moving body (ROTATED) the
+    supports of its points' maps and the guiding angle's coordinates, a DISTANCE block its map's support."""
+    kind, t0, term_map, l0, lin_idx = constraints[0], constraints[2], constraints[3], constraints[9], constraints[10]
+    out = []
+    for i in range(kind.size):
+        if kind[i] == ROTATED:
+            out.append(np.concatenate([_map_support(maps, k) for k in term_map[t0[i]:t0[i + 1]]]
+                                      + [lin_idx[l0[i]:l0[i + 1]]]))
+        elif kind[i] == DISTANCE:
+            out.append(_map_support(maps, term_map[t0[i]]))
+    return out
 
 
 def _newton_pattern(scene, packed):
     """Where the bordered Newton matrix (free coordinates, then multipliers) can be nonzero, from the
-    structure of the packed scene: the constant masses, the floating-frame and exact beams' kernel
-    patterns (a floating body's frame rows and columns hold every tangent of its points, loads and
-    gravity), the diagonal (springs, Cayley terms) and each constraint's rows and columns over all
-    coordinates of its bodies. An entry missed here could not give a wrong step: the bordered band
-    solve checks its backward error and the dense solve takes over."""
+    structure of the packed scene, as a scipy CSR matrix with sorted indices: the constant masses, the
+    floating-frame and exact beams' kernel patterns (a floating body's frame rows and columns hold every
+    tangent of its points, loads and gravity), the diagonal (springs, Cayley terms), the blocks of the
+    force elements and constraint blocks that couple coordinates, and each constraint's rows and columns
+    over all coordinates of its bodies. With dense storage an entry missed here could not give a wrong
+    step (the bordered band solve checks its backward error, the dense solve takes over); with CSR
+    storage the step counts it (:func:`missed_entries`) and goes to Python."""
     mass, frames, frame_off = packed[0], packed[1], packed[2]
     strains, strain_off = packed[8][0], packed[8][1]
     n, m = scene.n, scene.n_constraints
-    pat = np.zeros((n + m, n + m), dtype=bool)
-    pat[np.arange(n), np.arange(n)] = True      # not the multipliers' rows: no diagonal, border coordinates
+    rows, cols = [np.arange(n)], [np.arange(n)]   # no diagonal on the multipliers' rows: border coordinates
     ptr, idx, _ = mass
-    pat[np.repeat(np.arange(n), np.diff(ptr)), idx] = True
+    rows.append(np.repeat(np.arange(n), np.diff(ptr)))
+    cols.append(idx)
     for group, offsets in ((frames, frame_off), (strains, strain_off)):
         for kd, o in zip(group or (), offsets):
-            rows = np.repeat(np.arange(kd.n), np.diff(kd.pat_ptr))
-            pat[o + rows, o + kd.pat_idx] = True
-    for coords in _element_coordinates(packed[3], packed[7]):
-        pat[np.ix_(coords, coords)] = True
-    for coords in _rotated_coordinates(packed[3], packed[5]):
-        pat[np.ix_(coords, coords)] = True
+            rows.append(o + np.repeat(np.arange(kd.n), np.diff(kd.pat_ptr)))
+            cols.append(o + np.asarray(kd.pat_idx))
+    for coords in _element_coordinates(packed[3], packed[7]) + _constraint_coordinates(packed[3], packed[5]):
+        rows.append(np.repeat(coords, coords.size))
+        cols.append(np.tile(coords, coords.size))
     for idx_c, rows_c in scene.constraint_layout:
-        pat[np.ix_(n + np.asarray(rows_c), idx_c)] = True
-        pat[np.ix_(idx_c, n + np.asarray(rows_c))] = True
+        r = n + np.repeat(np.asarray(rows_c), len(idx_c))
+        c = np.tile(np.asarray(idx_c), len(rows_c))
+        rows += [r, c]
+        cols += [c, r]
+    rows, cols = np.concatenate(rows).astype(np.int64), np.concatenate(cols).astype(np.int64)
+    pat = sps.csr_matrix((np.ones(rows.size, dtype=np.int8), (rows, cols)), shape=(n + m, n + m))
     sel = np.concatenate([scene.free_index, n + np.arange(m)])
-    return pat[np.ix_(sel, sel)]
+    pat = pat[sel][:, sel].tocsr()
+    pat.sum_duplicates()
+    pat.sort_indices()
+    pat.data[:] = 1
+    return pat
 
 
 def _momentum_layout(body, kd, rng):
@@ -738,7 +903,7 @@ def _momentum_layout(body, kd, rng):
     for _ in range(2):
         q = np.asarray(body.q0, dtype=float) + 0.1 * rng.standard_normal(nb)
         v = rng.standard_normal(nb)
-        p = body.momentum(q, v) if kd is not None else to_dense(body.mass_matrix(q)) @ v
+        p = body.momentum(q, v) if kd is not None else np.asarray(body.mass_matrix(q) @ v).ravel()
         lin = np.array([p[lx].sum(), p[ly].sum()])
         ang = ((X + q[ix]) * p[iy]).sum() - ((Y + q[iy]) * p[ix]).sum() + p[ia].sum()
         try:
@@ -763,11 +928,16 @@ NEWMARK_SCHEMES = (Newmark, Trapezoidal, GeneralizedAlpha)
 def eligible(scene, scheme):
     """True if ``simulate`` may run ``scene`` with ``scheme`` through this loop: the
     :class:`~skfem_flex.integrators.EnergyMomentum` class itself or one of :data:`NEWMARK_SCHEMES`, on a
-    plain scene of at most :data:`SIZE_LIMIT` coordinates whose bodies, force elements, constraints and
-    joint points all have compiled forms (module docstring)."""
+    plain scene whose bodies, force elements, constraints and joint points all have compiled forms
+    (module docstring) and whose Newton matrix is stored dense (at most :data:`DENSE_STORAGE_LIMIT` rows)
+    or, larger, has a plan as a band with a dense border (every beam scene)."""
     if type(scheme) is not EnergyMomentum and type(scheme) not in NEWMARK_SCHEMES:
         return False
-    return pack(scene) is not None
+    return _compiles(scene)
+
+
+def _compiles(scene):
+    return pack(scene) is not None and _planned(scene) is not None
 
 
 def chunk_steps(scene):
@@ -805,19 +975,21 @@ _DQ_BASE, _DQ, _Q1, _V1, _P1, _R, _EXT, _GK, _GP, _FLOOR, _DTMU, _Z, _RATIO, _DR
 
 
 @numba.njit(cache=True)
-def _workspace(n, m, nx, nbmax):
+def _workspace(n, m, nx, nmat, nbmax):
     """The arrays one step works in, allocated once per chunk (per step only the Newton core's state and
     a few small kernel outputs are allocated), as few arrays as possible (each array of a tuple costs
-    compile time wherever the tuple goes): the Newton residual and matrix; the (n,) vectors Δq_base,
+    compile time wherever the tuple goes): the Newton residual and matrix (``nmat`` values, section "the
+    Newton matrix"); the (n,) vectors Δq_base,
     Δq, q1, v1, p1, r, Q, g_kin, g_V, floor, Dᵀμ, z (Δq with the Cayley parameter 2 tan(Δψ/2) on
     Cayley coordinates), Δψ/w, d(Δψ/w)/dΔψ, dz/dΔq, the mid-point q0 + Δq/2 and z/Δt (rows of ``ws[2]``,
     names ``_DQ`` …); Φ, Φ_t, μ (rows of ``ws[3]``); Φ_q, D; three 2-vectors; six (2, 2 nb) map blocks
     (two-point elements span two bodies); and a flag set when an evaluation met a state the Python step
-    refuses (a folded element, a turn ≥ MAX_INCREMENT)."""
+    refuses (a folded element, a turn ≥ MAX_INCREMENT) or wrote an entry outside a CSR-stored Newton
+    pattern."""
     wn = np.zeros((17, n))
     wn[_RATIO, :] = 1.0
     wn[_DZ, :] = 1.0
-    return (np.zeros(nx), np.zeros((nx, nx)), wn, np.zeros((3, m)), np.zeros((m, n)), np.zeros((m, n)),
+    return (np.zeros(nx), np.zeros(nmat), wn, np.zeros((3, m)), np.zeros((m, n)), np.zeros((m, n)),
             np.zeros((3, 2)), np.zeros((6, 2, 2 * nbmax)), np.zeros(1, dtype=np.int64))
 
 
@@ -873,7 +1045,7 @@ def _rotated_row(maps, constraints, i, q0, q1, v1, mu, scale, cq, d, cv, mat, fp
         if fpos[ia] >= 0:
             for b in range(l0[i], l0[i + 1]):
                 if fpos[lin_idx[b]] >= 0:
-                    mat[fpos[ia], fpos[lin_idx[b]]] += cgg * lin_coef[a] * lin_coef[b]
+                    _madd(mat, fpos, fpos[ia], fpos[lin_idx[b]], cgg * lin_coef[a] * lin_coef[b])
     jevx, jevy = 0.0, 0.0
     for t in range(t0[i], t0[i + 1]):
         k, s = term_map[t], term_sign[t]
@@ -901,8 +1073,8 @@ def _rotated_row(maps, constraints, i, q0, q1, v1, mu, scale, cq, d, cv, mat, fp
             for a in range(l0[i], l0[i + 1]):
                 ia = fpos[lin_idx[a]]
                 if ia >= 0 and jb >= 0:
-                    mat[ia, jb] += dn_je * lin_coef[a]
-                    mat[jb, ia] += de_jn * lin_coef[a]
+                    _madd(mat, fpos, ia, jb, dn_je * lin_coef[a])
+                    _madd(mat, fpos, jb, ia, de_jn * lin_coef[a])
     if use_cv:                                          # (J_e v)·E n1 g − (g·v)(e1·n1) g
         c_g = -jevx * n1y + jevy * n1x - gv * (e1x * n1x + e1y * n1y)
         for a in range(l0[i], l0[i + 1]):
@@ -999,7 +1171,7 @@ def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, mat, fpos, ws):
                 for j in range(nb):
                     jb = fpos[o + j]
                     if jb >= 0:
-                        mat[ia, jb] += 0.5 * mu[r0] * (jac[0, a] * jac[0, j] + jac[1, a] * jac[1, j])
+                        _madd(mat, fpos, ia, jb, 0.5 * mu[r0] * (jac[0, a] * jac[0, j] + jac[1, a] * jac[1, j]))
     _add_rotated_rows(maps, constraints, constraints[14], q0, q1, q1, mu, 1.0, cq, d, cq[:0], mat, fpos, ws)
 
 
@@ -1102,7 +1274,7 @@ def _add_spring_elements(maps, loads, q0, q1, th, gp, floor, mat, fpos, ws):
             gp[i] += 0.5 * k * g
             tan *= 0.5 * k * th
             if fpos[i] >= 0:
-                mat[fpos[i], fpos[i]] += tan
+                _madd(mat, fpos, fpos[i], fpos[i], tan)
             if use_floor:
                 floor[i] += abs(tan) * (abs(u0) + abs(u1))
         elif kind[e] == ROW_SPRING:       # V = ½ k (g·q + c)²: the mid-point gradient is exact
@@ -1118,7 +1290,7 @@ def _add_spring_elements(maps, loads, q0, q1, th, gp, floor, mat, fpos, ws):
                     if use_floor:
                         floor[ia] += abs(tan) * (abs(q0[jb]) + abs(q1[jb]))
                     if fpos[ia] >= 0 and fpos[jb] >= 0:
-                        mat[fpos[ia], fpos[jb]] += tan
+                        _madd(mat, fpos, fpos[ia], fpos[jb], tan)
         elif kind[e] == TWO_POINT_SPRING:
             # V(s) = ½ k (√s − l₀)², s = d·d: divided difference κ = ½ k (1 − 2 l₀/(l_0 + l_1)) times the exact
             # discrete gradient (d0 + d1)ᵀ D of s; ∂/∂q1 = κ (2 ∂(Dᵀ d̄)/∂q1 + Dᵀ J1) + (k l₀/(2 l1 Σl²)) ds ⊗ ∇s1
@@ -1142,7 +1314,7 @@ def _add_spring_elements(maps, loads, q0, q1, th, gp, floor, mat, fpos, ws):
                     if use_floor:
                         floor[ia] += abs(tan) * (abs(q0[jb]) + abs(q1[jb]))
                     if fpos[ia] >= 0 and fpos[jb] >= 0:
-                        mat[fpos[ia], fpos[jb]] += tan
+                        _madd(mat, fpos, fpos[ia], fpos[jb], tan)
             for side in range(2):
                 kk = ints[i0 + side]
                 if kk < 0:
@@ -1188,7 +1360,7 @@ def _add_loads(maps, loads, q, v, trow, cq, cv, dz, ext, mat, fpos, ws):
                     for t in range(i0 + 2, i1):
                         jb = fpos[ints[t]]
                         if jb >= 0:
-                            mat[ia, jb] -= cq * jef * fl[f0 + 1 + t - i0 - 2]
+                            _madd(mat, fpos, ia, jb, -(cq * jef * fl[f0 + 1 + t - i0 - 2]))
             for a in range(nb):
                 ext[o + a] += jac[0, a] * f[0] + jac[1, a] * f[1]
             _add_hessian_product(maps, k, qb, f, -cq, mat, fpos)
@@ -1208,7 +1380,7 @@ def _add_loads(maps, loads, q, v, trow, cq, cv, dz, ext, mat, fpos, ws):
                 for b in range(i0, i1):
                     jb = ints[b]
                     if fpos[jb] >= 0:
-                        mat[fpos[ia], fpos[jb]] += cv * c * ga * fl[f0 + 1 + b - i0] * dz[jb]
+                        _madd(mat, fpos, fpos[ia], fpos[jb], cv * c * ga * fl[f0 + 1 + b - i0] * dz[jb])
         elif ke == TWO_POINT_DAMPER:
             # Q = −c (u·w) J_dᵀ u, u = d/l, w = J_d v; ∂Q/∂q = −c (J_dᵀu ⊗ ∂(u·w)/∂q + (u·w)(∂(J_dᵀ u)/∂q|_u
             # + J_dᵀ ∂u/∂q)), ∂u/∂q = (I − u uᵀ) J_d / l, ∂(u·w)/∂q = wᵀ ∂u/∂q + uᵀ ∂(J_d v)/∂q
@@ -1246,7 +1418,7 @@ def _add_loads(maps, loads, q, v, trow, cq, cv, dz, ext, mat, fpos, ws):
                     jdu = (jd[0, a] * jd[0, b] + jd[1, a] * jd[1, b] - jtu[a] * jtu[b]) / ln
                     fq = -c * (jtu[a] * drate[b] + rate * jdu)
                     fv = -c * jtu[a] * jtu[b]
-                    mat[fpos[ia], fpos[jb]] -= cq * fq + cv * fv * dz[jb]
+                    _madd(mat, fpos, fpos[ia], fpos[jb], -(cq * fq + cv * fv * dz[jb]))
             for side in range(2):               # −c (u·w) ∂(J_dᵀ u)/∂q at fixed u
                 kk = ints[i0 + side]
                 if kk < 0:
@@ -1298,7 +1470,6 @@ def _add_frame_terms(frames, frame_off, frame_pos, q0, q1, v0, v1, h, p1, gk, gp
     ``frame_pos``: where their tangents' entries land in the flattened Newton matrix."""
     if frames is None:
         return
-    flat = mat.reshape(-1)
     pos, ptr = frame_pos
     for i in range(len(frames)):
         kd = frames[i]
@@ -1314,7 +1485,7 @@ def _add_frame_terms(frames, frame_off, frame_pos, q0, q1, v0, v1, h, p1, gk, gp
         for t in range(data.size):
             k = pos[base + t]
             if k >= 0:
-                flat[k] += data[t]
+                mat[k] += data[t]
 
 
 @numba.njit(cache=True)
@@ -1325,7 +1496,6 @@ def _add_strain_terms(strains, strain_off, strain_pos, q0, q1, h, gp, floor, mat
     the proper error and halves the step, as it does on the Python path)."""
     if strains is None:
         return True
-    flat = mat.reshape(-1)
     pos, ptr = strain_pos
     for i in range(len(strains)):
         kd = strains[i]
@@ -1342,7 +1512,7 @@ def _add_strain_terms(strains, strain_off, strain_pos, q0, q1, h, gp, floor, mat
         for t in range(data.size):
             k = pos[base + t]
             if k >= 0:
-                flat[k] += h * data[t]
+                mat[k] += h * data[t]
     return True
 
 
@@ -1419,7 +1589,7 @@ def _evaluate(system, x):
         z[c], ratio[c], dratio[c], dz[c] = cayley_terms(dq[c])
     for i in range(n):
         v1[i] = (2.0 / h) * z[i] - v0[i]
-    mat[:, :] = 0.0
+    mat[:] = 0.0
     ptr, idx, dat = mass
     for i in range(n):                  # p1 = M v1 of the constant-mass bodies
         s = 0.0
@@ -1451,9 +1621,8 @@ def _evaluate(system, x):
     for c in cay:                       # forces conjugate to Δq → to the Cayley rate z
         ic = fpos[c]
         if ic >= 0:
-            for j in range(nf):
-                mat[ic, j] *= ratio[c]
-            mat[ic, ic] += r[c] * dratio[c]
+            _mscale_row(mat, fpos, ic, nf, ratio[c])
+            _madd(mat, fpos, ic, ic, r[c] * dratio[c])
         r[c] *= ratio[c]
         floor[c] *= ratio[c]
     for i in range(n):                  # (2/Δt) M dz/dΔq of the constant-mass bodies
@@ -1463,7 +1632,7 @@ def _evaluate(system, x):
         for t in range(ptr[i], ptr[i + 1]):
             jb = fpos[idx[t]]
             if jb >= 0:
-                mat[ia, jb] += (2.0 / h) * dat[t] * dz[idx[t]]
+                _madd(mat, fpos, ia, jb, (2.0 / h) * dat[t] * dz[idx[t]])
     ext[:] = 0.0
     _add_loads_mid(maps, loads, q0, dq, z, dz, trow, h, ext, mat, fpos, ws)
     scale = max(scale, h * max_abs(ext))
@@ -1482,9 +1651,9 @@ def _evaluate(system, x):
         c_scale = max(cqq, cq_inf * constraints[8], _TINY)
         err_c = max_abs(phi) / (ctol * c_scale)
         for i in range(m):
-            for j in range(nf):
-                mat[j, nf + i] = d[i, free[j]] * ratio[free[j]]
-                mat[nf + i, j] = cq[i, free[j]]
+            for j in range(nf):             # the border, on a zeroed matrix: adds are sets
+                _madd(mat, fpos, j, nf + i, d[i, free[j]] * ratio[free[j]])
+                _madd(mat, fpos, nf + i, j, cq[i, free[j]])
             res[nf + i] = phi[i]
     vr, fl_inf, vfl = 0.0, 0.0, 0.0
     for i in range(nf):
@@ -1502,6 +1671,8 @@ def _evaluate(system, x):
     e_scale = max(e_scale0, abs(0.5 * _dot(v1, p1)), abs(zg), _TINY)
     err = max(r_inf / (rtol * max(scale, _TINY)), err_c, vr / (etol * e_scale))
     err = roundoff_floor(err, err_c, r_inf, fl_inf, vr, vfl)
+    if mat[mat.size - 1] != 0.0:        # an entry outside the Newton pattern: the step goes to Python
+        ws[8][0] = 1
     return err if all_finite(res) else np.nan
 
 
@@ -1511,13 +1682,20 @@ def _solve(system):
     scene's plan has one (:func:`skfem_flex.linear_solver.bordered_band_solve`, several times faster
     on beams), else, or when that solve is not backward stable, by LAPACK gesv."""
     res, mat = system[2][0], system[2][1]
-    interior, border, lo, up = system[0][9]
+    interior, border, lo, up, fpos = system[0][9]
+    size = fpos.size
+    n, nx = fpos[size - 3], fpos[size - 2]
+    if fpos[size - 1] == CSR:           # no dense fallback: a failed solve hands the step to Python
+        nnz = fpos[n + nx]
+        return bordered_band_solve_csr(mat, fpos[n:n + nx + 1], fpos[n + nx + 1:n + nx + 1 + nnz], res, interior,
+                                       border, lo, up)
+    a = mat[:nx * nx].reshape(nx, nx)
     if interior.size:
-        x, ok = bordered_band_solve(mat, res, interior, border, lo, up)
+        x, ok = bordered_band_solve(a, res, interior, border, lo, up)
         if ok:
             return x, True
     try:
-        return np.linalg.solve(mat, res), True
+        return np.linalg.solve(a, res), True
     except Exception:                  # singular: numba raises LinAlgError
         return res.copy(), False
 
@@ -1551,12 +1729,15 @@ def _derived(packed, q, v, p, rv):
 def _chunk_workspace(packed, n, nf):
     """:func:`_workspace` of a chunk: n coordinates, nf of them free, the packed scene's multipliers and
     largest body block."""
-    maps = packed[3]
+    maps, fpos = packed[3], packed[9][4]
     nbmax = 1
     for k in range(maps[2].size):
         nbmax = max(nbmax, maps[2][k])
     m = packed[5][7]
-    return _workspace(n, m, nf + m, nbmax)
+    size = fpos.size
+    nx = fpos[size - 2]
+    nmat = nx * nx + 1 if fpos[size - 1] == DENSE else fpos[fpos[size - 3] + nx] + 1
+    return _workspace(n, m, nf + m, nmat, nbmax)
 
 
 @numba.njit(cache=True)
@@ -1743,8 +1924,9 @@ def newton_system(scene, q0, v0, h, t=0.0, lam=None):
     x0 : ndarray
         The start of the Newton iteration.
     """
-    if pack(scene) is None:
-        raise ValueError(f"scene {scene.name!r} has a part without a compiled form (see compiled_scene.eligible)")
+    if not _compiles(scene):
+        raise ValueError(f"scene {scene.name!r} has a part without a compiled form, or a Newton matrix too large "
+                         f"to store dense with no bordered band plan (see compiled_scene.eligible)")
     return _system(scene, _planned(scene), _packed(scene)[2], q0, v0, h, t, lam)
 
 
@@ -1758,7 +1940,7 @@ def _system(scene, packed, columns, q0, v0, h, t, lam):
     if scene.prescribed_index.size:
         ws[2][_DQ_BASE][scene.prescribed_index] = scene.prescribed_state(t + h)[0] - q0[scene.prescribed_index]
     sc = np.array([float(h), max_abs(p0), abs(0.5 * float(v0 @ p0)), 1e-12, 1e-12, 1e-14])
-    step = (q0, v0, p0, free, _free_positions(scene), sc, np.ascontiguousarray(trow[None, :]),
+    step = (q0, v0, p0, free, packed[9][4], sc, np.ascontiguousarray(trow[None, :]),
             np.zeros(1, dtype=np.int64))
     lam = np.zeros(m) if lam is None else np.asarray(lam, dtype=float)
     return (packed, step, ws), np.concatenate([h * v0[free], h * lam])
@@ -1790,7 +1972,7 @@ def run_chunk(scene, scheme, state, dt, t_end, first_step, n_chunk, n_steps, rec
                 else np.zeros(npr))
     out = _run(packed, np.ascontiguousarray(state.q, dtype=float),
                np.ascontiguousarray(state.v, dtype=float), predictor_acceleration(state), float(state.t), hs, qp, table,
-               scene.prescribed_index.astype(np.int64), scene.free_index.astype(np.int64), _free_positions(scene),
+               scene.prescribed_index.astype(np.int64), scene.free_index.astype(np.int64), packed[9][4],
                lam, reaction,
                float(s.rtol), float(s.ctol), float(s.etol), int(s.max_iterations), bool(s.line_search), float(work),
                int(first_step), int(record_every), int(n_steps))
@@ -1833,7 +2015,7 @@ def _run_chunk_newmark(scene, scheme, state, dt, t_end, first_step, n_chunk, n_s
                          f"Integrator.start makes them)")
     out = _run_newmark(packed, np.ascontiguousarray(state.q, dtype=float), np.ascontiguousarray(state.v, dtype=float),
                        acc, pseudo, float(state.t), hs, qp, vp, ap, table, scene.prescribed_index.astype(np.int64),
-                       scene.free_index.astype(np.int64), _free_positions(scene), lam, reaction, have_reaction,
+                       scene.free_index.astype(np.int64), packed[9][4], lam, reaction, have_reaction,
                        scheme.alpha_m, scheme.alpha_f, scheme.beta, scheme.gamma,
                        scheme.constraint_level == "velocity", any(c.rheonomic for c in scene.constraints),
                        float(s.rtol), float(s.ctol), int(s.max_iterations), bool(s.line_search), float(work),
@@ -1956,7 +2138,7 @@ def _constraint_terms_at(maps, constraints, q1, v1, mu, trow, mat, fpos, ws, cv)
                 for j in range(nb):
                     jb = fpos[o + j]
                     if jb >= 0:
-                        mat[ia, jb] += mu[r0] * (jac[0, a] * jac[0, j] + jac[1, a] * jac[1, j])
+                        _madd(mat, fpos, ia, jb, mu[r0] * (jac[0, a] * jac[0, j] + jac[1, a] * jac[1, j]))
     _add_rotated_rows(maps, constraints, constraints[14], q1, q1, v1, mu, 2.0, cq, cq[:0], cv, mat, fpos, ws)
 
 @numba.njit(cache=True)
@@ -1965,7 +2147,6 @@ def _add_strain_potential(strains, strain_off, strain_pos, q1, h, grad, mat):
     function so that Numba prunes it in scenes without exact beams."""
     if strains is None:
         return True
-    flat = mat.reshape(-1)
     pos, ptr = strain_pos
     for i in range(len(strains)):
         kd = strains[i]
@@ -1983,7 +2164,7 @@ def _add_strain_potential(strains, strain_off, strain_pos, q1, h, grad, mat):
         for t in range(data.size):
             k = pos[base + t]
             if k >= 0:
-                flat[k] += 2.0 * h * data[t]
+                mat[k] += 2.0 * h * data[t]
     return True
 
 
@@ -1994,7 +2175,6 @@ def _add_frame_newmark(frames, frame_off, frame_pos, q1, v1, acc1, terms, c_a, c
     :func:`_add_frame_terms`, so that Numba prunes it in scenes without such bodies)."""
     if frames is None:
         return
-    flat = mat.reshape(-1)
     pos, ptr = frame_pos
     for i in range(len(frames)):
         kd = frames[i]
@@ -2011,7 +2191,7 @@ def _add_frame_newmark(frames, frame_off, frame_pos, q1, v1, acc1, terms, c_a, c
         for t in range(data.size):
             k = pos[base + t]
             if k >= 0:
-                flat[k] += h * data[t]
+                mat[k] += h * data[t]
 
 
 @numba.njit(cache=True)
@@ -2046,7 +2226,7 @@ def _evaluate_newmark(system, x):
     for j in range(pres.size):
         i = pres[j]
         v1[i], acc1[i], a1[i] = vp[j], ap[j], ap[j]
-    mat[:, :] = 0.0
+    mat[:] = 0.0
     ptr, idx, dat = mass
     for i in range(n):                  # the constant-mass bodies: M q̈1, |M| terms, h c_a M
         s, sa = 0.0, 0.0
@@ -2056,7 +2236,7 @@ def _evaluate_newmark(system, x):
             sa += abs(dat[t]) * terms[idx[t]]
             jb = fpos[idx[t]]
             if ia >= 0 and jb >= 0:
-                mat[ia, jb] += h * c_a * dat[t]
+                _madd(mat, fpos, ia, jb, h * c_a * dat[t])
         inertia[i] = s
         mterms[i] = sa
     grad[:] = 0.0
@@ -2100,20 +2280,22 @@ def _evaluate_newmark(system, x):
             c_scale = max(c_scale, cqv / c_v, max_abs(phi_t) / c_v)
             for i in range(m):
                 res[nf + i] = (_dot(cq[i], v1) + phi_t[i]) / c_v
-                for j in range(nf):
-                    mat[nf + i, j] = cq[i, free[j]] + cv[i, free[j]] / c_v
+                for j in range(nf):     # the border, on a zeroed matrix: adds are sets
+                    _madd(mat, fpos, nf + i, j, cq[i, free[j]] + cv[i, free[j]] / c_v)
         else:
             for i in range(m):
                 res[nf + i] = phi[i]
                 for j in range(nf):
-                    mat[nf + i, j] = cq[i, free[j]]
+                    _madd(mat, fpos, nf + i, j, cq[i, free[j]])
         for i in range(m):
             for j in range(nf):
-                mat[j, nf + i] = cq[i, free[j]]
+                _madd(mat, fpos, j, nf + i, cq[i, free[j]])
         err_c = max_abs(res[nf:]) / (ctol * c_scale)
     for i in range(nf):
         res[i] = r[free[i]]
     err = max(max_abs(res[:nf]) / (rtol * max(scale, _TINY)), err_c)
+    if mat[mat.size - 1] != 0.0:        # an entry outside the Newton pattern: the step goes to Python
+        ws[8][0] = 1
     return err if all_finite(res) else np.nan
 
 

@@ -8,9 +8,11 @@ accepted when its normwise backward error is below 1e-12); otherwise by SuperLU.
 matrices go to LAPACK gesv. The plans (which entry goes where) depend only on the sparsity
 pattern and are built once per pattern.
 
-Compiled code that holds its Newton matrix as a dense array (``compiled_scene``) can solve it
-the same way, band LU of the interior and dense Schur complement of the border, with
-:func:`dense_bordered_plan` (once per pattern) and the Numba kernel :func:`bordered_band_solve`.
+Compiled code (``compiled_scene``) solves its Newton matrix the same way, band LU of the interior
+and dense Schur complement of the border, with :func:`dense_bordered_plan` (once per pattern) and
+the Numba kernel :func:`bordered_band_solve` (the matrix held as a dense array) or
+:func:`bordered_band_solve_csr` (held as the values of a fixed CSR pattern); both share one
+elimination.
 """
 from __future__ import annotations
 
@@ -22,7 +24,7 @@ import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 
 __all__ = ["linear_solve", "PatternCache", "MAX_BANDWIDTH", "MAX_BORDER", "dense_bordered_plan",
-           "bordered_band_solve"]
+           "reordered_band_plan", "bordered_band_solve", "bordered_band_solve_csr"]
 
 
 class PatternCache:
@@ -298,6 +300,10 @@ def _interior_band(rows, cols, border):
     return interior, int(max(0, -off.min(initial=0))), int(max(0, off.max(initial=0)))
 
 
+#: most thresholds :func:`dense_bordered_plan` tries (each costs a pass over the pattern)
+MAX_THRESHOLDS = 256
+
+
 def dense_bordered_plan(pattern, far=None, max_border=None):
     """Plan of :func:`bordered_band_solve` for dense matrices with the nonzeros ``pattern``, or None.
 
@@ -309,7 +315,8 @@ def dense_bordered_plan(pattern, far=None, max_border=None):
     What counts as far must scale with the matrix: the sparse solver's ``MAX_BANDWIDTH // 2``
     (32) is right for large meshes, but a 30 × 30 Newton matrix has no entry that far, and
     its frame columns would stay in the interior, whose band would then be the whole matrix.
-    So by default every threshold (every distance |i − j| that occurs) is tried and the one
+    So by default every threshold (every distance |i − j| that occurs; above
+    :data:`MAX_THRESHOLDS` of them a geometric sample, dense near the diagonal) is tried and the one
     whose plan has the least modeled work (:func:`_bordered_band_work`) is kept; the largest
     such threshold on ties. For a floating beam the result is flat over a wide range of
     thresholds: any one above the elastic band's half-width and below the beam's length puts
@@ -317,7 +324,7 @@ def dense_bordered_plan(pattern, far=None, max_border=None):
 
     Parameters
     ----------
-    pattern : array_like of bool, shape (n, n)
+    pattern : array_like of bool or scipy sparse matrix, shape (n, n)
         The structural nonzeros: the union of ``mat != 0`` over several evaluations (states
         where an entry happens to vanish must not drop it). An entry of the interior block
         outside the band found here is not read by the solve; it shows up in the solve's
@@ -340,17 +347,28 @@ def dense_bordered_plan(pattern, far=None, max_border=None):
         of the bordered band solve, with its dense backward-error check (2n²), is not
         :data:`DENSE_BORDERED_GAIN` times below that of dense LU (n³/3 + n²).
     """
-    pattern = np.asarray(pattern, dtype=bool)
+    if sps.issparse(pattern):
+        pattern = sps.csr_matrix(pattern, dtype=bool)
+    else:
+        pattern = np.asarray(pattern, dtype=bool)
     if pattern.ndim != 2 or pattern.shape[0] != pattern.shape[1]:
         raise ValueError(f"pattern must be a square matrix, not of shape {pattern.shape}")
     n = pattern.shape[0]
     if n < MIN_DENSE_BORDERED:
         return None
     max_border = n // 2 if max_border is None else int(max_border)
-    rows, cols = np.nonzero(pattern)
-    no_diagonal = ~np.diagonal(pattern)
+    if sps.issparse(pattern):
+        pattern.eliminate_zeros()
+        rows, cols = pattern.nonzero()
+        no_diagonal = ~np.asarray(pattern.diagonal(), dtype=bool)
+    else:
+        rows, cols = np.nonzero(pattern)
+        no_diagonal = ~np.diagonal(pattern)
     if far is None:
         thresholds = np.unique(np.abs(rows - cols))[::-1]     # each gives another set of far entries
+        if thresholds.size > MAX_THRESHOLDS:                   # large: a geometric sample, fine near the band
+            pick = np.geomspace(1, thresholds.size, MAX_THRESHOLDS).astype(np.int64) - 1
+            thresholds = thresholds[::-1][np.unique(pick)][::-1]
     else:
         thresholds = [int(far)]
     best, best_work = None, np.inf
@@ -368,6 +386,56 @@ def dense_bordered_plan(pattern, far=None, max_border=None):
     if best is None or DENSE_BORDERED_GAIN * (best_work + 2.0 * n * n) > n ** 3 / 3.0 + n * n:
         return None
     return best
+
+
+def reordered_band_plan(pattern, max_border=MAX_BORDER):
+    """Plan of :func:`bordered_band_solve` that reorders the coordinates, or None: the dense rows and
+    columns (a floating frame's coordinates: more than 8 times the median number of entries, at least
+    16) form the border, and the rest, Lagrange multipliers included, is ordered by reverse
+    Cuthill–McKee into a band.
+
+    For matrices whose natural order is no band with a small border: a chain of many bodies, whose
+    multipliers (no diagonal entry) would all go to the border of :func:`dense_bordered_plan` and make
+    its Schur complement as large as the chain. Beside its coordinates a multiplier has a zero
+    diagonal; the band LU's partial pivoting takes a coordinate's row as its pivot instead, and the
+    backward-error check of the solve reports a failure.
+
+    Parameters
+    ----------
+    pattern : array_like of bool or scipy sparse matrix, shape (n, n)
+        The structural nonzeros.
+    max_border : int
+        Most coordinates in the border.
+
+    Returns
+    -------
+    tuple or None
+        ``(interior, border, lo, up)`` as :func:`dense_bordered_plan` returns it (the interior in the
+        band's order, not ascending), or None if the border would be larger than ``max_border`` or
+        the band wider than :data:`MAX_BANDWIDTH`.
+    """
+    from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+    p = sps.csr_matrix(pattern, dtype=bool)
+    n = p.shape[0]
+    if p.shape != (n, n) or n == 0:
+        raise ValueError(f"pattern must be a non-empty square matrix, not of shape {p.shape}")
+    sym = (p + p.T).tocsr()
+    degree = np.diff(sym.indptr)
+    border = degree > max(8.0 * np.median(degree), 16.0)
+    if border.sum() > max_border or border.all():
+        return None
+    rest = np.flatnonzero(~border)
+    interior = rest[reverse_cuthill_mckee(sym[rest][:, rest].tocsr(), symmetric_mode=True)]
+    pos = np.full(n, -1, dtype=np.int64)
+    pos[interior] = np.arange(interior.size)
+    rows, cols = p.nonzero()
+    inner = ~border[rows] & ~border[cols]
+    off = pos[cols[inner]] - pos[rows[inner]]
+    lo, up = int(max(0, -off.min(initial=0))), int(max(0, off.max(initial=0)))
+    if lo + up > MAX_BANDWIDTH:
+        return None
+    return interior.astype(np.int64), np.flatnonzero(border).astype(np.int64), lo, up
 
 
 @numba.njit(inline="always")
@@ -439,6 +507,144 @@ def _dense_backward_stable(mat, rhs, x, tol):
 
 
 @numba.njit(cache=True, fastmath={"contract"})
+def _bordered_core(ab, y, gb, sch, interior, border, lo, up, x):
+    """The elimination of :func:`bordered_band_solve`, shared by its dense and CSR forms: x from the
+    gathered blocks; False if a pivot is zero or not finite (x then NaN).
+
+    ``ab``: A_II by rows, entry (r, c) at ab[r·w + c − r + lo], w = 2 lo + up + 1, the slots right of
+    the band zero (the fill of row interchanges); ``y``: r_I, then A_IB's columns, each contiguous;
+    ``gb``: A_BI by rows; ``sch``: [A_BB | r_B] by rows, k × (k + 1). All are overwritten."""
+    ni, k = interior.size, border.size
+    uu = lo + up                           # U's bandwidth after row interchanges
+    w = lo + uu + 1
+    # keep only the columns of A_IB that are not zero (a multiplier's column is zero on the
+    # interior when it constrains frame coordinates only): act[s − 1] is the border index of
+    # right-hand side s, m their number with r_I
+    ints = np.empty(k + ni, dtype=np.int64)
+    act, uend = ints[:k], ints[k:]
+    m = 1
+    for b in range(k):
+        src = (b + 1) * ni
+        nonzero = False
+        for i in range(ni):
+            if y[uint64(src + i)] != 0.0:
+                nonzero = True
+                break
+        if nonzero:
+            if m != b + 1:
+                for i in range(ni):
+                    y[uint64(m * ni + i)] = y[uint64(src + i)]
+            act[m - 1] = b
+            m += 1
+    # band LU with partial pivoting (LAPACK gbtf2); the right-hand sides are eliminated along,
+    # so L need not be kept. ju is the last column U reaches so far (gbtf2's JU), uend[j] that
+    # of row j: with few interchanges the updates stay lo + up wide at most, usually up.
+    ju = 0
+    for j in range(ni):
+        last = min(ni - 1, j + lo)
+        dj = j * w + lo
+        p = j
+        big = abs(ab[uint64(dj)])
+        for r in range(j + 1, last + 1):
+            v = abs(ab[uint64(r * w + j - r + lo)])
+            if v > big:
+                big, p = v, r
+        if not (big > 0.0 and big < np.inf):
+            x[:] = np.nan
+            return False
+        ju = max(ju, min(ni - 1, p + up))
+        uend[j] = ju
+        ncol = ju - j
+        if p != j:
+            op = p * w + j - p + lo
+            for t in range(ncol + 1):
+                tmp = ab[uint64(dj + t)]
+                ab[uint64(dj + t)] = ab[uint64(op + t)]
+                ab[uint64(op + t)] = tmp
+            for s in range(m):
+                tmp = y[uint64(s * ni + j)]
+                y[uint64(s * ni + j)] = y[uint64(s * ni + p)]
+                y[uint64(s * ni + p)] = tmp
+        pivot = ab[uint64(dj)]
+        for r in range(j + 1, last + 1):
+            o = r * w + j - r + lo
+            l = ab[uint64(o)] / pivot
+            if l != 0.0:
+                _axpy(ab, uint64(o + 1), ab, uint64(dj + 1), uint64(ncol), l)
+                for s in range(m):
+                    y[uint64(s * ni + r)] -= l * y[uint64(s * ni + j)]
+    # back substitution with the m right-hand sides interleaved: each alone is a chain of
+    # dependent operations (latency-bound), together they overlap
+    for j in range(ni - 1, -1, -1):
+        o = j * w + lo
+        ncol = uint64(uend[j] - j)
+        d = 1.0 / ab[uint64(o)]
+        for s in range(m):
+            q = s * ni + j
+            y[uint64(q)] = (y[uint64(q)] - _dot(ab, uint64(o + 1), y, uint64(q + 1), ncol)) * d
+    # Schur complement [S | r_B − A_BI y] by rows
+    kk = k + 1
+    for a in range(k):
+        g0 = a * ni
+        nonzero = False
+        for i in range(ni):
+            if gb[uint64(g0 + i)] != 0.0:
+                nonzero = True
+                break
+        if nonzero:                        # a multiplier's row is often zero on the interior
+            sch[a * kk + k] -= _dot_long(gb, uint64(g0), y, uint64(0), uint64(ni))
+            for s in range(1, m):
+                sch[a * kk + act[s - 1]] -= _dot_long(gb, uint64(g0), y, uint64(s * ni), uint64(ni))
+    # x_B: dense LU of S with partial pivoting, the right-hand side as column k
+    for j in range(k):
+        p = j
+        big = abs(sch[j * kk + j])
+        for r in range(j + 1, k):
+            v = abs(sch[r * kk + j])
+            if v > big:
+                big, p = v, r
+        if not (big > 0.0 and big < np.inf):
+            x[:] = np.nan
+            return False
+        if p != j:
+            for c in range(j, kk):
+                tmp = sch[j * kk + c]
+                sch[j * kk + c] = sch[p * kk + c]
+                sch[p * kk + c] = tmp
+        pivot = sch[j * kk + j]
+        for r in range(j + 1, k):
+            l = sch[r * kk + j] / pivot
+            if l != 0.0:
+                _axpy(sch, uint64(r * kk + j + 1), sch, uint64(j * kk + j + 1), uint64(k - j), l)
+    for j in range(k - 1, -1, -1):
+        t = sch[j * kk + k]
+        for c in range(j + 1, k):
+            t -= sch[j * kk + c] * x[border[c]]
+        x[border[j]] = t / sch[j * kk + j]
+    # x_I = y − Y x_B
+    for i in range(ni):
+        t = y[i]
+        for s in range(1, m):
+            t -= y[uint64(s * ni + i)] * x[border[act[s - 1]]]
+        x[interior[i]] = t
+    return True
+
+
+@numba.njit(cache=True)
+def _check_plan(n, interior, border, lo, up):
+    """Raise ValueError if (interior, border, lo, up) is no plan for n coordinates."""
+    ni, k = interior.size, border.size
+    if ni + k != n or ni == 0 or lo < 0 or up < 0:
+        raise ValueError("bordered_band_solve: the plan does not fit the matrix")
+    for i in range(ni):                    # unchecked unsigned indices below: a bad one would not raise
+        if interior[i] < 0 or interior[i] >= n:
+            raise ValueError("bordered_band_solve: interior index out of range")
+    for i in range(k):
+        if border[i] < 0 or border[i] >= n:
+            raise ValueError("bordered_band_solve: border index out of range")
+
+
+@numba.njit(cache=True, fastmath={"contract"})
 def bordered_band_solve(mat, rhs, interior, border, lo, up):
     """Solve mat x = rhs as a band with a dense border (plan of :func:`dense_bordered_plan`).
 
@@ -484,23 +690,15 @@ def bordered_band_solve(mat, rhs, interior, border, lo, up):
         If the shapes do not fit or an index is out of range (a plan for another matrix).
     """
     n = mat.shape[0]
-    ni, k = interior.size, border.size
-    if mat.shape[1] != n or rhs.size != n or ni + k != n or ni == 0 or lo < 0 or up < 0:
+    if mat.shape[1] != n or rhs.size != n:
         raise ValueError("bordered_band_solve: the plan does not fit the matrix")
-    for i in range(ni):                    # unchecked unsigned indices below: a bad one would not raise
-        if interior[i] < 0 or interior[i] >= n:
-            raise ValueError("bordered_band_solve: interior index out of range")
-    for i in range(k):
-        if border[i] < 0 or border[i] >= n:
-            raise ValueError("bordered_band_solve: border index out of range")
-    x = np.empty(n)
-    uu = lo + up                           # U's bandwidth after row interchanges
-    w = lo + uu + 1
-    # A_II by rows: entry (r, c) at ab[r·w + c − r + lo], c from r − lo to r + lo + up; the
-    # slots right of the band hold the fill of row interchanges and start at zero
+    _check_plan(n, interior, border, lo, up)
+    ni, k = interior.size, border.size
+    w = 2 * lo + up + 1
     ab = np.zeros(ni * w)
-    # right-hand sides by columns, each contiguous: r_I, then A_IB's columns
     y = np.empty((k + 1) * ni)
+    gb = np.empty(k * ni)
+    sch = np.empty(k * (k + 1))
     for r in range(ni):
         row = interior[r]
         base = r * w + lo - r
@@ -509,119 +707,85 @@ def bordered_band_solve(mat, rhs, interior, border, lo, up):
         y[r] = rhs[row]
         for b in range(k):
             y[uint64((b + 1) * ni + r)] = mat[row, uint64(border[b])]
-    # keep only the columns of A_IB that are not zero (a multiplier's column is zero on the
-    # interior when it constrains frame coordinates only): act[s − 1] is the border index of
-    # right-hand side s, m their number with r_I
-    ints = np.empty(k + ni, dtype=np.int64)
-    act, uend = ints[:k], ints[k:]
-    m = 1
-    for b in range(k):
-        src = (b + 1) * ni
-        nonzero = False
-        for i in range(ni):
-            if y[uint64(src + i)] != 0.0:
-                nonzero = True
-                break
-        if nonzero:
-            if m != b + 1:
-                for i in range(ni):
-                    y[uint64(m * ni + i)] = y[uint64(src + i)]
-            act[m - 1] = b
-            m += 1
-    # band LU with partial pivoting (LAPACK gbtf2); the right-hand sides are eliminated along,
-    # so L need not be kept. ju is the last column U reaches so far (gbtf2's JU), uend[j] that
-    # of row j: with few interchanges the updates stay lo + up wide at most, usually up.
-    ju = 0
-    for j in range(ni):
-        last = min(ni - 1, j + lo)
-        dj = j * w + lo
-        p = j
-        big = abs(ab[uint64(dj)])
-        for r in range(j + 1, last + 1):
-            v = abs(ab[uint64(r * w + j - r + lo)])
-            if v > big:
-                big, p = v, r
-        if not (big > 0.0 and big < np.inf):
-            x[:] = np.nan
-            return x, False
-        ju = max(ju, min(ni - 1, p + up))
-        uend[j] = ju
-        ncol = ju - j
-        if p != j:
-            op = p * w + j - p + lo
-            for t in range(ncol + 1):
-                tmp = ab[uint64(dj + t)]
-                ab[uint64(dj + t)] = ab[uint64(op + t)]
-                ab[uint64(op + t)] = tmp
-            for s in range(m):
-                tmp = y[uint64(s * ni + j)]
-                y[uint64(s * ni + j)] = y[uint64(s * ni + p)]
-                y[uint64(s * ni + p)] = tmp
-        pivot = ab[uint64(dj)]
-        for r in range(j + 1, last + 1):
-            o = r * w + j - r + lo
-            l = ab[uint64(o)] / pivot
-            if l != 0.0:
-                _axpy(ab, uint64(o + 1), ab, uint64(dj + 1), uint64(ncol), l)
-                for s in range(m):
-                    y[uint64(s * ni + r)] -= l * y[uint64(s * ni + j)]
-    # back substitution with the m right-hand sides interleaved: each alone is a chain of
-    # dependent operations (latency-bound), together they overlap
-    for j in range(ni - 1, -1, -1):
-        o = j * w + lo
-        ncol = uint64(uend[j] - j)
-        d = 1.0 / ab[uint64(o)]
-        for s in range(m):
-            q = s * ni + j
-            y[uint64(q)] = (y[uint64(q)] - _dot(ab, uint64(o + 1), y, uint64(q + 1), ncol)) * d
-    # Schur complement [S | r_B − A_BI y] by rows, k × (k + 1); g is a row of A_BI
-    kk = k + 1
-    work = np.empty(k * kk + ni)
-    sch, g = work[:k * kk], work[k * kk:]
     for a in range(k):
         row = border[a]
-        nonzero = False
         for i in range(ni):
-            v = mat[row, uint64(interior[i])]
-            g[i] = v
-            nonzero = nonzero or v != 0.0
+            gb[uint64(a * ni + i)] = mat[row, uint64(interior[i])]
         for b in range(k):
-            sch[a * kk + b] = mat[row, uint64(border[b])]
-        sch[a * kk + k] = rhs[row]
-        if nonzero:                        # a multiplier's row is often zero on the interior
-            sch[a * kk + k] -= _dot_long(g, uint64(0), y, uint64(0), uint64(ni))
-            for s in range(1, m):
-                sch[a * kk + act[s - 1]] -= _dot_long(g, uint64(0), y, uint64(s * ni), uint64(ni))
-    # x_B: dense LU of S with partial pivoting, the right-hand side as column k
-    for j in range(k):
-        p = j
-        big = abs(sch[j * kk + j])
-        for r in range(j + 1, k):
-            v = abs(sch[r * kk + j])
-            if v > big:
-                big, p = v, r
-        if not (big > 0.0 and big < np.inf):
-            x[:] = np.nan
-            return x, False
-        if p != j:
-            for c in range(j, kk):
-                tmp = sch[j * kk + c]
-                sch[j * kk + c] = sch[p * kk + c]
-                sch[p * kk + c] = tmp
-        pivot = sch[j * kk + j]
-        for r in range(j + 1, k):
-            l = sch[r * kk + j] / pivot
-            if l != 0.0:
-                _axpy(sch, uint64(r * kk + j + 1), sch, uint64(j * kk + j + 1), uint64(k - j), l)
-    for j in range(k - 1, -1, -1):
-        t = sch[j * kk + k]
-        for c in range(j + 1, k):
-            t -= sch[j * kk + c] * x[border[c]]
-        x[border[j]] = t / sch[j * kk + j]
-    # x_I = y − Y x_B
-    for i in range(ni):
-        t = y[i]
-        for s in range(1, m):
-            t -= y[uint64(s * ni + i)] * x[border[act[s - 1]]]
-        x[interior[i]] = t
+            sch[a * (k + 1) + b] = mat[row, uint64(border[b])]
+        sch[a * (k + 1) + k] = rhs[row]
+    x = np.empty(n)
+    if not _bordered_core(ab, y, gb, sch, interior, border, lo, up, x):
+        return x, False
     return x, _dense_backward_stable(mat, rhs, x, 1e-12)
+
+
+@numba.njit(cache=True, fastmath={"contract"})
+def bordered_band_solve_csr(vals, ptr, idx, rhs, interior, border, lo, up):
+    """:func:`bordered_band_solve` of a matrix stored in CSR form (``vals[ptr[i]:ptr[i + 1]]`` the
+    entries of row i in the columns ``idx[ptr[i]:ptr[i + 1]]``): the same elimination
+    (:func:`_bordered_core`), the blocks gathered from the stored entries, the backward error
+    ‖mat x − rhs‖∞ / (‖mat‖∞ ‖x‖∞ + ‖rhs‖∞) from every stored entry (O(nnz)). A stored entry of A_II
+    outside the planned band is not read; that check sees it (``ok`` False).
+
+    ``vals`` may be longer than ``ptr[-1]`` (entries past the matrix are ignored). Raises ValueError
+    if the shapes do not fit or an index is out of range.
+    """
+    n = rhs.size
+    if ptr.size != n + 1 or ptr[n] > vals.size or ptr[n] > idx.size:
+        raise ValueError("bordered_band_solve_csr: the CSR structure does not fit the right-hand side")
+    _check_plan(n, interior, border, lo, up)
+    for t in range(ptr[n]):
+        if idx[t] < 0 or idx[t] >= n:
+            raise ValueError("bordered_band_solve_csr: column index out of range")
+    ni, k = interior.size, border.size
+    w = 2 * lo + up + 1
+    where = np.empty(n, dtype=np.int64)    # interior position, or −1 − border position
+    for i in range(ni):
+        where[interior[i]] = i
+    for b in range(k):
+        where[border[b]] = -1 - b
+    ab = np.zeros(ni * w)
+    y = np.zeros((k + 1) * ni)
+    gb = np.zeros(k * ni)
+    sch = np.zeros(k * (k + 1))
+    for r in range(ni):
+        row = interior[r]
+        y[r] = rhs[row]
+        for t in range(ptr[row], ptr[row + 1]):
+            c = where[idx[t]]
+            if c >= 0:
+                if c - r <= up and r - c <= lo:
+                    ab[uint64(r * w + c - r + lo)] = vals[t]
+            else:
+                y[uint64((-c) * ni + r)] = vals[t]
+    for a in range(k):
+        row = border[a]
+        for t in range(ptr[row], ptr[row + 1]):
+            c = where[idx[t]]
+            if c >= 0:
+                gb[uint64(a * ni + c)] = vals[t]
+            else:
+                sch[a * (k + 1) - 1 - c] = vals[t]
+        sch[a * (k + 1) + k] = rhs[row]
+    x = np.empty(n)
+    if not _bordered_core(ab, y, gb, sch, interior, border, lo, up, x):
+        return x, False
+    x_inf = 0.0
+    for j in range(n):
+        v = abs(x[j])
+        if not v < np.inf:
+            return x, False
+        x_inf = max(x_inf, v)
+    r_inf, a_inf, b_inf = 0.0, 0.0, 0.0
+    for i in range(n):
+        s, a = -rhs[i], 0.0
+        for t in range(ptr[i], ptr[i + 1]):
+            s += vals[t] * x[idx[t]]
+            a += abs(vals[t])
+        if not (abs(s) < np.inf and a < np.inf):
+            return x, False
+        r_inf = max(r_inf, abs(s))
+        a_inf = max(a_inf, a)
+        b_inf = max(b_inf, abs(rhs[i]))
+    return x, r_inf <= 1e-12 * max(a_inf * x_inf + b_inf, 1e-300)

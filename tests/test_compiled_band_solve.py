@@ -11,6 +11,11 @@
    SuperLU does; the same border for the same threshold).
 5. The plan of a mechanism's Newton matrix puts every multiplier (no diagonal) in the border, and
    its band solve succeeds (the slider-crank: 8 multipliers).
+7. A reordered plan (reverse Cuthill–McKee, multipliers in the band) for a chain's Newton matrix, whose
+   natural order has no band with a small border.
+6. The CSR form (``bordered_band_solve_csr``, the matrix held as the values of its pattern) gives the
+   dense form's solution from the same elimination, takes the plan of a sparse pattern, and reports
+   failure for an entry outside the planned band or a non-finite entry.
 """
 import numpy as np
 import pytest
@@ -130,8 +135,10 @@ def test_border_columns_zero_on_the_interior_are_skipped():
 
 
 def residual_and_matrix(system):
-    """The Newton residual and matrix in a system of ``compiled_scene.newton_system`` after ``_evaluate``."""
-    return system[2][0], system[2][1]
+    """The Newton residual and matrix (dense) in a system of ``compiled_scene.newton_system`` after
+    ``_evaluate``."""
+    mat = cs.newton_matrix(system)
+    return system[2][0], (mat.toarray() if sps.issparse(mat) else mat)
 
 
 @pytest.fixture(scope="module")
@@ -293,7 +300,7 @@ def test_mechanism_plan_puts_every_multiplier_in_the_border():
     in the interior the band LU met zero pivots, failed its check and the dense solve ran after it)."""
     scene = sf.scenes.get("slider_crank")()
     nf, m = scene.free_index.size, scene.n_constraints
-    interior, border, lo, up = cs._planned(scene)[9]
+    interior, border, lo, up = cs._planned(scene)[9][:4]
     assert m == 8 and set(range(nf, nf + m)) <= set(border.tolist()) and interior.size > 0
     q0, v0 = scene.initial_state()
     system, x0 = cs.newton_system(scene, q0, v0, 1e-4)
@@ -301,3 +308,78 @@ def test_mechanism_plan_puts_every_multiplier_in_the_border():
     res, mat = (a.copy() for a in residual_and_matrix(system))
     x, ok = ls.bordered_band_solve(mat, res, interior, border, lo, up)
     assert ok and rel_error(x, np.linalg.solve(mat, res)) <= 1e-12
+
+
+def csr_of(a, pattern):
+    """(vals, ptr, idx) of ``a`` stored on ``pattern`` (entries of a outside it dropped), with the extra last
+    value of the compiled step's storage."""
+    p = sps.csr_matrix(pattern.astype(np.int8))
+    p.sort_indices()
+    rows = np.repeat(np.arange(a.shape[0]), np.diff(p.indptr))
+    vals = np.concatenate([a[rows, p.indices], [0.0]])
+    return vals, p.indptr.astype(np.int64), p.indices.astype(np.int64)
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_csr_form_matches_the_dense_form(case):
+    ni, lo, up, n_frame, n_mult, frame_first = case
+    for seed in range(2):
+        a, pattern, border = random_bordered(ni, lo, up, n_frame, n_mult, frame_first, seed, pivoting=True)
+        plan = ls.dense_bordered_plan(pattern)
+        sparse_plan = ls.dense_bordered_plan(sps.csr_matrix(pattern))
+        for x, y in zip(plan, sparse_plan):
+            np.testing.assert_array_equal(x, y)
+        rhs = np.random.default_rng(7 + seed).normal(size=a.shape[0])
+        x_dense, ok_dense = ls.bordered_band_solve(a, rhs, *plan)
+        x, ok = ls.bordered_band_solve_csr(*csr_of(a, pattern), rhs, *plan)
+        assert ok and ok_dense
+        np.testing.assert_array_equal(x, x_dense)             # the same elimination, the same rounding
+        assert rel_error(x, np.linalg.solve(a, rhs)) <= 1e-12
+
+
+def test_csr_form_reports_an_entry_outside_the_band_and_non_finite_values():
+    a, pattern, border = random_bordered(40, 3, 3, 3, 2, True, seed=2, pivoting=False)
+    plan = ls.dense_bordered_plan(pattern)
+    interior = plan[0]
+    rhs = np.ones(a.shape[0])
+    pattern[interior[5], interior[30]] = True                 # stored, but outside the planned band
+    a[interior[5], interior[30]] = 0.0
+    assert ls.bordered_band_solve_csr(*csr_of(a, pattern), rhs, *plan)[1]
+    a[interior[5], interior[30]] = 1.0
+    assert not ls.bordered_band_solve_csr(*csr_of(a, pattern), rhs, *plan)[1]
+    a[interior[5], interior[30]] = 0.0
+    a[border[0], interior[7]] = np.nan
+    assert not ls.bordered_band_solve_csr(*csr_of(a, pattern), rhs, *plan)[1]
+    vals, ptr, idx = csr_of(a, pattern)
+    with pytest.raises(ValueError):
+        ls.bordered_band_solve_csr(vals, ptr[:-1], idx, rhs, *plan)
+    bad = idx.copy()
+    bad[3] = a.shape[0]
+    with pytest.raises(ValueError):
+        ls.bordered_band_solve_csr(vals, ptr, bad, rhs, *plan)
+
+
+def test_reordered_plan_of_a_chain():
+    """A chain of 70 bars: the natural plan would put all 140 multipliers in its border, more than MAX_BORDER;
+    the reordered plan is a band of half-width 5 without border (the multipliers inside it, pivoted past by
+    the band LU), and its solve is the dense solve's, also from CSR storage."""
+    from test_compiled_scene import rigid_chain
+    scene = rigid_chain(70)
+    pattern = cs._newton_pattern(scene, cs._packed(scene)[0])
+    assert ls.dense_bordered_plan(pattern, max_border=ls.MAX_BORDER) is None
+    plan = ls.reordered_band_plan(pattern)
+    interior, border, lo, up = plan
+    assert border.size == 0 and lo + up <= 12
+    np.testing.assert_array_equal(np.sort(interior), np.arange(pattern.shape[0]))
+    q0, v0 = scene.initial_state()
+    system, x0 = cs.newton_system(scene, q0, v0 + 0.3, 1e-3)
+    cs._evaluate(system, x0)
+    res, mat = (a.copy() for a in residual_and_matrix(system))
+    ref = np.linalg.solve(mat, res)
+    x, ok = ls.bordered_band_solve(mat, res, *plan)
+    assert ok and rel_error(x, ref) <= 1e-10
+    x, ok = ls.bordered_band_solve_csr(*csr_of(mat, pattern.toarray()), res, *plan)
+    assert ok and rel_error(x, ref) <= 1e-10
+    with pytest.raises(ValueError):
+        ls.reordered_band_plan(np.ones((3, 4), dtype=bool))
+    assert ls.reordered_band_plan(pattern, max_border=-1) is None

@@ -17,6 +17,7 @@ import skfem_flex as sf
 from skfem_flex import compiled_scene
 from skfem_flex.bodies.base import to_dense
 from skfem_flex.integrators import ConvergenceError, EnergyMomentum, NewtonSettings, Trapezoidal, make_integrator
+from skfem_flex.bodies.probes import PointProbe
 from skfem_flex.scenes.links import link
 
 EPS = np.finfo(float).eps
@@ -687,7 +688,7 @@ def test_energy_momentum_newton_matrix_is_the_residuals_derivative(factory):
                                               lam=rng.normal(size=scene.n_constraints))
     x = x0 + 0.01 * rng.normal(size=x0.size)
     compiled_scene._evaluate(system, x)
-    mat = system[2][1].copy()
+    mat = compiled_scene.newton_matrix(system)
     fd = np.empty_like(mat)
     for j in range(x.size):
         e = np.zeros(x.size)
@@ -709,15 +710,16 @@ def test_line_on_a_moving_body_row_and_its_derivatives():
     n, m = scene.n, scene.n_constraints
     rotated = np.flatnonzero(cons[0] == compiled_scene.ROTATED)
     assert rotated.size == 2                        # the slider's row and the prismatic joint's first row
-    ws = compiled_scene._workspace(n, m, n, int(maps[2].max()))
+    ws = compiled_scene._workspace(n, m, n, n * n + 1, int(maps[2].max()))
+    index = compiled_scene._matrix_index(np.arange(n), n)           # dense storage, no prescribed coordinates
     rng = np.random.default_rng(5)
     q_ref = scene.initial_state()[0]
 
     def row(i, q0, q1, v, mu=0.0, scale=1.0):
-        cq, d, cv, mat = np.zeros((m, n)), np.zeros((m, n)), np.zeros((m, n)), np.zeros((n, n))
-        phi = compiled_scene._rotated_row(maps, cons, i, q0, q1, v, mu, scale, cq, d, cv, mat, np.arange(n), ws)
+        cq, d, cv, mat = np.zeros((m, n)), np.zeros((m, n)), np.zeros((m, n)), np.zeros(n * n + 1)
+        phi = compiled_scene._rotated_row(maps, cons, i, q0, q1, v, mu, scale, cq, d, cv, mat, index, ws)
         r = cons[1][i]
-        return phi, cq[r], d[r], cv[r], mat
+        return phi, cq[r], d[r], cv[r], mat[:n * n].reshape(n, n)
 
     def fd(fun, q, eps=1e-6):
         return np.column_stack([(fun(q + eps * e) - fun(q - eps * e)) / (2 * eps) for e in np.eye(n)])
@@ -742,15 +744,21 @@ def test_line_on_a_moving_body_row_and_its_derivatives():
 
 
 @pytest.mark.parametrize("scheme", ["energy-momentum", "trapezoidal"])
-@pytest.mark.parametrize("params", [dict(n_elements=64), dict(body="plane-stress", n_elements=8)])
-def test_scenes_above_the_dense_limit_compiled_equal_python(params, scheme):
-    """Scenes with more coordinates than the Python path keeps dense (DENSE_LIMIT: sparse matrices there),
-    up to SIZE_LIMIT: a 64-element flexible pendulum (195 coordinates) and one made of an unreduced
-    plane-stress strip (a dense 173 × 173 tangent) run compiled and give the Python step's run."""
+@pytest.mark.parametrize("params, storage", [(dict(n_elements=64), compiled_scene.CSR),
+                                             (dict(body="plane-stress", n_elements=8), compiled_scene.DENSE),
+                                             (dict(n_elements=220), compiled_scene.CSR)])
+def test_large_scenes_compiled_equal_python(params, storage, scheme):
+    """Scenes with more coordinates than the Python path keeps dense (DENSE_LIMIT: sparse matrices there)
+    run compiled and give the Python step's run: a 64-element flexible pendulum (195 coordinates) and a
+    220-element one (663, more than any dense storage takes: COMPILED_SIZE_LIMIT), their Newton matrices
+    stored as the values of their patterns, and one made of an unreduced plane-stress strip, whose dense
+    173 × 173 tangent has no band plan and is stored dense. No step leaves the loop (``run_both``): a
+    pattern that missed an entry would send it to Python."""
     factory = sf.scenes.get("flexible_pendulum")
     scene = factory(**params)
-    assert sf.scene.DENSE_LIMIT < scene.n <= compiled_scene.SIZE_LIMIT and not scene.dense
+    assert sf.scene.DENSE_LIMIT < scene.n and not scene.dense
     assert compiled_scene.eligible(scene, make_integrator(scheme))
+    assert compiled_scene._planned(scene)[9][4][-1] == storage
     a, b = run_both(lambda: factory(**params), t_end=0.01, dt=1e-3, integrator=scheme)
     # short stiff elements: the steps end at the round-off floor of the internal forces, and the
     # velocities 2Δq/Δt − v0 of the two paths agree to 3e-10 (as the free beam's, see above)
@@ -760,6 +768,94 @@ def test_scenes_above_the_dense_limit_compiled_equal_python(params, scheme):
         # on both paths (41 against 42 in all): positions agree to the Newton tolerance, 1.1e-10
         tol.update(q=3e-10, probes=3e-10)
     assert_same_run(a, b, tol=tol)
+
+
+def rigid_chain(n_links, length=0.1):
+    """A chain of n_links rigid bars hanging from a pin, joined by revolute joints, under gravity: 3 n_links
+    coordinates and 2 n_links multipliers."""
+    bars, cons = [], []
+    for i in range(n_links):
+        bar = sf.RigidBody.bar(length, 0.1, start=(i * length, 0.0), angle=0.0, name=f"bar {i}")
+        if i == 0:
+            cons.append(sf.Pin(bar.point((-0.5 * length, 0.0)), (0.0, 0.0), name="pin"))
+        else:
+            cons.append(sf.Revolute(bars[-1].point((0.5 * length, 0.0)), bar.point((-0.5 * length, 0.0)),
+                                    name=f"hinge {i}"))
+        bars.append(bar)
+    return sf.Scene(bars, constraints=cons, forces=[sf.Gravity((0.0, -9.81))], name="chain",
+                    probes={"tip": PointProbe(bars[-1].point((0.5 * length, 0.0)))})
+
+
+@pytest.mark.parametrize("scheme", ["energy-momentum", "trapezoidal"])
+def test_a_long_chain_runs_compiled_in_a_reordered_band(scheme):
+    """A chain of 70 bars (210 coordinates, 140 multipliers): in its natural order every multiplier would be a
+    border coordinate (no diagonal entry), more than MAX_BORDER; reordered (reverse Cuthill–McKee) its Newton
+    matrix is a band of half-width 5 without border, stored as CSR, and the run is the Python step's."""
+    scene = rigid_chain(70)
+    assert compiled_scene.eligible(scene, make_integrator(scheme))
+    interior, border, lo, up, index = compiled_scene._planned(scene)[9]
+    assert index[-1] == compiled_scene.CSR and border.size == 0 and lo + up <= 12
+    a, b = run_both(lambda: rigid_chain(70), t_end=0.01, dt=1e-3, integrator=scheme)
+    # the energy-momentum steps end once the force residual is at the Newton tolerance; a chain's multipliers
+    # follow from that residual through D, which is badly conditioned for a long chain, so the two paths'
+    # last iterates give λ and the pin's reaction to 3e-8 and 6e-8 (7e-9 and 1.4e-8 at 20 bars, where both
+    # store the matrix dense): positions and velocities agree to 3e-11
+    tol = dict(lam=1e-7, reactions=2e-7) if scheme == "energy-momentum" else dict(energy_balance=np.inf)
+    assert_same_run(a, b, tol=tol)
+
+
+PATTERN_SCENES = [lambda: sf.scenes.get(name)() for name in
+                  ("pendulum", "flexible_pendulum", "double_pendulum", "spin_up_pinned", "slider_crank",
+                   "free_beam", "very_flexible_pendulum", "flying_beam")]
+PATTERN_SCENES += [driven_rigid_mechanism]
+
+
+@pytest.mark.parametrize("make", PATTERN_SCENES + ["torsion", "spring", "follower", "sliding"])
+def test_newton_pattern_holds_every_entry(make):
+    """Every entry the energy-momentum step writes into its Newton matrix, at random states, steps and
+    multipliers, lies in the scene's Newton pattern (what CSR storage keeps; dense storage here, so
+    that an entry outside it would be seen)."""
+    if isinstance(make, str):
+        make = globals()[f"{make}_mechanism"]
+    scene = make()
+    rng = np.random.default_rng(11)
+    q0 = scene.initial_state()[0]
+    pattern = compiled_scene._newton_pattern(scene, compiled_scene._planned(scene)).toarray().astype(bool)
+    for _ in range(3):
+        v0 = rng.normal(size=q0.size)
+        system, x0 = compiled_scene.newton_system(scene, q0, v0, 0.05, t=0.3,
+                                                  lam=rng.normal(size=scene.n_constraints))
+        compiled_scene._evaluate(system, x0 + 0.01 * rng.normal(size=x0.size))
+        mat = compiled_scene.newton_matrix(system)
+        outside = (mat != 0.0) & ~pattern
+        assert not outside.any(), np.argwhere(outside)[:5]
+
+
+def test_csr_storage_counts_an_entry_outside_its_pattern(monkeypatch):
+    """With CSR storage a value written outside the pattern is counted, not lost silently: the step then goes
+    to Python. Here the pattern of a 64-element pendulum is made to lack the pin's first row's entry on the
+    beam's R_x (and its transpose); the evaluation counts them and flags the step."""
+    scene = sf.scenes.get("flexible_pendulum")(n_elements=64)
+    real = compiled_scene._newton_pattern
+    nf = scene.free_index.size
+
+    def lacking(scene_, packed):
+        pat = real(scene_, packed).tolil()
+        pat[nf, 0] = pat[0, nf] = 0
+        pat = pat.tocsr()
+        pat.eliminate_zeros()
+        return pat
+    monkeypatch.setattr(compiled_scene, "_newton_pattern", lacking)
+    q0, v0 = scene.initial_state()
+    system, x0 = compiled_scene.newton_system(scene, q0, v0 + 0.3, 1e-3)
+    assert compiled_scene._planned(scene)[9][4][-1] == compiled_scene.CSR
+    compiled_scene._evaluate(system, x0)
+    assert compiled_scene.missed_entries(system) > 0 and system[2][8][0] == 1
+    fresh = sf.scenes.get("flexible_pendulum")(n_elements=64)
+    monkeypatch.setattr(compiled_scene, "_newton_pattern", real)
+    system, x0 = compiled_scene.newton_system(fresh, q0, v0 + 0.3, 1e-3)
+    compiled_scene._evaluate(system, x0)
+    assert compiled_scene.missed_entries(system) == 0 and system[2][8][0] == 0
 
 
 def test_a_damper_whose_points_coincide_sends_the_step_to_python():

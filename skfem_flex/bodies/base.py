@@ -52,11 +52,11 @@ def check_finite_vector(name, value, size=None):
 #: systems with at most this many coordinates use dense matrices; larger ones use
 #: ``scipy.sparse`` so that no n × n array is ever allocated for them (memory linear in the mesh)
 DENSE_LIMIT = 150
-#: most coordinates of a scene the compiled mechanism loop (skfem_flex.compiled_scene) runs, and of a
-#: body with a dense tangent that packs compiled kernel data: that loop stores its Newton matrix dense
-#: (measured on the flexible pendulum by examples/profile_compiled_scene.py --n-elements 180: 543
-#: coordinates take 0.63 ms per step, against 8.0 ms on the Python path); larger scenes use the
-#: Python path's sparse matrices
+#: most coordinates compiled code holds in a dense n × n matrix (2.9 MB): a body with a dense tangent
+#: (an unreduced ModalBody) packs compiled kernel data up to this size, and the compiled mechanism loop
+#: (skfem_flex.compiled_scene) stores a Newton matrix that has no plan as a band with a small dense
+#: border dense up to this size; above DENSE_LIMIT it stores every other one as the values of its
+#: sparsity pattern, at any size. Larger dense cases run on the Python path (SuperLU).
 COMPILED_SIZE_LIMIT = 600
 
 
