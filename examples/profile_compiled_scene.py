@@ -33,7 +33,7 @@ def _evaluations(system, x, n):
 @numba.njit
 def _solves(system, n):
     for _ in range(n):
-        cs._solve(system)
+        cs._solve(system[0][9][5], system)
 
 
 def rigid_chain(n_links, length=0.1):

@@ -37,8 +37,9 @@ scaling, scales, round-off floor, initial guess), on the package's one Newton co
 else by LAPACK. Up to :data:`DENSE_STORAGE_LIMIT` rows the matrix is stored dense; above, as the values
 of its pattern (fixed once per scene from the packed structure, :func:`_newton_pattern`) and solved by
 :func:`skfem_flex.linear_solver.bordered_band_solve_csr`, so that a step's cost grows linearly with the
-mesh (section "the Newton matrix"). On any failure the loop stops before the failing step and ``simulate`` re-runs that
-step on the Python path, as for :mod:`skfem_flex.compiled_loop`.
+mesh (section "the Newton matrix"); the constraint rows are swept over their spans only. On any failure
+the loop stops before the failing step and ``simulate`` re-runs that step on the Python path, as for
+:mod:`skfem_flex.compiled_loop`.
 """
 from __future__ import annotations
 
@@ -60,7 +61,8 @@ from .newton import (CONVERGED, EVALUATE, NONFINITE_RESIDUAL, all_finite, max_ab
 from .rotations import SERIES_BELOW, sinc
 from .scene import Scene
 
-__all__ = ["run_loop", "eligible", "run_chunk", "chunk_steps", "pack", "pack_maps", "time_table", "newton_system", "map_position", "map_jacobian", "map_dgrad",
+__all__ = ["run_loop", "eligible", "run_chunk", "chunk_steps", "pack", "pack_maps", "time_table", "newton_system",
+           "newton_matrix", "missed_entries", "DENSE_STORAGE_LIMIT", "map_position", "map_jacobian", "map_dgrad",
            "map_dgrad_jacobian", "map_hessian_product", "LINEAR", "FRAME", "POINTS", "DISTANCE", "OK"]
 
 _TINY = 1e-300
@@ -719,7 +721,7 @@ def _pack(scene):
     strain = (tuple(strains) if strains else None, np.asarray(strain_off, dtype=np.int64),
               np.asarray(scene.cayley_index, dtype=np.int64), frame_pos, strain_pos)
     # no band plan yet, dense storage (_planned decides both, from the Newton pattern)
-    dense = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), 0, 0, _matrix_index(fpos, nx))
+    dense = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), 0, 0, _matrix_index(fpos, nx), None)
     packed = (mass, tuple(frames) if frames else None, np.asarray(frame_off, dtype=np.int64), maps, gravity,
               constraints, bodies, loads, strain, dense)
     return packed, tuple(probe_names), tuple(table)
@@ -765,7 +767,7 @@ def _planned(scene):
         plan = reordered_band_plan(pattern)
     if nx <= DENSE_STORAGE_LIMIT or (plan is None and nx <= COMPILED_SIZE_LIMIT):
         empty = np.zeros(0, dtype=np.int64)
-        packed = packed[:9] + ((plan if plan is not None else (empty, empty, 0, 0)) + (_matrix_index(fpos, nx),),)
+        packed = packed[:9] + ((plan if plan is not None else (empty, empty, 0, 0)) + (_matrix_index(fpos, nx), None),)
     elif plan is None:
         packed = None
     else:
@@ -780,7 +782,10 @@ def _planned(scene):
             if not np.array_equal(inside, pos >= 0):
                 raise AssertionError("a kernel entry outside the scene's Newton pattern")
             moved.append((np.where(pos >= 0, slot, -1).astype(np.int64), ptr))
-        packed = packed[:8] + (strain[:3] + tuple(moved), plan + (_matrix_index(fpos, nx, pattern),))
+        index = _matrix_index(fpos, nx, pattern)
+        n = fpos.size
+        csr = (index[n:n + nx + 1], index[n + nx + 1:n + nx + 1 + pattern.nnz])      # views into the index
+        packed = packed[:8] + (strain[:3] + tuple(moved), plan + (index, csr))
     _PLANNED[scene] = (packed,)
     return packed
 
@@ -982,14 +987,16 @@ def _workspace(n, m, nx, nmat, nbmax):
     Newton matrix"); the (n,) vectors Δq_base,
     Δq, q1, v1, p1, r, Q, g_kin, g_V, floor, Dᵀμ, z (Δq with the Cayley parameter 2 tan(Δψ/2) on
     Cayley coordinates), Δψ/w, d(Δψ/w)/dΔψ, dz/dΔq, the mid-point q0 + Δq/2 and z/Δt (rows of ``ws[2]``,
-    names ``_DQ`` …); Φ, Φ_t, μ (rows of ``ws[3]``); Φ_q, D; three 2-vectors; six (2, 2 nb) map blocks
+    names ``_DQ`` …); Φ, Φ_t, μ and the span [lo, hi) of the coordinates each row of Φ_q and D can touch
+    (rows of ``ws[3]``, the span set by :func:`_clear_constraint_rows`); Φ_q, D; three 2-vectors; six
+    (2, 2 nb) map blocks
     (two-point elements span two bodies); and a flag set when an evaluation met a state the Python step
     refuses (a folded element, a turn ≥ MAX_INCREMENT) or wrote an entry outside a CSR-stored Newton
     pattern."""
     wn = np.zeros((17, n))
     wn[_RATIO, :] = 1.0
     wn[_DZ, :] = 1.0
-    return (np.zeros(nx), np.zeros(nmat), wn, np.zeros((3, m)), np.zeros((m, n)), np.zeros((m, n)),
+    return (np.zeros(nx), np.zeros(nmat), wn, np.zeros((5, m)), np.zeros((m, n)), np.zeros((m, n)),
             np.zeros((3, 2)), np.zeros((6, 2, 2 * nbmax)), np.zeros(1, dtype=np.int64))
 
 
@@ -1094,6 +1101,47 @@ def _add_rotated_rows(maps, constraints, lines, q0, q1, v1, mu, scale, cq, d, cv
         phi[r0] = _rotated_row(maps, constraints, i, q0, q1, v1, mu[r0], scale, cq, d, cv, mat, fpos, ws)
 
 
+@numba.njit(cache=True, _nrt=False, inline="always")
+def _block_span(maps, constraints, i):
+    """[lo, hi): the coordinates constraint block i's rows of Φ_q, D and ∂(Φ_q v)/∂q can touch: its maps'
+    body blocks and its linear rows' indices (a block's rows touch only these, so the loops over them
+    cost what the constraints hold, not rows × coordinates)."""
+    t0, term_map, l0, lin_idx = constraints[2], constraints[3], constraints[9], constraints[10]
+    off, nb = maps[1], maps[2]
+    lo, hi = np.int64(-1), np.int64(-1)
+    for t in range(t0[i], t0[i + 1]):
+        k = term_map[t]
+        if lo < 0 or off[k] < lo:
+            lo = off[k]
+        hi = max(hi, off[k] + nb[k])
+    for t in range(l0[i], l0[i + 1]):
+        if lo < 0 or lin_idx[t] < lo:
+            lo = lin_idx[t]
+        hi = max(hi, lin_idx[t] + 1)
+    if lo < 0:
+        return np.int64(0), np.int64(0)
+    return lo, hi
+
+
+@numba.njit(cache=True, _nrt=False, inline="always")
+def _clear_constraint_rows(maps, constraints, ws, a, b):
+    """Zero Φ, Φ_t and the rows of ``a`` and ``b`` (m × n: Φ_q and D or ∂(Φ_q v)/∂q) where the last
+    evaluation wrote them, and set each row's span (rows 3, 4 of ``ws[3]``) for this one."""
+    kind, row = constraints[0], constraints[1]
+    span = ws[3]
+    for i in range(span.shape[1]):
+        span[0, i] = 0.0
+        span[1, i] = 0.0
+        for j in range(int(span[3, i]), int(span[4, i])):
+            a[i, j] = 0.0
+            b[i, j] = 0.0
+    for i in range(kind.size):
+        lo, hi = _block_span(maps, constraints, i)
+        for r in range(row[i], row[i] + (2 if kind[i] == POINTS else 1)):
+            span[3, r] = lo
+            span[4, r] = hi
+
+
 @numba.njit(cache=True, _nrt=False)
 def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, mat, fpos, ws):
     """Φ(q1, t1), Φ_t, Φ_q(q1) and D into the workspace, ∂(Dᵀμ)/∂q1 added to ``mat`` (the
@@ -1102,10 +1150,7 @@ def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, mat, fpos, ws):
     phi, phi_t, cq, d = ws[3][0], ws[3][1], ws[4], ws[5]
     f, acc, rv, jac, dk = ws[6][0], ws[6][1], ws[6][2], ws[7][0], ws[7][1]
     nb_, off_ = maps[2], maps[1]
-    phi[:] = 0.0
-    phi_t[:] = 0.0
-    cq[:, :] = 0.0
-    d[:, :] = 0.0
+    _clear_constraint_rows(maps, constraints, ws, cq, d)
     no_floor = ws[0][:0]
     for i in range(kind.size):
         r0 = row[i]
@@ -1574,7 +1619,7 @@ def _evaluate(system, x):
     dq_base, dq, q1, v1, p1, r, ext, gk, gp, floor = (wn[_DQ_BASE], wn[_DQ], wn[_Q1], wn[_V1], wn[_P1], wn[_R],
                                                       wn[_EXT], wn[_GK], wn[_GP], wn[_FLOOR])
     dtmu, z, ratio, dratio, dz = wn[_DTMU], wn[_Z], wn[_RATIO], wn[_DRATIO], wn[_DZ]
-    phi, cq, d = ws[3][0], ws[4], ws[5]
+    phi, cq, d, span = ws[3][0], ws[4], ws[5], ws[3]
     strains, strain_off, cay = strain[0], strain[1], strain[2]
     n, nf = q0.size, free.size
     m = constraints[7]
@@ -1611,12 +1656,12 @@ def _evaluate(system, x):
     err_c = 0.0
     if m:
         _constraint_terms(maps, constraints, q0, q1, mu, trow, n, mat, fpos, ws)
+        dtmu[:] = 0.0
+        for i in range(m):              # each coordinate's sum in the order of the rows, as a full product
+            for j in range(int(span[3, i]), int(span[4, i])):
+                dtmu[j] += d[i, j] * mu[i]
         for j in range(n):
-            s = 0.0
-            for i in range(m):
-                s += d[i, j] * mu[i]
-            dtmu[j] = s
-            r[j] += s
+            r[j] += dtmu[j]
         scale = max(scale, max_abs(dtmu))
     for c in cay:                       # forces conjugate to Δq → to the Cayley rate z
         ic = fpos[c]
@@ -1642,7 +1687,7 @@ def _evaluate(system, x):
         cqq, cq_inf = 0.0, 0.0
         for i in range(m):
             s, sa = 0.0, 0.0
-            for j in range(n):
+            for j in range(int(span[3, i]), int(span[4, i])):
                 a = abs(cq[i, j])
                 s += a * abs(q1[j])
                 sa = max(sa, a)
@@ -1651,9 +1696,11 @@ def _evaluate(system, x):
         c_scale = max(cqq, cq_inf * constraints[8], _TINY)
         err_c = max_abs(phi) / (ctol * c_scale)
         for i in range(m):
-            for j in range(nf):             # the border, on a zeroed matrix: adds are sets
-                _madd(mat, fpos, j, nf + i, d[i, free[j]] * ratio[free[j]])
-                _madd(mat, fpos, nf + i, j, cq[i, free[j]])
+            for c in range(int(span[3, i]), int(span[4, i])):   # the border, on a zeroed matrix: adds are sets
+                j = fpos[c]
+                if j >= 0:
+                    _madd(mat, fpos, j, nf + i, d[i, c] * ratio[c])
+                    _madd(mat, fpos, nf + i, j, cq[i, c])
             res[nf + i] = phi[i]
     vr, fl_inf, vfl = 0.0, 0.0, 0.0
     for i in range(nf):
@@ -1677,18 +1724,18 @@ def _evaluate(system, x):
 
 
 @numba.njit(cache=True)
-def _solve(system):
+def _solve(csr, system):
     """``solve`` of the Newton core: the bordered Newton matrix as a band with a dense border when the
     scene's plan has one (:func:`skfem_flex.linear_solver.bordered_band_solve`, several times faster
-    on beams), else, or when that solve is not backward stable, by LAPACK gesv."""
+    on beams), else, or when that solve is not backward stable, by LAPACK gesv; stored as CSR, by
+    :func:`skfem_flex.linear_solver.bordered_band_solve_csr`. ``csr`` is the plan's last entry, None
+    (dense storage) or the pattern's (row pointers, column indices): an argument of its own, so that
+    Numba prunes the storage a scene does not use (each costs seconds of compilation)."""
+    interior, border, lo, up = system[0][9][:4]
     res, mat = system[2][0], system[2][1]
-    interior, border, lo, up, fpos = system[0][9]
-    size = fpos.size
-    n, nx = fpos[size - 3], fpos[size - 2]
-    if fpos[size - 1] == CSR:           # no dense fallback: a failed solve hands the step to Python
-        nnz = fpos[n + nx]
-        return bordered_band_solve_csr(mat, fpos[n:n + nx + 1], fpos[n + nx + 1:n + nx + 1 + nnz], res, interior,
-                                       border, lo, up)
+    if csr is not None:                 # no dense fallback: a failed solve hands the step to Python
+        return bordered_band_solve_csr(mat, csr[0], csr[1], res, interior, border, lo, up)
+    nx = res.size
     a = mat[:nx * nx].reshape(nx, nx)
     if interior.size:
         x, ok = bordered_band_solve(a, res, interior, border, lo, up)
@@ -1766,8 +1813,12 @@ def _record_mechanism(packed, records, i_rec, t, q, v, p, work, its, reaction, l
     rec_derived[i_rec, 3] = py
     rec_derived[i_rec, 4] = ang
     vres = 0.0
+    span = ws[3]
     for i in range(cq.shape[0]):
-        vres = max(vres, abs(_dot(cq[i], v) + phi_t[i]))
+        s = 0.0
+        for j in range(int(span[3, i]), int(span[4, i])):
+            s += cq[i, j] * v[j]
+        vres = max(vres, abs(s + phi_t[i]))
     rec_derived[i_rec, 5] = max_abs(phi)
     rec_derived[i_rec, 6] = vres
     for j in range(probe_maps.size):
@@ -1831,7 +1882,7 @@ def _run(packed, q_start, v_start, acc_start, t, hs, qp, table, pres, free, fpos
                     break
                 status = newton_evaluated(state, err)
             else:
-                y, regular = _solve(system)
+                y, regular = _solve(plan[5], system)
                 status = newton_solved(state, y, regular)
         its = state[4][0]
         mu[:] = state[0][nf:]
@@ -1847,8 +1898,9 @@ def _run(packed, q_start, v_start, acc_start, t, hs, qp, table, pres, free, fpos
             # Φ, Φ_q and D are those of the last evaluation: the Newton core ends at the point it
             # evaluated last (module newton: no exit evaluates a point it then leaves)
             dphi = 0.0                          # D diag(Δψ/w) z = D Δq = ΔΦ + Δx
+            span = ws[3]
             for i in range(m):
-                for j in range(n):
+                for j in range(int(span[3, i]), int(span[4, i])):
                     dphi += mu[i] * d[i, j] * ratio[j] * z[j]
             w -= dphi / h                       # μ = Δt λ̄: the work is −λ̄·ΔΦ
         work += w
@@ -2069,12 +2121,7 @@ def _constraint_terms_at(maps, constraints, q1, v1, mu, trow, mat, fpos, ws, cv)
     phi, phi_t, cq = ws[3][0], ws[3][1], ws[4]
     f, acc, rv, jac, vj = ws[6][0], ws[6][1], ws[6][2], ws[7][0], ws[7][1]
     nb_, off_ = maps[2], maps[1]
-    for i in range(phi.size):
-        phi[i] = 0.0
-        phi_t[i] = 0.0
-        for j in range(cq.shape[1]):
-            cq[i, j] = 0.0
-            cv[i, j] = 0.0
+    _clear_constraint_rows(maps, constraints, ws, cq, cv)
     for i in range(kind.size):
         r0 = row[i]
         if kind[i] == POINTS or kind[i] == PROJECTED:
@@ -2208,7 +2255,7 @@ def _evaluate_newmark(system, x):
     dq_base, dq, q1, v1, inertia, r, ext, qv, grad, mterms = (wn[_DQ_BASE], wn[_DQ], wn[_Q1], wn[_V1], wn[_P1],
                                                               wn[_R], wn[_EXT], wn[_GK], wn[_GP], wn[_FLOOR])
     a1, acc1, terms = wn[_Z], wn[_RATIO], wn[_DRATIO]
-    phi, phi_t, cq = ws[3][0], ws[3][1], ws[4]
+    phi, phi_t, cq, span = ws[3][0], ws[3][1], ws[4], ws[3]
     n, nf, m = q0.size, free.size, constraints[7]
     mu = x[nf:]
     c_a = (1.0 - am) / ((1.0 - af) * beta * h * h)
@@ -2256,18 +2303,18 @@ def _evaluate_newmark(system, x):
     err_c = 0.0
     if m:
         _constraint_terms_at(maps, constraints, q1, v1, mu, trow, mat, fpos, ws, cv)
-        ctmu_inf = 0.0
+        ctmu = wn[_DTMU]
+        ctmu[:] = 0.0
+        for i in range(m):              # each coordinate's sum in the order of the rows, as a full product
+            for j in range(int(span[3, i]), int(span[4, i])):
+                ctmu[j] += cq[i, j] * mu[i]
         for j in range(n):
-            s = 0.0
-            for i in range(m):
-                s += cq[i, j] * mu[i]
-            r[j] += s
-            ctmu_inf = max(ctmu_inf, abs(s))
-        scale = max(scale, ctmu_inf)
+            r[j] += ctmu[j]
+        scale = max(scale, max_abs(ctmu))
         cqq, cq_inf, cqv = 0.0, 0.0, 0.0
         for i in range(m):
             s, sa, sv = 0.0, 0.0, 0.0
-            for j in range(n):
+            for j in range(int(span[3, i]), int(span[4, i])):
                 a = abs(cq[i, j])
                 s += a * abs(q1[j])
                 sv += a * abs(v1[j])
@@ -2279,17 +2326,22 @@ def _evaluate_newmark(system, x):
         if by_velocity:                 # (βΔt/γ)(Φ_q v1 + Φ_t): a length, like Φ
             c_scale = max(c_scale, cqv / c_v, max_abs(phi_t) / c_v)
             for i in range(m):
-                res[nf + i] = (_dot(cq[i], v1) + phi_t[i]) / c_v
-                for j in range(nf):     # the border, on a zeroed matrix: adds are sets
-                    _madd(mat, fpos, nf + i, j, cq[i, free[j]] + cv[i, free[j]] / c_v)
+                s = 0.0
+                for c in range(int(span[3, i]), int(span[4, i])):
+                    s += cq[i, c] * v1[c]
+                    if fpos[c] >= 0:    # the border, on a zeroed matrix: adds are sets
+                        _madd(mat, fpos, nf + i, fpos[c], cq[i, c] + cv[i, c] / c_v)
+                res[nf + i] = (s + phi_t[i]) / c_v
         else:
             for i in range(m):
                 res[nf + i] = phi[i]
-                for j in range(nf):
-                    _madd(mat, fpos, nf + i, j, cq[i, free[j]])
+                for c in range(int(span[3, i]), int(span[4, i])):
+                    if fpos[c] >= 0:
+                        _madd(mat, fpos, nf + i, fpos[c], cq[i, c])
         for i in range(m):
-            for j in range(nf):
-                _madd(mat, fpos, j, nf + i, cq[i, free[j]])
+            for c in range(int(span[3, i]), int(span[4, i])):
+                if fpos[c] >= 0:
+                    _madd(mat, fpos, fpos[c], nf + i, cq[i, c])
         err_c = max_abs(res[nf:]) / (ctol * c_scale)
     for i in range(nf):
         res[i] = r[free[i]]
@@ -2355,7 +2407,7 @@ def _run_newmark(packed, q_start, v_start, acc_start, pseudo_start, t, hs, qp, v
                     break
                 status = newton_evaluated(state, err)
             else:
-                y, regular = _solve(system)
+                y, regular = _solve(plan[5], system)
                 status = newton_solved(state, y, regular)
         its = state[4][0]
         if status == OK and not (all_finite(q1) and all_finite(v1)):

@@ -630,7 +630,7 @@ def _bordered_core(ab, y, gb, sch, interior, border, lo, up, x):
     return True
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _check_plan(n, interior, border, lo, up):
     """Raise ValueError if (interior, border, lo, up) is no plan for n coordinates."""
     ni, k = interior.size, border.size

@@ -793,7 +793,7 @@ def test_a_long_chain_runs_compiled_in_a_reordered_band(scheme):
     matrix is a band of half-width 5 without border, stored as CSR, and the run is the Python step's."""
     scene = rigid_chain(70)
     assert compiled_scene.eligible(scene, make_integrator(scheme))
-    interior, border, lo, up, index = compiled_scene._planned(scene)[9]
+    interior, border, lo, up, index = compiled_scene._planned(scene)[9][:5]
     assert index[-1] == compiled_scene.CSR and border.size == 0 and lo + up <= 12
     a, b = run_both(lambda: rigid_chain(70), t_end=0.01, dt=1e-3, integrator=scheme)
     # the energy-momentum steps end once the force residual is at the Newton tolerance; a chain's multipliers
