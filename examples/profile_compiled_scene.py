@@ -83,6 +83,7 @@ def main(argv=None):
     sf.simulate(scene, 5 * h, h)
     res = sf.simulate(scene, 200 * h, h, record_every=10 ** 6)
     res_all = sf.simulate(scene, 200 * h, h)
+    sf.simulate(scene, 2 * h, h, record_every=10 ** 6, compiled=False)       # warm-up of the Python path
     res_py = sf.simulate(scene, 20 * h, h, record_every=10 ** 6, compiled=False)
     print(f"{args.scene}: {n} coordinates, {m} multipliers, Newton matrix {free.size + m} × {free.size + m}")
     print(f"one residual evaluation with its Newton matrix: {1e6 * t_eval:.1f} µs")
