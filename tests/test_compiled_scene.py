@@ -786,11 +786,12 @@ def rigid_chain(n_links, length=0.1):
                     probes={"tip": PointProbe(bars[-1].point((0.5 * length, 0.0)))})
 
 
-@pytest.mark.parametrize("scheme", ["energy-momentum", "trapezoidal"])
+@pytest.mark.parametrize("scheme", ["energy-momentum"])
 def test_a_long_chain_runs_compiled_in_a_reordered_band(scheme):
     """A chain of 70 bars (210 coordinates, 140 multipliers): in its natural order every multiplier would be a
     border coordinate (no diagonal entry), more than MAX_BORDER; reordered (reverse Cuthill–McKee) its Newton
-    matrix is a band of half-width 5 without border, stored as CSR, and the run is the Python step's."""
+    matrix is a band of half-width 5 without border, stored as CSR, and the run is the Python step's. (The
+    Newmark step on CSR storage: the large pendulums above; a second scheme here would cost CI a compile.)"""
     scene = rigid_chain(70)
     assert compiled_scene.eligible(scene, make_integrator(scheme))
     interior, border, lo, up, index = compiled_scene._planned(scene)[9][:5]
