@@ -7,6 +7,7 @@ path (``compiled=False``). Usage::
 
     python examples/profile_compiled_scene.py [SCENE] [--n-elements 16] [--dt 1e-3]
     python examples/profile_compiled_scene.py --chain 250 --dt 1e-3
+    python examples/profile_compiled_scene.py --n-elements 64 --dt 2e-4 --dense-storage-limit 1000
 
 ``--chain N`` profiles a hanging chain of N rigid bars joined by revolute joints instead of a catalogue
 scene (3N coordinates, 2N multipliers: a Newton matrix that is a band only after reordering).
@@ -55,7 +56,10 @@ def main(argv=None):
     ap.add_argument("--dt", type=float, default=1e-3)
     ap.add_argument("--repeat", type=int, default=5000)
     ap.add_argument("--chain", type=int, default=0, help="profile a chain of this many rigid bars instead")
+    ap.add_argument("--dense-storage-limit", type=int, default=cs.DENSE_STORAGE_LIMIT,
+                    help="store the Newton matrix dense up to this many rows (to compare the two storages)")
     args = ap.parse_args(argv)
+    cs.DENSE_STORAGE_LIMIT = args.dense_storage_limit
     if args.chain:
         scene = rigid_chain(args.chain)
         args.scene = scene.name
@@ -85,7 +89,9 @@ def main(argv=None):
     res_all = sf.simulate(scene, 200 * h, h)
     sf.simulate(scene, 2 * h, h, record_every=10 ** 6, compiled=False)       # warm-up of the Python path
     res_py = sf.simulate(scene, 20 * h, h, record_every=10 ** 6, compiled=False)
-    print(f"{args.scene}: {n} coordinates, {m} multipliers, Newton matrix {free.size + m} × {free.size + m}")
+    storage = "CSR" if cs._planned(scene)[9][4][-1] == cs.CSR else "dense"
+    print(f"{args.scene}: {n} coordinates, {m} multipliers, Newton matrix {free.size + m} × {free.size + m} "
+          f"stored {storage}")
     print(f"one residual evaluation with its Newton matrix: {1e6 * t_eval:.1f} µs")
     print(f"one solve of the Newton matrix (as the loop):   {1e6 * t_solve:.1f} µs")
     print(f"Newton iterations per step:                     {res_all.newton_iterations[1:].mean():.2f}")

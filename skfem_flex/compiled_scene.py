@@ -155,12 +155,6 @@ def _matrix_index(fpos, nx, pattern=None):
     return np.concatenate([fpos, pattern.indptr, pattern.indices, [n, nx, CSR]]).astype(np.int64)
 
 
-def _matrix_size(fpos):
-    """Length of ``mat`` for the index ``fpos``: the stored entries and the count of missed ones."""
-    n, nx, storage = (int(a) for a in fpos[-3:])
-    return (nx * nx if storage == DENSE else int(fpos[n + nx])) + 1
-
-
 def newton_matrix(system):
     """The Newton matrix of a :func:`newton_system` after an evaluation: a dense array, or a scipy CSR
     matrix for scenes stored that way (above :data:`DENSE_STORAGE_LIMIT` coordinates)."""
@@ -734,7 +728,9 @@ _PLANS_BY_PATTERN = {}
 _MAX_PLANS = 64
 #: the Newton matrix is stored as the values of its pattern (CSR) above this many rows when it has a plan
 #: as a band with a dense border (the package's one dense/sparse threshold: the dense matrix is zeroed at
-#: every evaluation and its solve checked with a dense residual, which costs more from about 200 rows on),
+#: every evaluation and its solve checked with a dense residual; `python examples/profile_compiled_scene.py
+#: --n-elements N --dt 2e-4 --dense-storage-limit L` gives 180 µs per step stored as CSR against 175 dense
+#: at 197 rows, 362 against 428 at 389),
 #: else stored dense up to COMPILED_SIZE_LIMIT rows; a larger scene without such a plan runs in Python
 DENSE_STORAGE_LIMIT = DENSE_LIMIT
 
@@ -762,7 +758,7 @@ def _planned(scene):
                                                           else None)
         plan = _PLANS_BY_PATTERN[key]
     fpos = _free_positions(scene)
-    if nx > DENSE_STORAGE_LIMIT and (plan is None or plan[1].size > MAX_BORDER):
+    if nx > DENSE_STORAGE_LIMIT and plan is None:
         # no band with a small border in the natural order (a long chain's multipliers): reorder
         plan = reordered_band_plan(pattern)
     if nx <= DENSE_STORAGE_LIMIT or (plan is None and nx <= COMPILED_SIZE_LIMIT):
@@ -988,7 +984,7 @@ def _workspace(n, m, nx, nmat, nbmax):
     Δq, q1, v1, p1, r, Q, g_kin, g_V, floor, Dᵀμ, z (Δq with the Cayley parameter 2 tan(Δψ/2) on
     Cayley coordinates), Δψ/w, d(Δψ/w)/dΔψ, dz/dΔq, the mid-point q0 + Δq/2 and z/Δt (rows of ``ws[2]``,
     names ``_DQ`` …); Φ, Φ_t, μ and the span [lo, hi) of the coordinates each row of Φ_q and D can touch
-    (rows of ``ws[3]``, the span set by :func:`_clear_constraint_rows`); Φ_q, D; three 2-vectors; six
+    (rows of ``ws[3]``, the span set by :func:`_set_constraint_spans`); Φ_q, D; three 2-vectors; six
     (2, 2 nb) map blocks
     (two-point elements span two bodies); and a flag set when an evaluation met a state the Python step
     refuses (a folded element, a turn ≥ MAX_INCREMENT) or wrote an entry outside a CSR-stored Newton
@@ -1123,11 +1119,22 @@ def _block_span(maps, constraints, i):
     return lo, hi
 
 
-@numba.njit(cache=True, _nrt=False, inline="always")
-def _clear_constraint_rows(maps, constraints, ws, a, b):
-    """Zero Φ, Φ_t and the rows of ``a`` and ``b`` (m × n: Φ_q and D or ∂(Φ_q v)/∂q) where the last
-    evaluation wrote them, and set each row's span (rows 3, 4 of ``ws[3]``) for this one."""
+@numba.njit(cache=True, _nrt=False)
+def _set_constraint_spans(maps, constraints, span):
+    """Each constraint row's span [lo, hi) into rows 3 and 4 of ``span`` (``ws[3]``): fixed by the scene's
+    structure, set once when a chunk's workspace is made."""
     kind, row = constraints[0], constraints[1]
+    for i in range(kind.size):
+        lo, hi = _block_span(maps, constraints, i)
+        for r in range(row[i], row[i] + (2 if kind[i] == POINTS else 1)):
+            span[3, r] = lo
+            span[4, r] = hi
+
+
+@numba.njit(cache=True, _nrt=False, inline="always")
+def _clear_constraint_rows(ws, a, b):
+    """Zero Φ, Φ_t and the rows of ``a`` and ``b`` (m × n: Φ_q and D or ∂(Φ_q v)/∂q) over their spans, all
+    an evaluation writes of them."""
     span = ws[3]
     for i in range(span.shape[1]):
         span[0, i] = 0.0
@@ -1135,11 +1142,6 @@ def _clear_constraint_rows(maps, constraints, ws, a, b):
         for j in range(int(span[3, i]), int(span[4, i])):
             a[i, j] = 0.0
             b[i, j] = 0.0
-    for i in range(kind.size):
-        lo, hi = _block_span(maps, constraints, i)
-        for r in range(row[i], row[i] + (2 if kind[i] == POINTS else 1)):
-            span[3, r] = lo
-            span[4, r] = hi
 
 
 @numba.njit(cache=True, _nrt=False)
@@ -1150,7 +1152,7 @@ def _constraint_terms(maps, constraints, q0, q1, mu, trow, n, mat, fpos, ws):
     phi, phi_t, cq, d = ws[3][0], ws[3][1], ws[4], ws[5]
     f, acc, rv, jac, dk = ws[6][0], ws[6][1], ws[6][2], ws[7][0], ws[7][1]
     nb_, off_ = maps[2], maps[1]
-    _clear_constraint_rows(maps, constraints, ws, cq, d)
+    _clear_constraint_rows(ws, cq, d)
     no_floor = ws[0][:0]
     for i in range(kind.size):
         r0 = row[i]
@@ -1784,7 +1786,9 @@ def _chunk_workspace(packed, n, nf):
     size = fpos.size
     nx = fpos[size - 2]
     nmat = nx * nx + 1 if fpos[size - 1] == DENSE else fpos[fpos[size - 3] + nx] + 1
-    return _workspace(n, m, nf + m, nmat, nbmax)
+    ws = _workspace(n, m, nf + m, nmat, nbmax)
+    _set_constraint_spans(maps, packed[5], ws[3])
+    return ws
 
 
 @numba.njit(cache=True)
@@ -2121,7 +2125,7 @@ def _constraint_terms_at(maps, constraints, q1, v1, mu, trow, mat, fpos, ws, cv)
     phi, phi_t, cq = ws[3][0], ws[3][1], ws[4]
     f, acc, rv, jac, vj = ws[6][0], ws[6][1], ws[6][2], ws[7][0], ws[7][1]
     nb_, off_ = maps[2], maps[1]
-    _clear_constraint_rows(maps, constraints, ws, cq, cv)
+    _clear_constraint_rows(ws, cq, cv)
     for i in range(kind.size):
         r0 = row[i]
         if kind[i] == POINTS or kind[i] == PROJECTED:

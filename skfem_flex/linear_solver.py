@@ -480,6 +480,18 @@ def _row_residual(mat, i, x, b):
     return s - b, a
 
 
+@numba.njit(inline="always")
+def _finite_norm(x):
+    """‖x‖∞, or −1 if an entry of x is not finite."""
+    x_inf = 0.0
+    for j in range(x.size):
+        v = abs(x[j])
+        if not v < np.inf:
+            return -1.0
+        x_inf = max(x_inf, v)
+    return x_inf
+
+
 @numba.njit(cache=True)
 def _dense_backward_stable(mat, rhs, x, tol):
     """True if x is finite and ‖mat x − rhs‖∞ ≤ ``tol`` · (‖mat‖∞ ‖x‖∞ + ‖rhs‖∞), from every entry of mat.
@@ -488,12 +500,9 @@ def _dense_backward_stable(mat, rhs, x, tol):
     taken from too few evaluations) makes the residual large, and the caller solves densely.
     """
     n = x.size
-    x_inf = 0.0
-    for j in range(n):
-        v = abs(x[j])
-        if not v < np.inf:
-            return False
-        x_inf = max(x_inf, v)
+    x_inf = _finite_norm(x)
+    if x_inf < 0.0:
+        return False
     r_inf, a_inf, b_inf = 0.0, 0.0, 0.0
     for i in range(n):
         r, a = _row_residual(mat, i, x, rhs[i])
@@ -630,6 +639,13 @@ def _bordered_core(ab, y, gb, sch, interior, border, lo, up, x):
     return True
 
 
+@numba.njit(inline="always")
+def _bordered_blocks(ni, k, lo, up):
+    """The zeroed blocks :func:`_bordered_core` works on: (w, ab, y, gb, sch), w = 2 lo + up + 1."""
+    w = 2 * lo + up + 1
+    return w, np.zeros(ni * w), np.zeros((k + 1) * ni), np.zeros(k * ni), np.zeros(k * (k + 1))
+
+
 @numba.njit(cache=True, inline="always")
 def _check_plan(n, interior, border, lo, up):
     """Raise ValueError if (interior, border, lo, up) is no plan for n coordinates."""
@@ -694,11 +710,7 @@ def bordered_band_solve(mat, rhs, interior, border, lo, up):
         raise ValueError("bordered_band_solve: the plan does not fit the matrix")
     _check_plan(n, interior, border, lo, up)
     ni, k = interior.size, border.size
-    w = 2 * lo + up + 1
-    ab = np.zeros(ni * w)
-    y = np.empty((k + 1) * ni)
-    gb = np.empty(k * ni)
-    sch = np.empty(k * (k + 1))
+    w, ab, y, gb, sch = _bordered_blocks(ni, k, lo, up)
     for r in range(ni):
         row = interior[r]
         base = r * w + lo - r
@@ -739,16 +751,12 @@ def bordered_band_solve_csr(vals, ptr, idx, rhs, interior, border, lo, up):
         if idx[t] < 0 or idx[t] >= n:
             raise ValueError("bordered_band_solve_csr: column index out of range")
     ni, k = interior.size, border.size
-    w = 2 * lo + up + 1
+    w, ab, y, gb, sch = _bordered_blocks(ni, k, lo, up)
     where = np.empty(n, dtype=np.int64)    # interior position, or −1 − border position
     for i in range(ni):
         where[interior[i]] = i
     for b in range(k):
         where[border[b]] = -1 - b
-    ab = np.zeros(ni * w)
-    y = np.zeros((k + 1) * ni)
-    gb = np.zeros(k * ni)
-    sch = np.zeros(k * (k + 1))
     for r in range(ni):
         row = interior[r]
         y[r] = rhs[row]
@@ -771,12 +779,9 @@ def bordered_band_solve_csr(vals, ptr, idx, rhs, interior, border, lo, up):
     x = np.empty(n)
     if not _bordered_core(ab, y, gb, sch, interior, border, lo, up, x):
         return x, False
-    x_inf = 0.0
-    for j in range(n):
-        v = abs(x[j])
-        if not v < np.inf:
-            return x, False
-        x_inf = max(x_inf, v)
+    x_inf = _finite_norm(x)
+    if x_inf < 0.0:
+        return x, False
     r_inf, a_inf, b_inf = 0.0, 0.0, 0.0
     for i in range(n):
         s, a = -rhs[i], 0.0
