@@ -4,7 +4,7 @@
   16, 64, 256 and 1024 P1 elements: the full 30 s for the small meshes, a
   shorter window (``--window``) for the large ones, where only µs per step is
   compared. These scenes run through the compiled loop
-  (:mod:`skfem_flex.compiled_loop`);
+  (:mod:`skfem_flex.compiled.single_body_loop`);
 * the same 30 s spin-up at 8 elements with every step recorded, and on the
   pure-Python path (``compiled=False``), once each, for comparison;
 * the pendulum, 10 000 steps at Δt = 1e-3 (Python path: it has a constraint);
@@ -31,7 +31,7 @@ Two more tables:
   step over the first ``--catalogue-steps`` steps (after a two-step warm-up),
   with the number of coordinates;
 * with exudyn installed (``pip install ".[bench]"``), the same problems in
-  both codes side by side in this process (:mod:`skfem_flex.peer`), alternating,
+  both codes side by side in this process (:mod:`skfem_flex.apps.peer`), alternating,
   median of ``--repeat``, every step recorded on both sides: spin-up (8
   elements, Δt = 1e-3, 30 s), flexible pendulum (16 elements, Δt = 1e-4 and
   1e-3, 2 s), rigid pendulum (Δt = 1e-2, 10 s). Each code's error is the
@@ -58,8 +58,8 @@ from pathlib import Path
 import numpy as np
 
 import skfem_flex as sf
-from skfem_flex import compiled_loop
-from skfem_flex.integrators import EnergyMomentum
+from skfem_flex.compiled import single_body_loop as compiled_loop
+from skfem_flex.schemes.integrators import EnergyMomentum
 
 SPIN_UP_ELEMENTS = (4, 8, 16, 64, 256, 1024)
 FULL_RUN_UP_TO = 16          # elements; larger meshes run a shorter window
@@ -90,8 +90,8 @@ def warm_up():
 def loop_name(scene, integrator="energy-momentum"):
     """Which time loop ``simulate`` runs the scene on: "compiled" (one floating-frame body),
     "compiled mechanism" or "Python"."""
-    from skfem_flex import compiled_scene
-    scheme = sf.integrators.make_integrator(integrator)
+    from skfem_flex.compiled import scene_loop as compiled_scene
+    scheme = sf.schemes.integrators.make_integrator(integrator)
     if compiled_loop.eligible(scene, scheme):
         return "compiled"
     return "compiled mechanism" if compiled_scene.eligible(scene, scheme) else "Python"
@@ -119,7 +119,7 @@ def startup():
     for name in STARTUP_SCENES:
         with tempfile.TemporaryDirectory() as tmp:
             env = dict(os.environ, NUMBA_CACHE_DIR=str(Path(tmp) / "cache"))
-            cmd = [sys.executable, "-m", "skfem_flex.cli", "run", name, "--t-end", "0.05", "--no-vtk", "--quiet",
+            cmd = [sys.executable, "-m", "skfem_flex.apps.cli", "run", name, "--t-end", "0.05", "--no-vtk", "--quiet",
                    "--out", str(Path(tmp) / "out")]
             times = []
             for _ in range(2):
@@ -285,7 +285,7 @@ def _reference(out, key, compute):
 
 def peer_problems(out):
     """[(label, our scene factory, our scheme, dt, t_end, probe, peer run, peer scheme, reference factory)]."""
-    from skfem_flex import peer
+    from skfem_flex.apps import peer
 
     def spin_ref():
         r = sf.simulate(sf.scenes.spin_up_beam(omega=4.0, n_elements=32), t_end=30.0, dt=2.5e-4)
@@ -301,7 +301,7 @@ def peer_problems(out):
         return _reference(out, "flexible_pendulum", flex_ref)
 
     def exact():
-        from skfem_flex.studies import pendulum_position
+        from skfem_flex.apps.studies import pendulum_position
         return pendulum_position
     rows = [("spin-up ω = 4, 8 elements", lambda: sf.scenes.spin_up_beam(omega=4.0, n_elements=8),
              "energy-momentum", 1e-3, 30.0, "tip", peer.spin_up(8, 1e-3, 30.0), "generalized-alpha 0.9", spin)]
@@ -338,7 +338,7 @@ def peer_rows(out, repeat=3, only=None):
 
 
 def peer_table(rows, repeat):
-    from skfem_flex import peer
+    from skfem_flex.apps import peer
     lines = [f"Side by side with exudyn {peer.version()} in this process, alternating, median of {repeat}, "
              f"every step recorded on both sides; error = largest distance (m) over the run from the converged "
              f"reference.", "",
@@ -396,7 +396,7 @@ if __name__ == "__main__":
     if not args.no_catalogue:
         parts.append(catalogue_table(catalogue_rows(args.catalogue_steps), args.catalogue_steps))
     if not args.no_peer:
-        from skfem_flex.peer import peer_available
+        from skfem_flex.apps.peer import peer_available
         if peer_available():
             parts.append(peer_table(peer_rows(args.out, args.repeat), args.repeat))
         else:

@@ -20,9 +20,9 @@ from pathlib import Path
 import numpy as np
 import skfem
 
-from skfem_flex.beam import TimoshenkoBeam
-from skfem_flex.plots import pyplot_for
-from skfem_flex.section import Section
+from skfem_flex.fem.beam import TimoshenkoBeam
+from skfem_flex.run.plots import pyplot_for
+from skfem_flex.fem.section import Section
 
 E, NU, WIDTH, HEIGHT, RHO = 210e9, 0.3, 0.1, 0.1, 7850.0
 SECTION = Section.rectangle(E=E, nu=NU, b=WIDTH, h=HEIGHT, rho=RHO)

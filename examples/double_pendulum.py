@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 import skfem_flex as sf
-from skfem_flex.plots import pyplot_for
+from skfem_flex.run.plots import pyplot_for
 
 T_END, DT = 2.0, 1e-3
 SCHEMES = ("energy-momentum", "trapezoidal", "generalized-alpha")
@@ -38,7 +38,7 @@ def summary():
 
 
 if __name__ == "__main__":
-    from skfem_flex.plots import plot_snapshots
+    from skfem_flex.run.plots import plot_snapshots
 
     print("Rigid–flexible double pendulum, Δt = 1e-3 s, 2 s")
     print(summary())

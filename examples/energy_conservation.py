@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 import skfem_flex as sf
-from skfem_flex.plots import pyplot_for
+from skfem_flex.run.plots import pyplot_for
 
 DT = 0.1            # s, the spring–mass step
 T_END = 40.0        # s

@@ -18,7 +18,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 import skfem_flex as sf
-from skfem_flex.plots import pyplot_for
+from skfem_flex.run.plots import pyplot_for
 
 G, LENGTH, RHOA, RHOI = 9.81, 1.0, 1.0, 1e-4
 T_END, DT = 2.0, 1e-3
@@ -50,7 +50,7 @@ def summary():
 
 
 if __name__ == "__main__":
-    from skfem_flex.plots import plot_snapshots
+    from skfem_flex.run.plots import plot_snapshots
 
     print("Flexible pendulum, 8 elements, Δt = 1e-3 s, 2 s")
     print(summary())

@@ -14,7 +14,7 @@ prints a summary and writes ``flying_beam_snapshots.png`` (shapes every 1 s) and
 
 Energy, linear and angular momentum are conserved by the energy-momentum scheme to the Newton
 tolerance after the load stops (section angles advance at their Cayley rate; see
-:mod:`skfem_flex.bodies.exact`).
+:mod:`skfem_flex.bodies.exact.body`).
 """
 import sys
 from pathlib import Path
@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 import skfem_flex as sf
-from skfem_flex.plots import pyplot_for
+from skfem_flex.run.plots import pyplot_for
 
 N_ELEMENTS = 10
 T_END = 12.0

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 import skfem_flex as sf
-from skfem_flex.plots import pyplot_for
+from skfem_flex.run.plots import pyplot_for
 
 FORCE, DURATION = 100.0, 0.05
 T_END, DT = 4.0, 5e-3
@@ -36,7 +36,7 @@ def summary():
 
 
 if __name__ == "__main__":
-    from skfem_flex.plots import plot_snapshots
+    from skfem_flex.run.plots import plot_snapshots
 
     print(f"Free beam after a {FORCE:g} N, {DURATION:g} s half-sine pulse at the tip, Δt = {DT:g} s, {T_END:g} s")
     print(summary())

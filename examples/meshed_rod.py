@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 
 import skfem_flex as sf
-from skfem_flex.output import VTKSeries
-from skfem_flex.plots import pyplot_for
+from skfem_flex.run.output import VTKSeries
+from skfem_flex.run.plots import pyplot_for
 
 HERE = Path(__file__).resolve().parent
 MESH = HERE / "meshes" / "conrod.msh"

@@ -1,11 +1,11 @@
-"""The benchmark problems in the established C++ code exudyn: now :mod:`skfem_flex.peer`.
+"""The benchmark problems in the established C++ code exudyn: now :mod:`skfem_flex.apps.peer`.
 
 The models (spin-up, flexible pendulum, rigid pendulum) live in the package,
 where the work–precision study (``skfem-flex study work-precision``) runs them
 beside our schemes; this module keeps the old names for scripts that
 ``import peer_exudyn``. exudyn is optional (``pip install ".[bench]"``).
 """
-from skfem_flex.peer import flexible_pendulum, pendulum, peer_available, spin_up, version
+from skfem_flex.apps.peer import flexible_pendulum, pendulum, peer_available, spin_up, version
 
 __all__ = ["available", "version", "spin_up", "flexible_pendulum", "pendulum"]
 

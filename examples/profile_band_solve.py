@@ -2,8 +2,8 @@
 
 Builds the bordered Newton matrix of a catalogue scene at its initial state (as
 ``examples/profile_compiled_scene.py`` does), its structural pattern (the union over a few
-perturbed evaluations), the plan of :func:`skfem_flex.linear_solver.dense_bordered_plan`, and times,
-inside compiled loops, :func:`skfem_flex.linear_solver.bordered_band_solve` and
+perturbed evaluations), the plan of :func:`skfem_flex.numerics.linear_solver.dense_bordered_plan`, and times,
+inside compiled loops, :func:`skfem_flex.numerics.linear_solver.bordered_band_solve` and
 ``np.linalg.solve`` on it (best of several rounds). Usage::
 
     python examples/profile_band_solve.py [SCENE] [--n-elements 16 24 40] [--repeat 5000]
@@ -17,8 +17,8 @@ import numpy as np
 import scipy.sparse as sps
 
 import skfem_flex as sf
-from skfem_flex import compiled_scene as cs
-from skfem_flex import linear_solver as ls
+from skfem_flex.compiled import scene_loop as cs
+from skfem_flex.numerics import linear_solver as ls
 
 
 @numba.njit

@@ -1,4 +1,4 @@
-"""Where a step of the compiled mechanism loop spends its time (``skfem_flex.compiled_scene``).
+"""Where a step of the compiled mechanism loop spends its time (``skfem_flex.compiled.scene_loop``).
 
 Times, in compiled loops, one residual evaluation (with its Newton matrix), one solve of that
 matrix and one evaluation of the constraint terms for a catalogue scene at its initial state, the
@@ -20,7 +20,7 @@ import numba
 import numpy as np
 
 import skfem_flex as sf
-from skfem_flex import compiled_scene as cs
+from skfem_flex.compiled import scene_loop as cs
 
 
 @numba.njit

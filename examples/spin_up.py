@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 import skfem_flex as sf
-from skfem_flex.plots import pyplot_for
+from skfem_flex.run.plots import pyplot_for
 
 OMEGAS = (4.0, 10.0)                 # rad/s
 STRAINS = ("green-lagrange", "linear")

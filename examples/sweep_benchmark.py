@@ -8,12 +8,12 @@ tasks in submission order; this keeps the two workers evenly loaded at the end).
 
 * serial: the 16 ``simulate`` calls one after another in this process, after
   a warm-up that loads the Numba kernels;
-* sweep: ``skfem_flex.sweep(..., n_workers=N, store=...)`` from start to
+* sweep: ``skfem_flex.apps.sweep(..., n_workers=N, store=...)`` from start to
   return, *including* starting and closing the local cluster of N worker
   processes (each imports skfem_flex and loads the kernels from numba's
   cache once) and writing every case to the store;
 * sweep on a running cluster: the same with a ``Client`` of
-  ``skfem_flex.sweep.local_cluster`` (the cluster a sweep starts, with the same
+  ``skfem_flex.apps.sweep.local_cluster`` (the cluster a sweep starts, with the same
   Dask settings) started before the clock starts (the cost a sweep pays on a
   cluster that is already up);
 * plain processes: the same 16 ``simulate`` calls handed out in grid order to N
@@ -130,7 +130,7 @@ def main():
     t_plain, loop_plain = processes(args.t_end, args.dt, args.record_every, args.workers)
     t_sweep, run_sweep, ds = sweep(args.t_end, args.dt, args.record_every, args.workers)
     from distributed import Client
-    from skfem_flex.sweep import local_cluster
+    from skfem_flex.apps.sweep import local_cluster
     with local_cluster(args.workers) as cluster, Client(cluster) as client:
         client.run(lambda: sf.simulate(sf.scenes.spin_up_beam(), 0.01, args.dt) and None)   # workers warm
         t_warm, run_warm, _ = sweep(args.t_end, args.dt, args.record_every, args.workers, client)

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 import skfem_flex as sf
-from skfem_flex.plots import pyplot_for
+from skfem_flex.run.plots import pyplot_for
 
 MESHES = (8, 16, 32)
 T_END = 1.0

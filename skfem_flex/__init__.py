@@ -4,29 +4,29 @@ Timoshenko beams (linear, floating frame of reference, geometrically exact),
 rigid bodies and point masses, joined by constraints and integrated in time
 by an energy-conserving scheme, the trapezoidal rule or generalized-α.
 """
-from . import jit_cache  # noqa: F401  (first: compiled kernels must see the package's cache rule)
-from .section import Section
-from .beam import TimoshenkoBeam
+from .numerics import jit_cache  # noqa: F401  (first: compiled kernels must see the package's cache rule)
+from .fem.section import Section
+from .fem.beam import TimoshenkoBeam
 from .bodies import Body, BodyGeometry, BodyPoint, PointMass
-from .bodies.floating import DistributedLoad, FloatingBeam
-from .bodies.exact import ElementInversionError, ExactBeam, ExactDistributedLoad, NodalLoad
-from .constraints import Constraint, Distance, UserConstraint
+from .bodies.floating.body import DistributedLoad, FloatingBeam
+from .bodies.exact.body import ElementInversionError, ExactBeam, ExactDistributedLoad, NodalLoad
+from .elements.constraints import Constraint, Distance, UserConstraint
 from .bodies.rigid import RigidBody
-from .constraints import Driver, Pin, Prismatic, Revolute, Slider, Weld
-from .forces import LinearDamper, LinearSpring, PointForce, PointMoment, RotationalDamper, RotationalSpring
-from .initial_conditions import (InconsistentInitialConditionsError, RedundantConstraintsError,
+from .elements.constraints import Driver, Pin, Prismatic, Revolute, Slider, Weld
+from .elements.forces import LinearDamper, LinearSpring, PointForce, PointMoment, RotationalDamper, RotationalSpring
+from .scene_initial import (InconsistentInitialConditionsError, RedundantConstraintsError,
                                  consistent_initial_state)
-from .forces import ForceElement, Gravity, NonlinearSpring
-from .motion import MotionLaw, Prescribed, spin_up_law
+from .elements.forces import ForceElement, Gravity, NonlinearSpring
+from .elements.motion import MotionLaw, Prescribed, spin_up_law
 from .scene import Scene
-from .integrators import (ConvergenceError, EnergyMomentum, GeneralizedAlpha, NewtonSettings, SimulationError,
+from .schemes.integrators import (ConvergenceError, EnergyMomentum, GeneralizedAlpha, NewtonSettings, SimulationError,
                           Trapezoidal)
 from .errors import DivergenceError, Interrupted, OutputError
-from .resources import InsufficientMemoryError
-from .result import Result
-from .simulate import simulate
-from .sweep import open_sweep, sweep
-from .output import VTKSeries
+from .numerics.resources import InsufficientMemoryError
+from .run.result import Result
+from .run.simulate import simulate
+from .apps.sweep import open_sweep, sweep
+from .run.output import VTKSeries
 from .analysis import (CampbellDiagram, EquilibriumState, LinearSystem, Modes, campbell, linearize, modes,
                        static_equilibrium)
 from . import scenes

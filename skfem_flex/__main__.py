@@ -1,4 +1,4 @@
 """``python -m skfem_flex``: the ``skfem-flex`` command."""
-from .cli import main
+from .apps.cli import main
 
 raise SystemExit(main())

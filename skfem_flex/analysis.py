@@ -41,8 +41,8 @@ import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 
 from .errors import ConvergenceError
-from .initial_conditions import RedundantConstraintsError, consistent_initial_state
-from .integrators import EnergyMomentum, NewtonSettings, State, linear_solve, newton_solve
+from .scene_initial import RedundantConstraintsError, consistent_initial_state
+from .schemes.integrators import EnergyMomentum, NewtonSettings, State, linear_solve, newton_solve
 from .scene import add_matrices
 
 __all__ = ["EquilibriumState", "LinearSystem", "Modes", "CampbellDiagram", "static_equilibrium", "linearize",
@@ -1009,7 +1009,7 @@ def write_mode_series(scene, result, directory, frames=24, amplitude=0.1, prefix
     list of Path
         The ``.pvd`` file of each mode.
     """
-    from .output import VTKSeries
+    from .run.output import VTKSeries
 
     if isinstance(frames, bool) or int(frames) != frames or frames < 2:
         raise ValueError(f"frames must be an integer >= 2, got {frames!r}")
@@ -1117,8 +1117,8 @@ class CampbellDiagram:
         return csv_path, md_path
 
     def plot(self, path=None, orders=None):
-        """Frequencies against the parameter (:func:`skfem_flex.plots.plot_campbell`)."""
-        from .plots import plot_campbell
+        """Frequencies against the parameter (:func:`skfem_flex.run.plots.plot_campbell`)."""
+        from .run.plots import plot_campbell
 
         return plot_campbell(self, path, orders)
 

@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sps
 
-from .forces import Gravity
-from .motion import Prescribed
+from .elements.forces import Gravity
+from .elements.motion import Prescribed
 
 __all__ = ["Scene", "DENSE_LIMIT", "add_matrices"]
 

@@ -9,7 +9,7 @@ import pytest
 
 import skfem_flex as sf
 from skfem_flex import analysis, scenes
-from skfem_flex.output import read_pvd
+from skfem_flex.run.output import read_pvd
 
 G = 9.81
 
@@ -378,12 +378,12 @@ def test_mode_series_animates_each_mode(tmp_path):
 
 def _cli(args, cwd):
     env = dict(os.environ)
-    return subprocess.run([sys.executable, "-m", "skfem_flex.cli"] + args, cwd=cwd, capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "skfem_flex.apps.cli"] + args, cwd=cwd, capture_output=True, text=True,
                           timeout=120, env=env)
 
 
 def test_cli_modes_and_campbell(tmp_path, monkeypatch, capsys):
-    from skfem_flex import cli
+    from skfem_flex.apps import cli
 
     monkeypatch.chdir(tmp_path)
     assert cli.main(["modes", "pendulum", "--set", "v0=0", "--n", "1", "--out", "m"]) == 0
@@ -403,7 +403,7 @@ def test_cli_campbell_unknown_parameter_exits_2_with_one_line(tmp_path):
 
 
 def test_cli_bad_analysis_input_is_one_line(tmp_path, monkeypatch, capsys):
-    from skfem_flex import cli
+    from skfem_flex.apps import cli
 
     monkeypatch.chdir(tmp_path)
     for argv in (["modes", "rotating_beam", "--set", "spin=1"], ["campbell", "rotating_beam", "--vary", "omega"],

@@ -8,8 +8,8 @@ import skfem
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from skfem_flex.beam import TimoshenkoBeam, gauss_line
-from skfem_flex.section import Section
+from skfem_flex.fem.beam import TimoshenkoBeam, gauss_line
+from skfem_flex.fem.section import Section
 
 E, NU, B, RHO = 210e9, 0.3, 0.1, 7850.0
 SECTION = Section.rectangle(E=E, nu=NU, b=B, h=0.1, rho=RHO)

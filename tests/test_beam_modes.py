@@ -28,8 +28,8 @@ import scipy.linalg
 import scipy.optimize
 import skfem
 
-from skfem_flex.beam import TimoshenkoBeam
-from skfem_flex.section import Section
+from skfem_flex.fem.beam import TimoshenkoBeam
+from skfem_flex.fem.section import Section
 
 E, NU, H, RHO, LENGTH, K_SHEAR = 210e9, 0.3, 0.1, 7850.0, 1.0, 5 / 6
 

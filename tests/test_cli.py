@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import skfem_flex as sf
-from skfem_flex import cli
-from skfem_flex.output import read_pvd
+from skfem_flex.apps import cli
+from skfem_flex.run.output import read_pvd
 from skfem_flex.scenes import CATALOGUE, register
 
 PNG = b"\x89PNG\r\n\x1a\n"
@@ -19,7 +19,7 @@ PNG = b"\x89PNG\r\n\x1a\n"
 def command():
     """The installed console script if there is one, else the module."""
     exe = shutil.which("skfem-flex")
-    return [exe] if exe else [sys.executable, "-m", "skfem_flex.cli"]
+    return [exe] if exe else [sys.executable, "-m", "skfem_flex.apps.cli"]
 
 
 def run_process(args, cwd, timeout=120):

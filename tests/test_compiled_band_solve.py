@@ -23,8 +23,8 @@ import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 
 import skfem_flex as sf
-from skfem_flex import compiled_scene as cs
-from skfem_flex import linear_solver as ls
+from skfem_flex.compiled import scene_loop as cs
+from skfem_flex.numerics import linear_solver as ls
 
 from test_linear_solve import bordered_matrix
 

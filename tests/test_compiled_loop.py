@@ -10,9 +10,9 @@ import pytest
 import skfem
 
 import skfem_flex as sf
-from skfem_flex import compiled_loop
-from skfem_flex.bodies.floating import FloatingBeam
-from skfem_flex.integrators import ConvergenceError, EnergyMomentum, NewtonSettings
+from skfem_flex.compiled import single_body_loop as compiled_loop
+from skfem_flex.bodies.floating.body import FloatingBeam
+from skfem_flex.schemes.integrators import ConvergenceError, EnergyMomentum, NewtonSettings
 
 SEC = dict(EA=2.8e7, EI=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4)
 
@@ -57,7 +57,7 @@ def test_eligibility():
     em = EnergyMomentum()
     assert compiled_loop.eligible(sf.scenes.spin_up_beam(n_elements=4), em)
     assert compiled_loop.eligible(free_flying_beam(), em)
-    assert not compiled_loop.eligible(sf.scenes.spin_up_beam(n_elements=4), sf.integrators.Trapezoidal())
+    assert not compiled_loop.eligible(sf.scenes.spin_up_beam(n_elements=4), sf.schemes.integrators.Trapezoidal())
     assert not compiled_loop.eligible(sf.scenes.spin_up_pinned(n_elements=4), em)   # constraints
     assert not compiled_loop.eligible(sf.scenes.free_beam(n_elements=4), em)        # a load
     assert not compiled_loop.eligible(sf.scenes.pendulum(), em)                      # not a floating beam

@@ -14,9 +14,9 @@ import pytest
 import scipy.sparse as sps
 
 import skfem_flex as sf
-from skfem_flex import compiled_scene
+from skfem_flex.compiled import scene_loop as compiled_scene
 from skfem_flex.bodies.base import to_dense
-from skfem_flex.integrators import ConvergenceError, EnergyMomentum, NewtonSettings, Trapezoidal, make_integrator
+from skfem_flex.schemes.integrators import ConvergenceError, EnergyMomentum, NewtonSettings, Trapezoidal, make_integrator
 from skfem_flex.bodies.probes import PointProbe
 from skfem_flex.scenes.links import link
 
@@ -305,8 +305,8 @@ def test_catalogue_mechanisms_compiled_equal_python(name, dt, t_end):
 
 
 def test_cayley_terms_are_the_rotations_formulas():
-    """The compiled step's Cayley rate terms against the numpy functions of skfem_flex.rotations."""
-    from skfem_flex import rotations
+    """The compiled step's Cayley rate terms against the numpy functions of skfem_flex.numerics.rotations."""
+    from skfem_flex.numerics import rotations
     for x in np.concatenate([np.linspace(-2.8, 2.8, 57), [0.0, 1e-9, -3e-5, 0.0099, 0.0101, -0.0101]]):
         z, ratio, dratio, dz = compiled_scene.cayley_terms(x)
         assert z == pytest.approx(float(rotations.cayley(x)), rel=1e-15, abs=1e-300)
@@ -503,7 +503,7 @@ def test_block_energy_guard_stops_where_the_record_by_record_guard_does():
     """first_energy_violation on a block equals check_energy applied record by record (scale window
     included), for a blow-up at every position, a NaN energy and a run that never diverges."""
     from skfem_flex.errors import DivergenceError
-    from skfem_flex.simulate import _DivergenceGuard, _SCALE_RECORDS
+    from skfem_flex.run.simulate import _DivergenceGuard, _SCALE_RECORDS
 
     class Scene_:
         length_scale = 1.0

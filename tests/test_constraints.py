@@ -6,14 +6,14 @@ import pytest
 import skfem
 
 import skfem_flex as sf
-from skfem_flex.bodies.floating import FloatingBeam
+from skfem_flex.bodies.floating.body import FloatingBeam
 from skfem_flex.bodies.rigid import RigidBody
-from skfem_flex.constraints import Driver, Pin, Prismatic, Revolute, Slider, UserConstraint, Weld
-from skfem_flex.forces import (LinearDamper, LinearSpring, PointForce, PointMoment, RotationalDamper,
+from skfem_flex.elements.constraints import Driver, Pin, Prismatic, Revolute, Slider, UserConstraint, Weld
+from skfem_flex.elements.forces import (LinearDamper, LinearSpring, PointForce, PointMoment, RotationalDamper,
                                RotationalSpring, half_sine_pulse)
-from skfem_flex.initial_conditions import (InconsistentInitialConditionsError, RedundantConstraintsError,
+from skfem_flex.scene_initial import (InconsistentInitialConditionsError, RedundantConstraintsError,
                                            consistent_initial_state, find_redundant)
-from skfem_flex.motion import MotionLaw
+from skfem_flex.elements.motion import MotionLaw
 
 G = 9.81
 

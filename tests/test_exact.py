@@ -8,7 +8,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 import skfem_flex as sf
-from skfem_flex.bodies.exact import ElementInversionError, ExactBeam, ExactDistributedLoad, NodalLoad
+from skfem_flex.bodies.exact.body import ElementInversionError, ExactBeam, ExactDistributedLoad, NodalLoad
 from skfem_flex.scenes.exact_beams import exact_spin_up_beam, flying_beam, very_flexible_pendulum
 
 SECTION = sf.Section(EA=1e4, EI=100.0, kGA=3e3, rhoA=1.0, rhoI=10.0)
@@ -221,7 +221,7 @@ def test_flying_beam_energy_momentum(dt, t_end):
 def test_discrete_gradient_is_equivariant_in_cayley_rates(order):
     """D V scaled to Cayley rates (rows ψ times Δψ/w) is orthogonal to the infinitesimal rotation
     ξ = (E r̄, 1) at the mean configuration, for large steps: exact angular momentum needs exactly this."""
-    from skfem_flex.rotations import cayley_ratio
+    from skfem_flex.numerics.rotations import cayley_ratio
     rng = np.random.default_rng(7)
     body = ExactBeam.from_points(SECTION, (6.0, 0.0), (0.0, 8.0), n_elements=4, order=order)
     nd = body.node_dofs
@@ -448,7 +448,7 @@ def test_cayley_functions_stay_real_after_a_complex_call():
     import subprocess
     import sys
     code = ("import numpy as np\n"
-            "from skfem_flex.rotations import cayley_ratio, cayley_divided_difference\n"
+            "from skfem_flex.numerics.rotations import cayley_ratio, cayley_divided_difference\n"
             "cayley_divided_difference(np.array([0.3 + 1e-20j]), np.array([0.1]))\n"
             "cayley_ratio(np.array([0.2 + 1e-20j]))\n"
             "r = cayley_ratio(np.array([0.3]))\n"

@@ -1,4 +1,4 @@
-"""Compiled ExactBeam kernels (skfem_flex.bodies.exact_kernel) against the numpy methods of ExactBeam."""
+"""Compiled ExactBeam kernels (skfem_flex.bodies.exact.kernel) against the numpy methods of ExactBeam."""
 import time
 
 import numba
@@ -7,11 +7,11 @@ import pytest
 import scipy.sparse as sps
 
 import skfem_flex as sf
-from skfem_flex.bodies import exact_kernel as ek
-from skfem_flex.bodies import exact as exact_module
-from skfem_flex.bodies.exact import ElementInversionError, ExactBeam
+from skfem_flex.bodies.exact import kernel as ek
+from skfem_flex.bodies.exact import body as exact_module
+from skfem_flex.bodies.exact.body import ElementInversionError, ExactBeam
 from skfem_flex.errors import ConvergenceError
-from skfem_flex.rotations import MAX_INCREMENT
+from skfem_flex.numerics.rotations import MAX_INCREMENT
 
 SECTION = sf.Section(EA=1e4, EI=100.0, kGA=3e3, rhoA=1.0, rhoI=10.0)
 TOL = 1e-12

@@ -12,7 +12,7 @@ import pytest
 import skfem
 
 import skfem_flex as sf
-from skfem_flex.bodies.floating import FloatingBeam, DistributedLoad
+from skfem_flex.bodies.floating.body import FloatingBeam, DistributedLoad
 
 SEC = dict(EA=2.8e7, EI=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4)
 L = 10.0

@@ -11,7 +11,7 @@ import scipy.sparse as sps
 import skfem
 
 import skfem_flex as sf
-from skfem_flex.bodies.floating import FloatingBeam
+from skfem_flex.bodies.floating.body import FloatingBeam
 
 SEC = dict(EA=2.8e7, EI=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4)
 CASES = [dict(reference=ref, strain=strain, order=order, sparse=sparse)

@@ -12,8 +12,9 @@ import scipy.sparse as sps
 import skfem
 
 import skfem_flex as sf
-from skfem_flex.bodies import PlaneStress, floating_kernel as fk
-from skfem_flex.bodies.floating import FloatingBeam
+from skfem_flex.bodies import PlaneStress
+from skfem_flex.bodies.floating import kernel as fk
+from skfem_flex.bodies.floating.body import FloatingBeam
 
 SEC = dict(EA=2.8e7, EI=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4)
 # a section whose stiffness is of the size of the kinetic terms at ω, α ~ 1: the tangent's comparison

@@ -228,7 +228,7 @@ def test_predicted_increment_is_third_order_and_falls_back_on_unresolved_steps()
     """Δq⁰ = Δt v0 + ½ Δt² a0 with a0 the last step's mean acceleration misses the exact increment of a
     smooth motion by O(Δt³) (Δt v0 alone: O(Δt²)); a step with ½ Δt ‖a0‖ > PREDICTOR_LIMIT ‖v0‖ starts
     from Δt v0."""
-    from skfem_flex.newton import PREDICTOR_LIMIT, predicted_increment
+    from skfem_flex.numerics.newton import PREDICTOR_LIMIT, predicted_increment
 
     def q(t):
         return np.array([np.sin(t), 2.0 * np.cos(0.5 * t), 0.3 * t])
@@ -269,7 +269,7 @@ def test_each_scheme_carries_its_own_state():
     """Energy-momentum carries State (no algorithmic acceleration), the Newmark family NewmarkState with
     generalized-α's a (equal to q̈ at the start); a Newmark step refuses a state without it."""
     import skfem_flex as sf
-    from skfem_flex.integrators import NewmarkState, State
+    from skfem_flex.schemes.integrators import NewmarkState, State
     scene = sf.scenes.get("pendulum")()
     q, v = scene.initial_state()
     em = sf.EnergyMomentum().start(scene, State(0.0, q, v))

@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 
 import skfem_flex as sf
-from skfem_flex.cli import main
-from skfem_flex.output import read_pvd
+from skfem_flex.apps.cli import main
+from skfem_flex.run.output import read_pvd
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENE, T_END, DT = "pendulum", 10.0, 0.01

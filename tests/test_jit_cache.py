@@ -1,4 +1,4 @@
-"""Compiled code is cached across processes and never goes stale (skfem_flex.jit_cache).
+"""Compiled code is cached across processes and never goes stale (skfem_flex.numerics.jit_cache).
 
 Each test works on a copy of the package in a temporary folder and runs fresh
 Python processes, as a user's successive runs would.

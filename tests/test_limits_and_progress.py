@@ -1,7 +1,7 @@
 """Limits the run must respect and what it shows while running (issue: nothing lost, nothing silent).
 
 - memory: the least of the system's free memory, the cgroup limit and the address-space limit
-  (``skfem_flex.resources.available_memory``), so that a container or ``ulimit -v`` refuses a
+  (``skfem_flex.numerics.resources.available_memory``), so that a container or ``ulimit -v`` refuses a
   request with a sentence instead of a MemoryError or a kill;
 - checkpoints: the wait after a save grows with the time the save took (no quadratic cost);
 - stability study: plain case names listed by ``study --help``; a cold Numba cache's compile is
@@ -23,13 +23,16 @@ from pathlib import Path
 import pytest
 
 import skfem_flex as sf
-from skfem_flex import cli, compiled_loop, resources, studies
-from skfem_flex.resources import InsufficientMemoryError
-from skfem_flex.result import Result
+from skfem_flex.apps import cli
+from skfem_flex.compiled import single_body_loop as compiled_loop
+from skfem_flex.numerics import resources
+from skfem_flex.apps import studies
+from skfem_flex.numerics.resources import InsufficientMemoryError
+from skfem_flex.run.result import Result
 
 ROOT = Path(__file__).resolve().parents[1]
-simulate_module = importlib.import_module("skfem_flex.simulate")
-sweep_module = importlib.import_module("skfem_flex.sweep")
+simulate_module = importlib.import_module("skfem_flex.run.simulate")
+sweep_module = importlib.import_module("skfem_flex.apps.sweep")
 
 SYSTEM = 64_000_000_000           # bytes the (fake) system reports available: more than any limit below
 
@@ -119,7 +122,7 @@ def test_address_space_limit_refuses_cleanly_in_a_subprocess(tmp_path):
     half a minute of allocating (exit 1) or a kill."""
     code = ("import resource, sys\n"
             "resource.setrlimit(resource.RLIMIT_AS, (int(1.5 * 2**30), resource.RLIM_INFINITY))\n"
-            "from skfem_flex import cli\n"
+            "from skfem_flex.apps import cli\n"
             f"sys.exit(cli.main(['run', 'spin_up_beam', '--set', 'n_elements=100000', '--out', {str(tmp_path)!r}, "
             "'--quiet', '--no-vtk']))\n")
     env = dict(os.environ, PYTHONPATH=str(ROOT))
@@ -136,7 +139,7 @@ def test_address_space_limit_refuses_cleanly_in_a_subprocess(tmp_path):
 
 # ------------------------------------------------------------------ 2. checkpoint interval
 class _FakeClock:
-    """time for skfem_flex.simulate: perf_counter is a counter the test advances."""
+    """time for skfem_flex.run.simulate: perf_counter is a counter the test advances."""
 
     def __init__(self):
         self.now = 0.0

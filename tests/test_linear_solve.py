@@ -10,7 +10,7 @@ import pytest
 import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 
-from skfem_flex import linear_solver
+from skfem_flex.numerics import linear_solver
 
 
 def bordered_matrix(n, n_frame=3, n_mult=2, half_band=3, seed=0):

@@ -11,13 +11,14 @@ import scipy.sparse as sps
 import skfem
 
 import skfem_flex as sf
-from skfem_flex import compiled_loop
-from skfem_flex.bodies import PlaneStress, floating_kernel as fk
-from skfem_flex.bodies.floating import FloatingBeam
-from skfem_flex.bodies.modal import ModalBody
-from skfem_flex.bodies.modal_kernel import pack_quartic, quartic_discrete_gradient, quartic_energy
-from skfem_flex.bodies.stiffening import QuarticEnergy
-from skfem_flex.integrators import EnergyMomentum, Trapezoidal
+from skfem_flex.compiled import single_body_loop as compiled_loop
+from skfem_flex.bodies import PlaneStress
+from skfem_flex.bodies.floating import kernel as fk
+from skfem_flex.bodies.floating.body import FloatingBeam
+from skfem_flex.bodies.modal.body import ModalBody
+from skfem_flex.bodies.modal.kernel import pack_quartic, quartic_discrete_gradient, quartic_energy
+from skfem_flex.bodies.modal.stiffening import QuarticEnergy
+from skfem_flex.schemes.integrators import EnergyMomentum, Trapezoidal
 from test_compiled_loop import assert_loop_measures_are_the_scenes, assert_same_run as same_run
 
 SEC = dict(EA=2.8e7, EI=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4)

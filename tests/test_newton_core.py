@@ -1,4 +1,4 @@
-"""The one Newton core (skfem_flex.newton): its rules on small problems with known roots, and
+"""The one Newton core (skfem_flex.numerics.newton): its rules on small problems with known roots, and
 that every solver of the package runs it — change one rule in a copy of the package and every
 scheme (compiled and Python-assembled) and the static solver change with it."""
 import json
@@ -14,7 +14,7 @@ import pytest
 
 import skfem_flex
 from skfem_flex.errors import ConvergenceError
-from skfem_flex.newton import NewtonSettings, newton_solve
+from skfem_flex.numerics.newton import NewtonSettings, newton_solve
 
 
 def scalar(f, df, scale=1e-12):
@@ -72,7 +72,7 @@ def test_exceptions_of_the_residual_pass_through():
 PROBE = textwrap.dedent('''
     import json
     import skfem_flex as sf
-    from skfem_flex import compiled_loop
+    from skfem_flex.compiled import single_body_loop as compiled_loop
     from skfem_flex.analysis import static_equilibrium
     out = {}
     pendulum = sf.scenes.get("pendulum")()
@@ -80,7 +80,7 @@ PROBE = textwrap.dedent('''
         res = sf.simulate(pendulum, 0.5, 1e-2, integrator=scheme)
         out[scheme] = int(res.newton_iterations.sum())
     spin = sf.scenes.get("spin_up_beam")()
-    assert compiled_loop.eligible(spin, sf.integrators.make_integrator("energy-momentum"))
+    assert compiled_loop.eligible(spin, sf.schemes.integrators.make_integrator("energy-momentum"))
     out["energy-momentum, compiled loop"] = int(sf.simulate(spin, 0.05, 1e-3).newton_iterations.sum())
     out["statics"] = int(static_equilibrium(sf.scenes.get("rotating_beam")(), steady=True).iterations)
     print(json.dumps(out))
@@ -104,7 +104,7 @@ def test_one_rule_changed_in_one_place_changes_every_scheme(tmp_path):
     shutil.copytree(Path(skfem_flex.__file__).parent, root / "skfem_flex",
                     ignore=shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc"))
     before = probe(root)
-    source = root / "skfem_flex" / "newton.py"
+    source = root / "skfem_flex" / "numerics" / "newton.py"
     text = source.read_text()
     assert text.count("CONVERGED_BELOW = 1.0\n") == 1
     source.write_text(text.replace("CONVERGED_BELOW = 1.0\n", "CONVERGED_BELOW = 1e7\n"))

@@ -11,7 +11,7 @@ from scipy.optimize import minimize_scalar
 
 import skfem_flex as sf
 from skfem_flex.bodies import PlaneStress, craig_bampton, load_mesh
-from skfem_flex.bodies.plane_stress import von_mises
+from skfem_flex.bodies.modal.plane_stress import von_mises
 
 ROOT = Path(__file__).resolve().parents[1]
 CONROD = ROOT / "examples" / "meshes" / "conrod.msh"
@@ -134,9 +134,9 @@ def test_meshed_rod_stresses_vanish_under_finite_rigid_motion(tmp_path):
     turned by a finite amount, η = 0, written through a VTKSeries and read back with meshio: the rod's stress cells
     are zero and its points sit at the rigidly placed mesh; a second frame with η ≠ 0 reads back the body's own
     nonzero stresses, so the arrays are really the rod's."""
-    from skfem_flex.bodies.plane_stress import _LINEAR
+    from skfem_flex.bodies.modal.plane_stress import _LINEAR
     from skfem_flex.bodies.rigid import rotation
-    from skfem_flex.output import VTKSeries
+    from skfem_flex.run.output import VTKSeries
     scene = sf.scenes.slider_crank(body="plane-stress-modal", mesh=str(CONROD))
     rod = scene.bodies[1]
     model = rod.model
@@ -219,7 +219,7 @@ def test_bad_material_and_interface_input():
 def test_large_unreduced_body_is_refused_before_dense_allocation(monkeypatch):
     """The unreduced body is dense in its DOFs: above the limit it is refused (naming the DOF count and
     the way out), not built into an n × n allocation the machine cannot hold."""
-    from skfem_flex.bodies import reduction
+    from skfem_flex.bodies.modal import reduction
     rod = strip(8, 1)
     n = rod.model().n_dofs
     monkeypatch.setattr(reduction, "UNREDUCED_LIMIT", n - 1)

@@ -4,10 +4,11 @@ import pytest
 import scipy.sparse as sps
 
 import skfem_flex as sf
-from skfem_flex import constraints, point_terms
+from skfem_flex.elements import constraints
+from skfem_flex.elements import point_terms
 from skfem_flex.bodies.rigid import RigidBody
-from skfem_flex.constraints import Pin, Revolute, Weld
-from skfem_flex.point_terms import (Constant, Difference, Dot, PointLayout, Position, Rotated, angle_term,
+from skfem_flex.elements.constraints import Pin, Revolute, Weld
+from skfem_flex.elements.point_terms import (Constant, Difference, Dot, PointLayout, Position, Rotated, angle_term,
                                     coordinate_term, linear_combination)
 
 

@@ -51,7 +51,7 @@ def test_reduced_beam_rod_follows_the_full_green_lagrange_beam_rod():
 def command():
     """The installed console script if there is one, else the module (as tests/test_cli.py)."""
     exe = shutil.which("skfem-flex")
-    return [exe] if exe else [sys.executable, "-m", "skfem_flex.cli"]
+    return [exe] if exe else [sys.executable, "-m", "skfem_flex.apps.cli"]
 
 
 def test_cli_runs_the_slider_crank_with_the_reduced_strip_rod(tmp_path):

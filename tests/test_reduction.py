@@ -6,10 +6,10 @@ import scipy.linalg as sla
 import skfem
 
 import skfem_flex as sf
-from skfem_flex.beam import TimoshenkoBeam
+from skfem_flex.fem.beam import TimoshenkoBeam
 from skfem_flex.bodies import FloatingBeam, PlaneStress, craig_bampton, free_modes, reduce
 from skfem_flex.scene import Scene
-from skfem_flex.section import Section
+from skfem_flex.fem.section import Section
 
 SPIN = Section(EA=2.8e7, EI=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4)       # the catalogue spin-up beam
 
@@ -80,7 +80,7 @@ def test_modal_derivatives_of_the_constraint_modes():
     each derivative is the static second-order response with the interfaces held (K_oo θ = −∂²f, P θ = 0); the
     beam's axial constraint mode with itself gives none (a uniform axial force, held by the interfaces). A body held
     at its reference interface only falls back to the derivatives of its fixed-interface modes."""
-    from skfem_flex.bodies.reduction import modal_derivatives
+    from skfem_flex.bodies.modal.reduction import modal_derivatives
     mesh = skfem.MeshQuad.init_tensor(np.linspace(0, 0.4, 9), np.linspace(0, 0.04, 3))
     ps = PlaneStress(mesh, 2e9, 0.3, 1000.0, thickness=0.01, interfaces={"root": lambda X: np.isclose(X[0], 0.0),
                                                                        "tip": lambda X: np.isclose(X[0], 0.4)})
@@ -266,7 +266,7 @@ def test_reduced_bodies_run_with_the_other_schemes(scheme):
 def test_point_force_on_a_meshed_body_point_balances_its_work():
     """A force pulse at a material point (X, Y) of a free reduced plate: the energy gained equals the pulse's work
     (1e-9) and the momentum gained equals the impulse 2τF/π (to the midpoint rule's (πΔt/τ)²/24 = 1e-3)."""
-    from skfem_flex.forces import PointForce, half_sine_pulse
+    from skfem_flex.elements.forces import PointForce, half_sine_pulse
     mesh = skfem.MeshQuad.init_tensor(np.linspace(0, 0.4, 9), np.linspace(0, 0.1, 3))
     body = PlaneStress(mesh, 2e9, 0.3, 1000.0, thickness=0.01).reduced(4)
     F, tau = np.array([0.0, 50.0]), 2e-3

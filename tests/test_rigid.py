@@ -8,7 +8,7 @@ from scipy.special import ellipk
 
 import skfem_flex as sf
 from skfem_flex.bodies.rigid import RigidBody, rotation
-from skfem_flex.rotations import dsinc, sinc
+from skfem_flex.numerics.rotations import dsinc, sinc
 
 G = 9.81
 

@@ -18,8 +18,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import skfem_flex as sf
-from skfem_flex import cli, compiled_loop, scenes
-from skfem_flex.output import VTKSeries, read_pvd
+from skfem_flex import scenes
+from skfem_flex.apps import cli
+from skfem_flex.compiled import single_body_loop as compiled_loop
+from skfem_flex.run.output import VTKSeries, read_pvd
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -148,7 +150,7 @@ def test_divergence_exits_3_and_keeps_outputs(tmp_path, capsys):
 def test_divergence_guard_energy_rule():
     """A non-conservative scheme whose energy grows 10⁶ times beyond the scale of its first steps
     plus the work done is stopped; a run released from rest (T₀ + V₀ = 0) is not."""
-    from skfem_flex.simulate import _SCALE_RECORDS, DIVERGENCE_FACTOR, _DivergenceGuard
+    from skfem_flex.run.simulate import _SCALE_RECORDS, DIVERGENCE_FACTOR, _DivergenceGuard
     scene = sf.scenes.pendulum()
 
     guard = _DivergenceGuard(scene, np.array([0.5, 0.0]), [0.0], [0.0], [0.0])
@@ -181,7 +183,7 @@ def test_energy_balance_warning(tmp_path, capsys):
 def test_full_disk_is_one_line_without_tmp_or_unlisted_frames(tmp_path, capsys, monkeypatch, failing):
     """ENOSPC while writing the 6th frame (its .vtu, or its listing after the .pvd was written)."""
     import meshio
-    from skfem_flex import output
+    from skfem_flex.run import output
     calls = {"n": 0}
     if failing == "vtu":
         real = meshio.write
@@ -218,7 +220,7 @@ def test_full_disk_is_one_line_without_tmp_or_unlisted_frames(tmp_path, capsys, 
 def test_series_cost_is_linear_in_the_frames(tmp_path, monkeypatch):
     """Writing N frames writes O(N log N) bytes of collections, not O(N²): the collections are
     rewritten when the unlisted frames reach 1/256 of the listed ones (or after a second)."""
-    from skfem_flex import output
+    from skfem_flex.run import output
     monkeypatch.setattr(output, "LISTING_SECONDS", 1e9)          # the count rule alone, deterministic
     written = {"bytes": 0, "calls": 0}
     real = output.write_text_atomically
@@ -269,7 +271,7 @@ def test_large_body_allocates_no_dense_n_by_n():
 
 
 def test_memory_estimate_before_allocating(monkeypatch):
-    from skfem_flex import resources
+    from skfem_flex.numerics import resources
     monkeypatch.setattr(resources, "available_memory", lambda: 50e6)
     with pytest.raises(MemoryError, match="elements"):
         sf.scenes.get("spin_up_beam")(n_elements=100_000)
@@ -325,7 +327,7 @@ def test_cold_cache_detection(tmp_path):
     """With an empty Numba cache directory the kernels are cold (the Newton core for every scene, the
     floating-frame kernels too for a beam); after a run in this process they are not."""
     env = dict(os.environ, PYTHONPATH=str(ROOT), NUMBA_CACHE_DIR=str(tmp_path))
-    code = ("import skfem_flex as sf; from skfem_flex import compiled_loop as c; "
+    code = ("import skfem_flex as sf; from skfem_flex.compiled import single_body_loop as c; "
             "print(c.jit_cache_cold(sf.scenes.get('spin_up_beam')()), c.jit_cache_cold(sf.scenes.pendulum()))")
     proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
     assert proc.stdout.split() == ["True", "True"], proc.stderr

@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from skfem_flex.section import Section
+from skfem_flex.fem.section import Section
 
 GOOD = dict(EA=2.8e7, EI=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4)
 BAD_VALUES = [0.0, -1.0, math.nan, math.inf, -math.inf]

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import skfem_flex as sf
-from skfem_flex import studies
+from skfem_flex.apps import studies
 
 
 def test_oscillator_period_references():
@@ -74,7 +74,7 @@ def test_stability_budget_stops_slow_runs_and_keeps_the_history():
 
 
 def test_study_command_writes_tables_and_plot(tmp_path):
-    from skfem_flex.cli import main
+    from skfem_flex.apps.cli import main
     assert main(["study", "stability", "--cases", "quartic_T4", "--schemes", "energy-momentum", "--quick",
                  "--quiet", "--out", str(tmp_path / "s")]) == 0
     for name in ("stability.md", "stability.csv", "stability.png"):
@@ -94,7 +94,7 @@ def _tiny_flexible_pendulum():
 
 
 def test_work_precision_without_the_peer_has_only_our_rows(monkeypatch):
-    from skfem_flex import peer
+    from skfem_flex.apps import peer
     monkeypatch.setattr(peer, "peer_available", lambda: False)
     case = _tiny_flexible_pendulum()
     assert case.peer is not None and studies.WORK_PRECISION_CASES["spin_up_beam"]().peer is not None

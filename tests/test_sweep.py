@@ -17,8 +17,8 @@ import xarray as xr
 from distributed import Client, LocalCluster
 
 import skfem_flex as sf
-from skfem_flex.integrators import NewtonSettings
-from skfem_flex.sweep import local_cluster, open_sweep, plan, probe_extremes
+from skfem_flex.schemes.integrators import NewtonSettings
+from skfem_flex.apps.sweep import local_cluster, open_sweep, plan, probe_extremes
 
 ROOT = Path(__file__).resolve().parents[1]
 GRID = {"omega": [4.0, 6.0, 8.0, 10.0], "n_elements": [2, 3, 4, 6]}
@@ -215,7 +215,7 @@ def test_driver_killed_then_resume_computes_only_the_missing_cases(client, tmp_p
 
 
 def test_cli_sweep_rejects_bad_input_with_one_line_and_status_2(tmp_path, capsys):
-    from skfem_flex.cli import main
+    from skfem_flex.apps.cli import main
 
     for args, text in ((["nope", "--vary", "omega=1"], "unknown scene 'nope'"),
                        (["spin_up_beam", "--vary", "omegax=1"], "no parameter 'omegax'"),
@@ -228,7 +228,7 @@ def test_cli_sweep_rejects_bad_input_with_one_line_and_status_2(tmp_path, capsys
 
 
 def test_studies_run_their_cases_through_the_sweep_on_a_cluster_and_resume(client, tmp_path):
-    from skfem_flex import studies
+    from skfem_flex.apps import studies
 
     period = studies.oscillator_period(2.0)
     dts = [period / 20, period / 40]
@@ -292,7 +292,7 @@ def test_a_mixed_sweep_compiles_each_kernel_once_per_machine(tmp_path):
 
 
 def test_cli_sweep_shows_a_progress_bar_and_a_summary_table(client, tmp_path, capsys):
-    from skfem_flex.cli import main
+    from skfem_flex.apps.cli import main
 
     out = tmp_path / "bar"
     assert main(["sweep", "spin_up_beam", "--vary", "omega=4,6", "--t-end", "0.05", "--dt", "0.01",
@@ -308,7 +308,7 @@ def test_cli_sweep_shows_a_progress_bar_and_a_summary_table(client, tmp_path, ca
 
 
 def test_cli_study_on_a_cluster_with_a_store_and_a_rerun_that_computes_nothing(client, tmp_path, capsys):
-    from skfem_flex.cli import main
+    from skfem_flex.apps.cli import main
 
     store = tmp_path / "runs"
     args = ["study", "stability", "--cases", "quartic_T4", "pendulum_near_upright",

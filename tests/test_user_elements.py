@@ -24,7 +24,7 @@ import pytest
 import skfem_flex as sf
 from skfem_flex.bodies.base import Body, BodyGeometry, BodyPoint
 from skfem_flex.bodies.rigid import RigidBody
-from skfem_flex.constraints import Pin, Revolute, UserConstraint
+from skfem_flex.elements.constraints import Pin, Revolute, UserConstraint
 
 SCHEMES = ["energy-momentum", "trapezoidal", "generalized-alpha"]
 G = 9.81

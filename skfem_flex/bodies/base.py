@@ -54,7 +54,7 @@ def check_finite_vector(name, value, size=None):
 DENSE_LIMIT = 150
 #: most coordinates compiled code holds in a dense n × n matrix (2.9 MB): a body with a dense tangent
 #: (an unreduced ModalBody) packs compiled kernel data up to this size, and the compiled mechanism loop
-#: (skfem_flex.compiled_scene) stores a Newton matrix that has no plan as a band with a small dense
+#: (skfem_flex.compiled.scene_loop) stores a Newton matrix that has no plan as a band with a small dense
 #: border dense up to this size; above DENSE_LIMIT it stores every other one as the values of its
 #: sparsity pattern, at any size. Larger dense cases run on the Python path (SuperLU).
 COMPILED_SIZE_LIMIT = 600
@@ -170,7 +170,7 @@ class BodyPoint:
 
     def compiled_map(self):
         """The position map in the form the compiled mechanism loop evaluates
-        (:mod:`skfem_flex.compiled_scene`): ``("linear", G, c)`` for r = G q + c,
+        (:mod:`skfem_flex.compiled.scene_loop`): ``("linear", G, c)`` for r = G q + c,
         ``("frame", m_R, y0, Y)`` for r = m_R R + A(θ)(y0 + Y q_f) with R = q[0:2], θ = q[2],
         q_f = q[3:]; None (the default) if it is neither (the scene then runs on the Python path)."""
         return None
@@ -201,7 +201,7 @@ class Body:
     #: True when potential_energy is not identically zero
     has_potential: bool = False
     #: local indices of angles whose mean rate in the energy-momentum scheme is the Cayley rate
-    #: 2 tan(Δφ/2)/Δt instead of Δφ/Δt (:mod:`skfem_flex.rotations`); a body that declares them
+    #: 2 tan(Δφ/2)/Δt instead of Δφ/Δt (:mod:`skfem_flex.numerics.rotations`); a body that declares them
     #: writes its potential discrete gradient so that, with its rows on these coordinates scaled
     #: by Δφ/w, it is conjugate to those rates. Constant-mass bodies only.
     cayley_coordinates: tuple = ()

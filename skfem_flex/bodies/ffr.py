@@ -40,7 +40,7 @@ sinc(Δθ/2) A(θ_m) E Δθ and (A(θ₀) + A(θ₁))/2 = cos(Δθ/2) A(θ_m)). 
 gravity and for every material point (:class:`FramePoint`), whose position is linear in q_f.
 
 :class:`FloatingFrame` holds this algebra once; :class:`~skfem_flex.bodies.FloatingBeam`
-(nodal beam coordinates) and :class:`~skfem_flex.bodies.modal.ModalBody` (any linear field
+(nodal beam coordinates) and :class:`~skfem_flex.bodies.modal.body.ModalBody` (any linear field
 u = Φ η: reduced beams, plane-stress bodies) are its subclasses and only supply the
 invariants, a strain energy and geometry. Derivation: docs/flexible_bodies.md.
 """
@@ -52,7 +52,7 @@ from collections import namedtuple
 import numpy as np
 
 from .base import Body, BodyPoint
-from .floating_kernel import sinc_half
+from .floating.kernel import sinc_half
 from .rigid import E_MATRIX as E2, rotation as _rot
 
 __all__ = ["FloatingFrame", "FramePoint"]
@@ -347,10 +347,10 @@ class FloatingFrame(Body):
 
     # ================================================================ fused evaluation
     def compiled_kernel_data(self):
-        """The packed arrays (:class:`~skfem_flex.bodies.floating_kernel.FloatingKernelData`) on which the
+        """The packed arrays (:class:`~skfem_flex.bodies.floating.kernel.FloatingKernelData`) on which the
         compiled floating-frame kernels evaluate this body, or None if it has none (subclasses provide them).
 
-        What :mod:`skfem_flex.compiled_loop` asks a body for; the kernels' reference is the numpy
+        What :mod:`skfem_flex.compiled.single_body_loop` asks a body for; the kernels' reference is the numpy
         contract methods of the body."""
         return None
 

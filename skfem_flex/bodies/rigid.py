@@ -27,7 +27,7 @@ import math
 import numpy as np
 
 from .base import Body, BodyGeometry, BodyPoint, check_finite_vector
-from ..rotations import dsinc, sinc
+from ..numerics.rotations import dsinc, sinc
 
 __all__ = ["RigidBody", "rotation", "E_MATRIX"]
 

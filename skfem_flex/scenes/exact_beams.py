@@ -1,4 +1,4 @@
-"""Scenes with geometrically exact beams (:class:`~skfem_flex.bodies.exact.ExactBeam`).
+"""Scenes with geometrically exact beams (:class:`~skfem_flex.bodies.exact.body.ExactBeam`).
 
 * :func:`flying_beam` — the free-flying beam of Simo & Vu-Quoc (1986);
 * :func:`very_flexible_pendulum` — the pendulum of Berzeri & Shabana (2000);
@@ -9,12 +9,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..bodies.exact import ExactBeam, NodalLoad
+from ..bodies.exact.body import ExactBeam, NodalLoad
 from ..bodies.probes import LinearProbe, PointProbe
-from ..forces import Gravity
-from ..motion import MotionLaw, Prescribed, spin_up_law
+from ..elements.forces import Gravity
+from ..elements.motion import MotionLaw, Prescribed, spin_up_law
 from ..scene import Scene
-from ..section import Section
+from ..fem.section import Section
 from ._registry import positive_count as _count, register
 
 __all__ = ["flying_beam", "very_flexible_pendulum", "exact_spin_up_beam", "LoadWindow"]
@@ -57,7 +57,7 @@ def flying_beam(n_elements=10, order=1, length=10.0, EA=1e4, GA=1e4, EI=100.0, r
     energy, linear and angular momentum stay constant to the Newton
     tolerance (``rotation_rate="cayley"``, the default; with
     ``"mid-point"`` angular momentum drifts by O(Δt²), 5e-4 relative at
-    Δt = 0.1; see :mod:`skfem_flex.bodies.exact`).
+    Δt = 0.1; see :mod:`skfem_flex.bodies.exact.body`).
 
     ``GA`` is the shear stiffness as given in the paper (shear factor
     included). Probes: ``"end_a"`` (the loaded end), ``"end_b"`` (the other
@@ -130,9 +130,9 @@ def exact_spin_up_beam(omega=4.0, T=15.0, length=10.0, EA=2.8e7, EI=1.4e4, kGA=1
     overall motions — the plane case: part II", J. Appl. Mech. 53 (1986):
     a beam clamped to a hub at the origin whose angle follows
     θ(t) = (ω/T)(t²/2 + (T/2π)²(cos(2πt/T) − 1)) for t < T and ω(t − T/2)
-    after (:func:`~skfem_flex.motion.spin_up_law`). The root node's position
+    after (:func:`~skfem_flex.elements.motion.spin_up_law`). The root node's position
     is held at the origin and its section angle is prescribed to θ(t)
-    (the clamp), both through :class:`~skfem_flex.motion.Prescribed`.
+    (the clamp), both through :class:`~skfem_flex.elements.motion.Prescribed`.
 
     Probe ``"tip"``: tip displacement in the hub frame (axial, transverse),
     A(θ)ᵀ(r_tip − r_root) − (L, 0), m.

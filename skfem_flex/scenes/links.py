@@ -23,10 +23,10 @@ from dataclasses import dataclass
 import numpy as np
 import skfem
 
-from ..beam import TimoshenkoBeam, line_mesh
-from ..bodies.floating import FloatingBeam
-from ..bodies.plane_stress import PlaneStress, load_mesh
-from ..resources import BYTES_PER_ELEMENT, check_fits
+from ..fem.beam import TimoshenkoBeam, line_mesh
+from ..bodies.floating.body import FloatingBeam
+from ..bodies.modal.plane_stress import PlaneStress, load_mesh
+from ..numerics.resources import BYTES_PER_ELEMENT, check_fits
 from ._registry import positive_count, positive_value
 
 __all__ = ["LINK_KINDS", "Link", "link", "strip_material"]

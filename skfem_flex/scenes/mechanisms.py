@@ -9,23 +9,23 @@ r"""Multibody scenes with joints: pendulums, the flexible slider–crank, a free
 ``free_beam``
     A free floating-frame beam in zero gravity, set flying by a short force pulse.
 ``spin_up_pinned``
-    The spin-up beam with a :class:`~skfem_flex.constraints.Pin` at the hub and a
-    :class:`~skfem_flex.constraints.Driver` on the hub angle (instead of prescribed coordinates).
+    The spin-up beam with a :class:`~skfem_flex.elements.constraints.Pin` at the hub and a
+    :class:`~skfem_flex.elements.constraints.Driver` on the hub angle (instead of prescribed coordinates).
 """
 from __future__ import annotations
 
 import numpy as np
 
-from ..beam import TimoshenkoBeam, line_mesh
-from ..bodies.floating import FloatingBeam
+from ..fem.beam import TimoshenkoBeam, line_mesh
+from ..bodies.floating.body import FloatingBeam
 from ..bodies.particle import PointMass
 from ..bodies.probes import CombinedProbe, LinearProbe, PointProbe
 from ..bodies.rigid import RigidBody
-from ..constraints import Driver, Pin, Revolute, Slider
-from ..forces import Gravity, PointForce, half_sine_pulse
-from ..motion import MotionLaw, spin_up_law
+from ..elements.constraints import Driver, Pin, Revolute, Slider
+from ..elements.forces import Gravity, PointForce, half_sine_pulse
+from ..elements.motion import MotionLaw, spin_up_law
 from ..scene import Scene
-from ..section import Section
+from ..fem.section import Section
 from ._registry import positive_count as _count, positive_value as _positive, register
 from .links import LINK_KINDS, link
 from .rotating import hub_beam
@@ -81,7 +81,7 @@ def flexible_pendulum(length=1.0, EA=1e6, EI=1e2, kGA=3.205e5, rhoA=1.0, rhoI=1e
     """A flexible beam pinned at one end, released at rest from horizontal under gravity.
 
     FloatingBeam along [0, L] (clamped reference: the body frame is tangent to the root),
-    root pinned to the origin by a :class:`~skfem_flex.constraints.Pin`, gravity (0, −g).
+    root pinned to the origin by a :class:`~skfem_flex.elements.constraints.Pin`, gravity (0, −g).
     The mass centre falls by at most L/2, so m g L/2 (m = ρA L) is the natural energy scale.
     docs/scenes.md (also run with EI = 1e4, the stiffer case).
 
@@ -111,7 +111,7 @@ def double_pendulum(bar_length=1.0, bar_mass=1.0, beam_length=1.0, EA=1e6, EI=1e
 
     A rigid bar (mass ``bar_mass``, slender-rod inertia m L²/12 about its centre) pinned to
     the ground at the origin, and a FloatingBeam (clamped reference) hinged to the bar's tip
-    by a :class:`~skfem_flex.constraints.Revolute`; both lie along +x at t = 0; gravity (0, −g).
+    by a :class:`~skfem_flex.elements.constraints.Revolute`; both lie along +x at t = 0; gravity (0, −g).
 
     Probes: ``"elbow"`` = the hinge position (m), ``"tip"`` = beam tip position (m),
     ``"tip_deflection"`` = elastic tip displacement (u, w) in the beam frame (m).
@@ -290,7 +290,7 @@ def free_beam(length=10.0, EA=2.8e7, EI=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4, n_e
 
     FloatingBeam along [0, L] (clamped reference), no joints, no gravity. A half-sine pulse
     F(t) = force · sin(π t/τ), 0 ≤ t ≤ τ = ``duration``, acts at the tip along global +y
-    (:class:`~skfem_flex.forces.PointForce` with :func:`~skfem_flex.forces.half_sine_pulse`);
+    (:class:`~skfem_flex.elements.forces.PointForce` with :func:`~skfem_flex.elements.forces.half_sine_pulse`);
     its impulse is 2 τ force/π. Afterwards energy, linear and angular momentum are constant
     (docs/scenes.md), and ``Result.external_work`` holds the work of the pulse.
 
@@ -314,8 +314,8 @@ def spin_up_pinned(omega=4.0, T=15.0, length=10.0, EA=2.8e7, EI=1.4e4, kGA=1e7, 
     """The spin-up beam (Simo & Vu-Quoc 1986) with joints instead of prescribed coordinates.
 
     Same beam and hub law as :func:`~skfem_flex.scenes.spin_up_beam`, but the root is held at
-    the origin by a :class:`~skfem_flex.constraints.Pin` and the hub angle θ follows
-    :func:`~skfem_flex.motion.spin_up_law` through a :class:`~skfem_flex.constraints.Driver`,
+    the origin by a :class:`~skfem_flex.elements.constraints.Pin` and the hub angle θ follows
+    :func:`~skfem_flex.elements.motion.spin_up_law` through a :class:`~skfem_flex.elements.constraints.Driver`,
     so the coordinates stay unknowns and the driving torque is the driver's reaction −λ
     (``Result.reactions["hub drive"]``), equal to the generalized force that the prescribed
     version records in ``Result.prescribed_force``.

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 from ..bodies.particle import PointMass
 from ..bodies.probes import PointProbe
-from ..constraints import Distance
-from ..forces import Gravity, NonlinearSpring
+from ..elements.constraints import Distance
+from ..elements.forces import Gravity, NonlinearSpring
 from ..scene import Scene
 from ._registry import register
 

@@ -2,7 +2,7 @@
 
 ``spin_up_beam``
     Simo & Vu-Quoc (1986): a beam clamped to a hub whose angle follows
-    :func:`~skfem_flex.motion.spin_up_law` (docs/scenes.md). The hub frame is the body
+    :func:`~skfem_flex.elements.motion.spin_up_law` (docs/scenes.md). The hub frame is the body
     frame (clamped reference condition), R is held at the origin by constant laws.
 ``rotating_beam``
     A cantilever turning at constant ω, started in its stretched steady state.
@@ -13,11 +13,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..beam import TimoshenkoBeam, line_mesh
-from ..bodies.floating import FloatingBeam
-from ..motion import MotionLaw, Prescribed, spin_up_law
+from ..fem.beam import TimoshenkoBeam, line_mesh
+from ..bodies.floating.body import FloatingBeam
+from ..elements.motion import MotionLaw, Prescribed, spin_up_law
 from ..scene import Scene
-from ..section import Section
+from ..fem.section import Section
 from ._registry import register
 
 __all__ = ["spin_up_beam", "rotating_beam", "rotating_beam_frequencies", "hub_beam"]
