@@ -36,7 +36,7 @@ import numpy as np
 from ..errors import ConvergenceError
 from .linear_solver import linear_solve as default_linear_solve
 
-__all__ = ["NewtonSettings", "newton_start", "newton_evaluated", "newton_solved", "newton_solve", "roundoff_floor",
+__all__ = ["NewtonSettings", "newton_start", "newton_reset", "newton_evaluated", "newton_solved", "newton_solve", "roundoff_floor",
            "PythonSystem", "max_abs", "all_finite", "EVALUATE", "SOLVE", "CONVERGED", "NONFINITE_RESIDUAL",
            "NONFINITE_UPDATE", "SINGULAR", "NOT_CONVERGED"]
 
@@ -177,6 +177,19 @@ def newton_start(x0, x_scale, max_iterations, line_search):
     fl = np.array([np.inf, np.inf, 1.0, x_scale])
     ints = np.array([0, 0, 0, max_iterations, 1 if line_search else 0], dtype=np.int64)
     return x, np.zeros(x.size), x0.copy(), fl, ints
+
+
+@numba.njit(cache=True, _nrt=False)
+def newton_reset(state, x_scale, max_iterations, line_search):
+    """Start a Newton iteration in the preallocated ``state`` (as :func:`newton_start` makes it) from
+    the start already written into ``x_try``: the compiled loop's form, which allocates nothing."""
+    x, dx, x_try, fl, ints = state
+    for i in range(x.size):
+        x[i] = x_try[i]
+        dx[i] = 0.0
+    fl[0], fl[1], fl[2], fl[3] = np.inf, np.inf, 1.0, x_scale
+    ints[0], ints[1], ints[2], ints[3] = 0, 0, 0, max_iterations
+    ints[4] = 1 if line_search else 0
 
 
 @numba.njit(cache=True, _nrt=False)

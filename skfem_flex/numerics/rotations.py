@@ -30,7 +30,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["MAX_INCREMENT", "cayley", "cayley_derivative", "cayley_ratio", "cayley_ratio_derivative", "cayley_divided_difference",
+__all__ = ["sinc_half", "cayley_terms", "MAX_INCREMENT", "cayley", "cayley_derivative", "cayley_ratio", "cayley_ratio_derivative", "cayley_divided_difference",
            "sinc", "dsinc"]
 
 #: largest incremental rotation per step the Cayley update accepts, rad (W has a pole at π)
@@ -57,6 +57,28 @@ def dsinc(x):
         x2 = x * x
         return x * (-1.0 / 3.0 + x2 * (1.0 / 30.0 - x2 / 840.0))
     return (x * math.cos(x) - math.sin(x)) / (x * x)
+
+
+@numba.njit(cache=True)
+def sinc_half(d):
+    """σ = sinc(d/2) and dσ/dd = ½ dsinc(d/2) of an angle increment d (rad)."""
+    h = 0.5 * d
+    return sinc(h), 0.5 * dsinc(h)
+
+
+@numba.njit(cache=True)
+def cayley_terms(dpsi):
+    """(z, Δψ/w, d(Δψ/w)/dΔψ, dz/dΔψ) of an increment Δψ (rad), z = w = 2 tan(Δψ/2): :func:`cayley`,
+    :func:`cayley_ratio`, :func:`cayley_ratio_derivative` and :func:`cayley_derivative` in one compiled call
+    for the energy-momentum step."""
+    h = 0.5 * dpsi
+    c = np.cos(h)
+    if abs(dpsi) < SERIES_BELOW:
+        dratio = -dpsi / 6.0 - dpsi ** 3 / 180.0
+    else:
+        sh = np.sin(h)
+        dratio = (np.sin(dpsi) - dpsi) / (4.0 * sh * sh)
+    return 2.0 * np.tan(h), c / sinc(h), dratio, 1.0 / (c * c)
 
 
 def _sinc_any(x):

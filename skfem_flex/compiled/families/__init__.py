@@ -1,0 +1,93 @@
+r"""Element families of the compiled core: one module per family, registered here.
+
+A family packs the elements of one kind (every revolute-type point constraint of a scene, every
+floating-frame body, …) into one record and evaluates them all in one compiled kernel
+(:mod:`skfem_flex.compiled.tasks` says what a kernel is asked). A family module provides
+
+``NAME``
+    what notices and errors call it ("gravity");
+``FORMS``
+    the ``compiled_form()`` names of the elements (or constraint blocks) it packs;
+``pack(items, packer)``
+    a :class:`FamilyPack` from the items (each ``(form, element, where)``, see
+    :class:`~skfem_flex.compiled.pack.Packer`);
+``kernel()``
+    its compiled kernel (:func:`skfem_flex.compiled.registry.compiled_kernel`).
+
+Adding a family is one module and one line in :data:`FAMILY_MODULES`; the loop and the schemes do
+not change.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from importlib import import_module
+
+__all__ = ["FamilyPack", "FAMILY_MODULES", "family_for", "families"]
+
+#: every family of the package, by module (imported when first needed: a scene loads only its own)
+FAMILY_MODULES = (
+    "constant_mass",
+    "gravity",
+    "point_rows",
+    "linear_rows",
+    "distance_rows",
+)
+
+
+@dataclass
+class FamilyPack:
+    """What a family hands the scene: its data, the number of elements, and where it couples the
+    Newton matrix.
+
+    Attributes
+    ----------
+    data : NamedTuple of ndarray
+        The family's arrays (field order = the kernel's view order).
+    count : int
+        Number of elements packed.
+    couplings : list of ndarray
+        Sets of scene coordinates whose rows and columns the family's tangent may couple (each set
+        a dense block of the pattern).
+    entries : tuple of ndarray, optional
+        (rows, cols) of individual coordinate entries, for families whose tangent is sparse within
+        its blocks (a large beam).
+    rows : list of (int, ndarray)
+        Constraint rows the family owns and the coordinates each row's Φ_q may touch.
+    finish : callable, optional
+        ``finish(layout) -> data``: the data again once the Newton matrix's storage is fixed (families
+        that precompute where their entries go).
+    """
+
+    data: object
+    count: int
+    couplings: list = field(default_factory=list)
+    entries: tuple = None
+    rows: list = field(default_factory=list)
+    finish: object = None
+
+
+_MODULES = {}
+_BY_FORM = None
+
+
+def _module(name):
+    mod = _MODULES.get(name)
+    if mod is None:
+        mod = _MODULES[name] = import_module(f"{__name__}.{name}")
+    return mod
+
+
+def families():
+    """Every registered family module."""
+    return tuple(_module(name) for name in FAMILY_MODULES)
+
+
+def family_for(form_name):
+    """The family module that packs elements whose ``compiled_form()`` is named ``form_name``, or None."""
+    global _BY_FORM
+    if _BY_FORM is None:
+        _BY_FORM = {}
+        for mod in families():
+            for f in mod.FORMS:
+                _BY_FORM[f] = mod
+    return _BY_FORM.get(form_name)

@@ -1,0 +1,101 @@
+r"""Gravity: V = −g · ∫ r dm for every body it acts on, through the first moment of the body's mass.
+
+The first moment is a position map (:mod:`..points`): linear in q for constant-mass bodies
+(∫ r dm = Γ q + c: a constant gradient −Γᵀg), of the frame form for floating-frame bodies
+(m R + A(θ)(S₀ + S̄ q_f)); its exact discrete gradient D gives the exact discrete gradient −Dᵀg of V.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+from ..abi import context_of, f2, family_at, family_of, fvec, i1
+from ..points import LINEAR, dgrad_into, dgrad_jacobian_parts, maps_view, position_into
+from ..registry import compiled_kernel
+from ..storage import add_qq, storage_of
+from ..tasks import TASK_ENERGY, TASK_EVAL
+from . import FamilyPack
+
+NAME = "gravity"
+FORMS = ("gravity",)
+
+
+class Data(NamedTuple):
+    maps: np.ndarray    # the first-moment map of each body
+    g: np.ndarray       # (k, 2) gravitational acceleration, m/s²
+
+
+@numba.njit(cache=True)
+def _view(fam):
+    return Data(i1(fam, 0), f2(fam, 1))
+
+
+def pack(items, packer):
+    maps, g = [], []
+    for (entry, gvec), body, (off, nb) in items:
+        maps.append(packer.maps.add(entry, off, nb))
+        g.append(np.asarray(gvec, dtype=float).reshape(2))
+    return FamilyPack(data=Data(np.asarray(maps, dtype=np.int64), np.asarray(g).reshape(-1, 2)), count=len(items),
+                      couplings=[packer.maps_support(k) for k in maps])
+
+
+@numba.njit(cache=True)
+def _evaluate(ctx, d):
+    """g_p += −Dᵀg from q_a to q_b; the frame maps' w_gp c_dg ∂(−Dᵀg)/∂q_b and round-off floor."""
+    n = ctx.n
+    mrec = family_at(ctx.maps)
+    maps = maps_view(mrec)
+    qa, qb, gp, floor = fvec(ctx.qa, n), fvec(ctx.qb, n), fvec(ctx.gp, n), fvec(ctx.floor, n)
+    st = storage_of(ctx)
+    scratch = fvec(ctx.scratch, ctx.nscratch)
+    f = np.empty(2)
+    for i in range(d.maps.size):
+        k = d.maps[i]
+        o, nb = maps.off[k], maps.nb[k]
+        dk = scratch[:2 * nb].reshape(2, nb)
+        dgrad_into(mrec, k, qa[o:o + nb], qb[o:o + nb], dk)
+        f[0], f[1] = -d.g[i, 0], -d.g[i, 1]
+        for j in range(nb):
+            gp[o + j] += f[0] * dk[0, j] + f[1] * dk[1, j]
+        if maps.kind[k] == LINEAR:
+            continue
+        row, col = scratch[2 * nb:3 * nb - 3], scratch[3 * nb:4 * nb - 3]
+        h22 = dgrad_jacobian_parts(mrec, k, qa[o:o + nb], qb[o:o + nb], f, row, col)
+        w = ctx.w_gp * ctx.c_dg * ctx.dq1
+        a2 = abs(qa[o + 2]) + abs(qb[o + 2])
+        add_qq(ctx, st, o + 2, o + 2, w * h22)
+        fl2 = abs(w * h22) * a2
+        for j in range(nb - 3):
+            add_qq(ctx, st, o + 2, o + 3 + j, w * row[j])
+            add_qq(ctx, st, o + 3 + j, o + 2, w * col[j])
+            fl2 += abs(w * row[j]) * (abs(qa[o + 3 + j]) + abs(qb[o + 3 + j]))
+            floor[o + 3 + j] += abs(w * col[j]) * a2
+        floor[o + 2] += fl2
+
+
+@numba.njit(cache=True)
+def _energy(ctx, d):
+    n = ctx.n
+    mrec = family_at(ctx.maps)
+    maps = maps_view(mrec)
+    q, out = fvec(ctx.q1, n), fvec(ctx.out, 7)
+    r = np.empty(2)
+    for i in range(d.maps.size):
+        k = d.maps[i]
+        o = maps.off[k]
+        position_into(mrec, k, q[o:o + maps.nb[k]], r)
+        out[0] -= d.g[i, 0] * r[0] + d.g[i, 1] * r[1]
+
+
+def _kernel(ctx_p, fam_p):
+    ctx = context_of(ctx_p)
+    if ctx.task == TASK_EVAL:
+        _evaluate(ctx, _view(family_of(fam_p)))
+    elif ctx.task == TASK_ENERGY:
+        _energy(ctx, _view(family_of(fam_p)))
+
+
+def kernel():
+    return compiled_kernel(_kernel, "the gravity family")

@@ -1,0 +1,188 @@
+r"""The compiled time loop: many steps per call, one Newton core, every scheme and every scene.
+
+The loop knows neither schemes nor elements. For each step it asks the scheme's kernel (called by
+address, :mod:`.abi`) to PREDICT the Newton start, drives the Newton core
+(:mod:`skfem_flex.numerics.newton`: EVALUATE → the scheme's kernel, SOLVE → the solver's kernel) until
+the core answers, asks the scheme to ACCEPT the step and records the steps asked for. It returns at the
+first step it cannot finish, with the state before that step (a scheme changes its state only when it
+accepts), so that Python can halve the step or raise. It is compiled once per machine for all scenes.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+from ..numerics.newton import CONVERGED, EVALUATE, newton_evaluated, newton_reset, newton_solved
+from .abi import call, call_families, fvec, ivec
+from .points import maps_view, position_into
+from .abi import family_at
+from .tasks import (PHASE_ACCEPT, PHASE_EVALUATE, PHASE_PREDICT, PHASE_START, STATUS_OK, TASK_ENERGY,
+                    TASK_MOMENTUM, TASK_ROWS)
+
+__all__ = ["Records", "NewtonArrays", "run_steps", "start_state", "REFUSED", "DERIVED"]
+
+#: status of :func:`run_steps` when an element refused a state, a Python element raised or a kernel wrote
+#: outside the Newton pattern (``ctx.status`` says which)
+REFUSED = 10
+#: the derived values recorded per step, in the columns of ``Records.derived``
+DERIVED = ("kinetic", "potential", "px", "py", "pz", "lx", "ly", "lz", "constraint_residual",
+           "velocity_constraint_residual")
+
+
+class Records(NamedTuple):
+    """The arrays a chunk records into, one row per recorded step."""
+    t: np.ndarray            # (nr,) s
+    q: np.ndarray            # (nr, n)
+    v: np.ndarray            # (nr, n)
+    lam: np.ndarray          # (nr, m)
+    work: np.ndarray         # (nr,) J
+    iterations: np.ndarray   # (nr,) Newton iterations of the step
+    reaction: np.ndarray     # (nr, npres)
+    derived: np.ndarray      # (nr, len(DERIVED))
+    probes: np.ndarray       # (nr, number of probe maps, 2)
+    probe_maps: np.ndarray   # (number of probe maps,) map indices
+
+
+class NewtonArrays(NamedTuple):
+    """The Newton core's state (:func:`~skfem_flex.numerics.newton.newton_start`), allocated once per chunk."""
+    x: np.ndarray
+    dx: np.ndarray
+    x_try: np.ndarray
+    fl: np.ndarray
+    ints: np.ndarray
+
+
+@numba.njit(cache=True)
+def _mass_times(ctx, v, p):
+    """p = M v of the scene's constant masses."""
+    n = ctx.n
+    ptr = ivec(ctx.mass_ptr, n + 1)
+    nnz = ptr[n]
+    idx, dat = ivec(ctx.mass_idx, nnz), fvec(ctx.mass_dat, nnz)
+    for i in range(n):
+        s = 0.0
+        for t in range(ptr[i], ptr[i + 1]):
+            s += dat[t] * v[idx[t]]
+        p[i] = s
+
+
+@numba.njit(cache=True)
+def record_step(ctx, records, i, t):
+    """Record row i at time t from the state (ctx.q1, ctx.v1, the scheme's λ, work and reactions)."""
+    n, m = ctx.n, ctx.m
+    q, v, p = fvec(ctx.q1, n), fvec(ctx.v1, n), fvec(ctx.p, n)
+    out = fvec(ctx.out, 7)
+    lam, reaction = fvec(ctx.lam, m), fvec(ctx.reaction, ctx.npres)
+    records.t[i] = t
+    for j in range(n):
+        records.q[i, j] = q[j]
+        records.v[i, j] = v[j]
+    for j in range(m):
+        records.lam[i, j] = lam[j]
+    for j in range(reaction.size):
+        records.reaction[i, j] = reaction[j]
+    records.work[i] = fvec(ctx.work, 1)[0]
+    records.iterations[i] = ctx.its
+    for j in range(7):
+        out[j] = 0.0
+    _mass_times(ctx, v, p)
+    call_families(ctx, TASK_MOMENTUM)
+    kin = 0.0
+    for j in range(n):
+        kin += v[j] * p[j]
+    call_families(ctx, TASK_ENERGY)
+    d = records.derived[i]
+    d[0] = 0.5 * kin
+    for j in range(7):
+        d[1 + j] = out[j]
+    phi_max, rate_max = 0.0, 0.0
+    if m:
+        call_families(ctx, TASK_ROWS)
+        phi, phit = fvec(ctx.phi, m), fvec(ctx.phit, m)
+        for j in range(m):
+            phi_max = max(phi_max, abs(phi[j]))
+            rate_max = max(rate_max, abs(phit[j]))
+    d[8] = phi_max
+    d[9] = rate_max
+    if records.probe_maps.size:
+        mrec = family_at(ctx.maps)
+        maps = maps_view(mrec)
+        for j in range(records.probe_maps.size):
+            k = records.probe_maps[j]
+            o = maps.off[k]
+            position_into(mrec, k, q[o:o + maps.nb[k]], records.probes[i, j])
+
+
+@numba.njit(cache=True)
+def run_steps(ctx, scheme, solver, hs, t0, recorded, records, newton, max_iterations, line_search, table):
+    """Advance ``hs.size`` steps from time t0; returns (status, steps done, records written, Newton iterations).
+
+    ``ctx``: the context array (one record, :mod:`.abi`); ``scheme``, ``solver``: one FAMILY record each;
+    ``table``: the chunk's functions of time, row 0 at t0 and row k + 1 for step k; ``recorded[k]``:
+    record step k. On a status other than CONVERGED the state is the one before the failing step."""
+    c = ctx[0]
+    n_rec = 0
+    its_total = 0
+    sch, sol = scheme.ctypes.data, solver.ctypes.data
+    t = t0
+    c.x = newton.x_try.ctypes.data
+    for k in range(hs.size):
+        c.t = t
+        c.h = hs[k]
+        c.trow = table.ctypes.data + 8 * (k + 1) * c.ncol
+        c.status = STATUS_OK
+        c.phase = PHASE_PREDICT
+        call(scheme[0].kernel, c.self, sch)
+        newton_reset(newton, c.x_scale, max_iterations, line_search)
+        status = EVALUATE
+        while status < 0:               # do what the Newton core asks; its rules are all in the core
+            if status == EVALUATE:
+                c.phase = PHASE_EVALUATE
+                call(scheme[0].kernel, c.self, sch)
+                if c.status != STATUS_OK:
+                    return REFUSED, k, n_rec, its_total
+                status = newton_evaluated(newton, c.err)
+            else:
+                call(solver[0].kernel, c.self, sol)
+                status = newton_solved(newton, fvec(c.y, c.nx), c.regular != 0)
+        if status != CONVERGED:
+            return status, k, n_rec, its_total
+        c.its = newton.ints[0]
+        its_total += c.its
+        c.phase = PHASE_ACCEPT
+        call(scheme[0].kernel, c.self, sch)
+        if c.status != STATUS_OK:
+            return REFUSED, k, n_rec, its_total
+        t = t + hs[k]
+        if recorded[k]:
+            record_step(c, records, n_rec, t)
+            n_rec += 1
+    return CONVERGED, hs.size, n_rec, its_total
+
+
+@numba.njit(cache=True)
+def start_state(ctx, scheme, solver, table):
+    """The consistent acceleration and multipliers of the scheme's state (PHASE_START of the scheme's
+    kernel: a residual linear in them, solved once); returns True when the solve succeeded, with the
+    solution in ``ctx.x`` and the residual at it (the prescribed coordinates' forces) in the scheme."""
+    c = ctx[0]
+    sch, sol = scheme.ctypes.data, solver.ctypes.data
+    c.trow = table.ctypes.data
+    c.status = STATUS_OK
+    x = fvec(c.x, c.nx)
+    for i in range(c.nx):
+        x[i] = 0.0
+    c.phase = PHASE_START
+    call(scheme[0].kernel, c.self, sch)
+    if c.status != STATUS_OK:
+        return False
+    call(solver[0].kernel, c.self, sol)
+    if c.regular == 0:
+        return False
+    y = fvec(c.y, c.nx)
+    for i in range(c.nx):
+        x[i] = -y[i]
+    call(scheme[0].kernel, c.self, sch)
+    return c.status == STATUS_OK

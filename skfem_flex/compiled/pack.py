@@ -1,0 +1,327 @@
+r"""A scene packed once for the compiled core: its families, position maps, constant masses, functions of
+time, probes, and the Newton matrix's pattern, storage and solver.
+
+Everything is read through public interfaces of the scene's parts (no type checks):
+
+* a body with a mass matrix that depends on q hands ``compiled_kernel_data()`` and
+  ``mass_moment_map()`` (the floating-frame family);
+* a body with constant mass hands ``mass_matrix``, ``mass_moment()`` (∫ r dm = Γ q + c) and, with a
+  strain energy, ``compiled_strain_data()`` (the exact-beam family);
+* a force element its ``compiled_form()``, whose name selects its family
+  (:func:`~skfem_flex.compiled.families.family_for`); gravity is packed per body from the first moments;
+* a constraint its ``compiled_form()``: one block or ``("rows", [(block, law), ...])``, each block to
+  the family of its name;
+* a body point its ``compiled_map()`` (:mod:`.points`).
+
+An element with no compiled form is packed into the Python family (its kernel calls the element's
+own methods); :attr:`PackedScene.python_elements` names them and why.
+"""
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sps
+
+from ..bodies.base import COMPILED_SIZE_LIMIT, DENSE_LIMIT
+from ..numerics.linear_solver import MAX_BORDER, MIN_DENSE_BORDERED, dense_bordered_plan, reordered_band_plan
+from .abi import Fields
+from .families import family_for
+from .points import MapStore
+from .storage import CSR, DENSE
+
+__all__ = ["Packer", "PackedScene", "packed_scene", "DENSE_STORAGE_LIMIT", "time_table"]
+
+#: the Newton matrix is stored dense up to this many rows, above as the values of its pattern (the
+#: package's one dense/sparse threshold)
+DENSE_STORAGE_LIMIT = DENSE_LIMIT
+
+
+def _call(obj, method):
+    fn = getattr(obj, method, None)
+    return None if fn is None else fn()
+
+
+class Packer:
+    """What a family's ``pack`` may use: the scene's layout, the shared position maps and the chunk's
+    columns of functions of time.
+
+    Attributes
+    ----------
+    scene : Scene
+    maps : MapStore
+    columns : list of (str, callable, int)
+        ("end" | "force", fun, component): a function of time evaluated at each step's end or where the
+        scheme evaluates its loads (the mid-point for energy-momentum, the end for Newmark).
+    """
+
+    def __init__(self, scene):
+        self.scene = scene
+        self.maps = MapStore()
+        self.columns = []
+
+    def block(self, body):
+        """(offset, size) of ``body``'s coordinates."""
+        sl = self.scene.slice(body)
+        return sl.start, sl.stop - sl.start
+
+    def point_map(self, point):
+        """The map index of a body point (its ``compiled_map()``), or None if it has none."""
+        entry = _call(point, "compiled_map")
+        if entry is None:
+            return None
+        off, nb = self.block(point.body)
+        return self.maps.add(entry, off, nb)
+
+    def maps_support(self, k):
+        """The scene coordinates map k's position can depend on."""
+        return self.maps.support(k)
+
+    def column(self, fun, component, when):
+        """Index of the time-table column for ``fun(t)[component]`` evaluated ``when`` ("end" | "force")."""
+        self.columns.append((when, fun, component))
+        return len(self.columns) - 1
+
+
+@dataclass
+class PackedScene:
+    """A scene in the compiled core's form (built once per scene by :func:`packed_scene`)."""
+
+    families: list                      # (module, Fields, count) per family, in calling order
+    maps: Fields
+    columns: list
+    mass: tuple                         # (ptr, idx, dat) CSR of the constant masses over all coordinates
+    free: np.ndarray
+    pres: np.ndarray
+    fpos: np.ndarray
+    cayley: np.ndarray
+    pres_cols: np.ndarray               # first of the (value, rate, acceleration) columns of each law
+    probe_names: list                   # (name, first map, number of maps, combine)
+    probe_maps: np.ndarray
+    storage: int
+    pattern: object                     # scipy CSR pattern of the bordered Newton matrix (CSR storage)
+    solver: str                         # "dense" | "bordered band" | "bordered band (CSR)"
+    plan: tuple                         # (interior, border, (lo, up)) or None
+    python_elements: list = field(default_factory=list)
+
+    @property
+    def nx(self):
+        return self.free.size + int(self.m)
+
+    m: int = 0
+
+
+_PACKED = weakref.WeakKeyDictionary()
+
+
+def packed_scene(scene):
+    """The scene's :class:`PackedScene`, built on first use."""
+    hit = _PACKED.get(scene)
+    if hit is None:
+        hit = _PACKED[scene] = _pack(scene)
+    return hit
+
+
+def _momentum_layout(body):
+    """(l_x, l_y, i_x, i_y, X, Y, i_angle) of a constant-mass body (local indices): p_x = Σ p[l_x],
+    L = Σ (X + q[i_x]) p[i_y] − (Y + q[i_y]) p[i_x] + Σ p[i_angle]; from ``momentum_layout()`` or by
+    default R = q[0:2], θ = q[2] where present."""
+    nb = body.n_dofs
+    none, zero = np.zeros(0, dtype=np.int64), np.zeros(1)
+    layout = _call(body, "momentum_layout")
+    if layout is not None:
+        ix, iy, X, Y, ia = (np.asarray(a) for a in layout)
+        return ix, iy, ix, iy, np.asarray(X, float), np.asarray(Y, float), ia
+    if nb == 1:
+        return np.array([0]), none, none, none, np.zeros(0), np.zeros(0), none
+    ix, iy = np.array([0]), np.array([1])
+    return ix, iy, ix, iy, zero, zero, (np.array([2]) if nb >= 3 else none)
+
+
+def _pack(scene):
+    packer = Packer(scene)
+    n = scene.n
+    items = {}                                            # family module → list of items
+    python = []
+
+    def add(mod, item):
+        items.setdefault(mod, []).append(item)
+
+    first_moment = {}
+    mass_blocks = []
+    for b in scene.bodies:
+        off, nb = packer.block(b)
+        kd = _call(b, "compiled_kernel_data")
+        if kd is not None:
+            moment = _call(b, "mass_moment_map")
+            add(family_for("floating frame"), (kd, b, off))
+            if moment is not None:
+                first_moment[id(b)] = ("frame", moment[0], moment[1], moment[2])
+            continue
+        strain = _call(b, "compiled_strain_data") if b.has_potential else None
+        if b.constant_mass and (not b.has_potential or strain is not None):
+            block = sps.coo_matrix(b.mass_matrix(np.asarray(b.q0, dtype=float)))
+            mass_blocks.append((block.row + off, block.col + off, block.data))
+            add(family_for("constant mass"), (_momentum_layout(b), b, off))
+            try:
+                gam, c = b.mass_moment()
+                first_moment[id(b)] = ("linear", gam, c)
+            except NotImplementedError:
+                pass
+            if strain is not None:
+                add(family_for("exact beam"), (strain, b, off))
+            continue
+        python.append((b, "its mass matrix depends on q but it has no compiled_kernel_data()"
+                       if not b.constant_mass else "its strain energy has no compiled_strain_data()"))
+    for f, idx in scene.conservative_forces + scene.loads:
+        form = _call(f, "compiled_form")
+        mod = family_for(form[0]) if form is not None else None
+        if form is not None and form[0] == "gravity":
+            for b in (f.bodies if f.bodies is not None else scene.bodies):
+                if id(b) in first_moment:
+                    add(mod, ((first_moment[id(b)], np.asarray(form[1], dtype=float)), b, packer.block(b)))
+                else:
+                    python.append((f, f"body {b.name!r} gives no first moment of its mass"))
+        elif mod is not None:
+            add(mod, (form, f, idx))
+        else:
+            python.append((f, "it has no compiled form" if form is None else f"no family packs {form[0]!r}"))
+    for c, (idx, rows) in zip(scene.constraints, scene.constraint_layout):
+        form = _call(c, "compiled_form")
+        if form is None:
+            python.append((c, "it has no compiled form"))
+            continue
+        blocks = form[1] if form[0] == "rows" else [(form, None)]
+        r = int(rows[0])
+        for term, law in blocks:
+            mod = family_for(term[0])
+            if mod is None:
+                python.append((c, f"no family packs its block {term[0]!r}"))
+                break
+            add(mod, ((term, law), c, (np.asarray(idx), r)))
+            r += mod.row_count(term)
+    packs = []
+    for mod, its in items.items():
+        pk = mod.pack(its, packer)
+        if pk is not None:
+            packs.append((mod, pk))
+    if python:
+        from .families import python_elements           # the fallback family
+        packs.append((python_elements, python_elements.pack(python, packer)))
+    # prescribed coordinates: (value, rate, acceleration) columns of their laws at the step's end
+    pres_cols = []
+    for p in scene.prescribed:
+        law = p.law
+        pres_cols.append(packer.column(law, 0, "end"))
+        packer.column(law, 1, "end")
+        packer.column(law, 2, "end")
+    # probes made of position maps are recorded by the loop; the others are called in Python
+    probe_names, probe_maps = [], []
+    for name, fn in scene.probes.items():
+        parts = getattr(fn, "parts", None)
+        parts, combine = (tuple(parts), fn.combine) if parts is not None else ((fn,), None)
+        found = []
+        for part in parts:
+            body = getattr(part, "body", None)
+            if body is None or not any(body is b for b in scene.bodies) or _call(part, "compiled_map") is None:
+                break
+            found.append(part)
+        else:
+            probe_names.append((name, len(probe_maps), len(found), combine))
+            probe_maps += [packer.point_map(part) for part in found]
+    rows, cols, vals = (np.concatenate([blk[i] for blk in mass_blocks]) if mass_blocks else np.zeros(0)
+                        for i in range(3))
+    mass = sps.csr_matrix((vals, (rows.astype(np.int64), cols.astype(np.int64))), shape=(n, n))
+    mass.sum_duplicates()
+    mass.eliminate_zeros()
+    mass.sort_indices()
+    free = np.asarray(scene.free_index, dtype=np.int64)
+    fpos = -np.ones(n, dtype=np.int64)
+    fpos[free] = np.arange(free.size)
+    packed = PackedScene(
+        families=[], maps=Fields(packer.maps.data()), columns=packer.columns,
+        mass=(mass.indptr.astype(np.int64), mass.indices.astype(np.int64), mass.data.astype(float)),
+        free=free, pres=np.asarray(scene.prescribed_index, dtype=np.int64), fpos=fpos,
+        cayley=np.asarray(scene.cayley_index, dtype=np.int64), pres_cols=np.asarray(pres_cols, dtype=np.int64),
+        probe_names=probe_names, probe_maps=np.asarray(probe_maps, dtype=np.int64), storage=DENSE,
+        pattern=None, solver="dense", plan=None, python_elements=python, m=int(scene.n_constraints))
+    _plan(packed, scene, packs)
+    return packed
+
+
+def _newton_pattern(scene, packed, packs):
+    """Where the bordered Newton matrix (free coordinates, then multipliers) can be nonzero: the constant
+    masses, the diagonal, every family's coupled blocks and entries, each constraint row with the
+    coordinates it touches; scipy CSR with sorted indices."""
+    n, m = scene.n, scene.n_constraints
+    rows, cols = [np.arange(n)], [np.arange(n)]
+    ptr, idx, _ = packed.mass
+    rows.append(np.repeat(np.arange(n), np.diff(ptr)))
+    cols.append(idx)
+    for _, pk in packs:
+        for coords in pk.couplings:
+            coords = np.asarray(coords, dtype=np.int64)
+            rows.append(np.repeat(coords, coords.size))
+            cols.append(np.tile(coords, coords.size))
+        if pk.entries is not None:
+            rows.append(np.asarray(pk.entries[0], dtype=np.int64))
+            cols.append(np.asarray(pk.entries[1], dtype=np.int64))
+        for row, coords in pk.rows:
+            coords = np.asarray(coords, dtype=np.int64)
+            r = np.full(coords.size, n + row)
+            rows += [r, coords]
+            cols += [coords, r]
+    rows, cols = np.concatenate(rows).astype(np.int64), np.concatenate(cols).astype(np.int64)
+    pat = sps.csr_matrix((np.ones(rows.size, dtype=np.int8), (rows, cols)), shape=(n + m, n + m))
+    sel = np.concatenate([scene.free_index, n + np.arange(m)]).astype(np.int64)
+    pat = pat[sel][:, sel].tocsr()
+    pat.sum_duplicates()
+    pat.sort_indices()
+    pat.data[:] = 1
+    return pat
+
+
+def _plan(packed, scene, packs):
+    """Fix the Newton matrix's storage and solver from its pattern, then the families' data."""
+    nx = packed.nx
+    pattern = _newton_pattern(scene, packed, packs)
+    plan = None
+    if nx >= MIN_DENSE_BORDERED:
+        plan = dense_bordered_plan(pattern, max_border=MAX_BORDER if nx > DENSE_STORAGE_LIMIT else None)
+        if plan is None and nx > DENSE_STORAGE_LIMIT:
+            plan = reordered_band_plan(pattern)
+    if nx <= DENSE_STORAGE_LIMIT or (plan is None and nx <= COMPILED_SIZE_LIMIT):
+        packed.storage = DENSE
+        packed.solver = "bordered band" if plan is not None else "dense"
+    elif plan is None:
+        packed.storage = CSR
+        packed.solver = "sparse (SuperLU)"
+    else:
+        packed.storage = CSR
+        packed.solver = "bordered band (CSR)"
+    packed.pattern = pattern
+    packed.plan = plan
+    layout = (packed.storage, pattern, packed.fpos, nx)
+    for mod, pk in packs:
+        data = pk.finish(layout) if pk.finish is not None else pk.data
+        packed.families.append((mod, Fields(data), pk.count))
+
+
+def time_table(columns, t0, hs, scheme_mid):
+    """The chunk's functions of time: row 0 at t0, row k + 1 for step k (from t_k, size hs[k]); an
+    "end" column at t_k+1, a "force" column at t_k + hs[k]/2 when ``scheme_mid`` (energy-momentum)
+    else at t_k+1."""
+    ns = hs.size
+    ends = t0 + np.cumsum(hs)
+    starts = ends - hs
+    table = np.zeros((ns + 1, max(len(columns), 1)))
+    cache = {}
+    for j, (when, fun, comp) in enumerate(columns):
+        times = np.concatenate([[t0], ends if (when == "end" or not scheme_mid) else starts + 0.5 * hs])
+        key = (id(fun), when)
+        vals = cache.get(key)
+        if vals is None:
+            vals = cache[key] = [np.atleast_1d(np.asarray(fun(float(t)), dtype=float)) for t in times]
+        table[:, j] = [v[comp] for v in vals]
+    return table

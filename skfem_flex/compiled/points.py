@@ -1,0 +1,249 @@
+r"""Position maps of body points in the plane: the one compiled description of where a point of a body is.
+
+Joints, point loads, springs, gravity's first moments and probes all read body points through maps
+packed once per scene (:func:`pack_maps`); a map is one of
+
+* LINEAR: r = G q + c (point masses, rigid bodies, exact-beam nodes, the first moment ∫ r dm of a
+  body linear in q), G (2, n_b);
+* FRAME: r = m_R R + A(θ)(y₀ + Y q_f) with R = q[0:2], θ = q[2], q_f = q[3:] (floating-frame bodies:
+  points, and the first moment m R + A(θ)(S₀ + S̄ q_f)).
+
+For each the kernels give the value, the Jacobian, the exact discrete gradient D with
+D (q₁ − q₀) = r(q₁) − r(q₀) (FRAME: A(θ₁) − A(θ₀) = sinc(Δθ/2) Δθ A(θ_m) E, (A₀ + A₁)/2 =
+cos(Δθ/2) A(θ_m), so D = [m_R I, sinc(Δθ/2) A(θ_m) E s_m, cos(Δθ/2) A(θ_m) Y], s_m = y₀ + Y q_f,m),
+its derivative ∂(Dᵀf)/∂q₁ for a fixed f, the Hessian product ∂(r_qᵀ f)/∂q and the velocity Jacobian
+∂(r_q v)/∂q. ``q`` is always the body's own block of the coordinates (``off``, ``nb`` of the map).
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+from ..numerics.rotations import sinc_half
+from .abi import f1, f2, i1
+
+__all__ = ["LINEAR", "FRAME", "MapData", "MapStore", "maps_view", "position_into", "jacobian_into",
+           "dgrad_into", "dgrad_jacobian_parts", "frame_offset", "hessian_parts", "velocity_jacobian_into"]
+
+LINEAR, FRAME = 0, 1
+
+
+class MapData(NamedTuple):
+    """Every map of a scene (k maps): kind, body block offset and size, m_R, c (k, 2), y₀ (k, 2), the
+    flattened G (2 × n_b each, at gptr[k]) and Y (2 × (n_b − 3) each, at yptr[k])."""
+    kind: np.ndarray
+    off: np.ndarray
+    nb: np.ndarray
+    m_r: np.ndarray
+    c: np.ndarray
+    y0: np.ndarray
+    gdat: np.ndarray
+    gptr: np.ndarray
+    ydat: np.ndarray
+    yptr: np.ndarray
+
+
+@numba.njit(cache=True, _nrt=False)
+def maps_view(fam):
+    """The :class:`MapData` of a maps record."""
+    return MapData(i1(fam, 0), i1(fam, 1), i1(fam, 2), f1(fam, 3), f2(fam, 4), f2(fam, 5), f1(fam, 6), i1(fam, 7),
+                   f1(fam, 8), i1(fam, 9))
+
+
+class MapStore:
+    """Collects maps while a scene is packed; :meth:`data` gives the :class:`MapData`."""
+
+    def __init__(self):
+        self.rows = []
+        self.g, self.y, self.blocks = [], [], []
+        self.ng = self.ny = 0
+
+    def add(self, entry, off, nb):
+        """Add a map from a body point's ``compiled_map()`` entry on the body block at ``off`` of size
+        ``nb``: ("linear", G, c) or ("frame", m_R, y0, Y). Returns its index."""
+        kind = entry[0]
+        if kind == "linear":
+            _, G, c = entry
+            G = np.asarray(G, dtype=float).reshape(2, nb)
+            self.rows.append((LINEAR, off, nb, 0.0, np.asarray(c, dtype=float).reshape(2), np.zeros(2), self.ng,
+                              self.ny))
+            self.g.append(G.ravel())
+            self.ng += G.size
+            self.blocks.append(G)
+        elif kind == "frame":
+            _, m_r, y0, Y = entry
+            Y = np.asarray(Y, dtype=float).reshape(2, nb - 3)
+            self.rows.append((FRAME, off, nb, float(m_r), np.zeros(2), np.asarray(y0, dtype=float).reshape(2),
+                              self.ng, self.ny))
+            self.y.append(Y.ravel())
+            self.ny += Y.size
+            self.blocks.append(Y)
+        else:
+            raise ValueError(f"unknown position map kind {kind!r}; expected 'linear' or 'frame'")
+        return len(self.rows) - 1
+
+    def support(self, k):
+        """The scene coordinates map k's position can depend on (:func:`map_support`)."""
+        kind, off = self.rows[k][0], self.rows[k][1]
+        if kind == LINEAR:
+            cols = np.flatnonzero(self.blocks[k].any(axis=0))
+        else:
+            cols = np.concatenate([[0, 1, 2], 3 + np.flatnonzero(self.blocks[k].any(axis=0))])
+        return off + cols.astype(np.int64)
+
+    def data(self):
+        k = len(self.rows)
+        col = list(zip(*self.rows)) if k else [()] * 8
+        return MapData(np.asarray(col[0], dtype=np.int64), np.asarray(col[1], dtype=np.int64),
+                       np.asarray(col[2], dtype=np.int64), np.asarray(col[3], dtype=float),
+                       np.asarray(col[4], dtype=float).reshape(k, 2), np.asarray(col[5], dtype=float).reshape(k, 2),
+                       np.concatenate(self.g + [np.zeros(1)]), np.asarray(col[6], dtype=np.int64),
+                       np.concatenate(self.y + [np.zeros(1)]), np.asarray(col[7], dtype=np.int64))
+
+
+@numba.njit(cache=True, _nrt=False)
+def frame_offset(mrec, k, qa, qb):
+    """(s_x, s_y) = y₀ + Y (q_a,f + q_b,f)/2 of FRAME map k (q_a = q_b: at that state, exactly)."""
+    maps = maps_view(mrec)
+    ne = maps.nb[k] - 3
+    y = maps.yptr[k]
+    sx, sy = maps.y0[k, 0], maps.y0[k, 1]
+    for j in range(ne):
+        qm = 0.5 * (qa[3 + j] + qb[3 + j])
+        sx += maps.ydat[y + j] * qm
+        sy += maps.ydat[y + ne + j] * qm
+    return sx, sy
+
+
+@numba.njit(cache=True, _nrt=False)
+def position_into(mrec, k, q, out):
+    """out[0:2] = r(q) of map k, m."""
+    maps = maps_view(mrec)
+    if maps.kind[k] == LINEAR:
+        n, g0 = maps.nb[k], maps.gptr[k]
+        for a in range(2):
+            s = maps.c[k, a]
+            for j in range(n):
+                s += maps.gdat[g0 + a * n + j] * q[j]
+            out[a] = s
+        return
+    sx, sy = frame_offset(mrec, k, q, q)
+    C, S = np.cos(q[2]), np.sin(q[2])
+    out[0] = maps.m_r[k] * q[0] + C * sx - S * sy
+    out[1] = maps.m_r[k] * q[1] + S * sx + C * sy
+
+
+@numba.njit(cache=True, _nrt=False)
+def jacobian_into(mrec, k, q, out):
+    """out[:, :n_b] = ∂r/∂q of map k."""
+    maps = maps_view(mrec)
+    n = maps.nb[k]
+    if maps.kind[k] == LINEAR:
+        g0 = maps.gptr[k]
+        for a in range(2):
+            for j in range(n):
+                out[a, j] = maps.gdat[g0 + a * n + j]
+        return
+    ne, y = n - 3, maps.yptr[k]
+    sx, sy = frame_offset(mrec, k, q, q)
+    C, S = np.cos(q[2]), np.sin(q[2])
+    out[0, 0] = out[1, 1] = maps.m_r[k]
+    out[0, 1] = out[1, 0] = 0.0
+    out[0, 2] = -S * sx - C * sy            # A E s, E = [[0, −1], [1, 0]]
+    out[1, 2] = C * sx - S * sy
+    for j in range(ne):
+        yx, yy = maps.ydat[y + j], maps.ydat[y + ne + j]
+        out[0, 3 + j] = C * yx - S * yy
+        out[1, 3 + j] = S * yx + C * yy
+
+
+@numba.njit(cache=True, _nrt=False)
+def dgrad_into(mrec, k, q0, q1, out):
+    """out[:, :n_b] = the exact discrete gradient D of map k: D (q₁ − q₀) = r(q₁) − r(q₀)."""
+    maps = maps_view(mrec)
+    if maps.kind[k] == LINEAR:
+        jacobian_into(mrec, k, q0, out)
+        return
+    n = maps.nb[k]
+    ne, y = n - 3, maps.yptr[k]
+    half = 0.5 * (q1[2] - q0[2])
+    tm = q0[2] + half
+    C, S = np.cos(tm), np.sin(tm)
+    sig, kap = sinc_half(q1[2] - q0[2])[0], np.cos(half)
+    sx, sy = frame_offset(mrec, k, q0, q1)
+    out[0, 0] = out[1, 1] = maps.m_r[k]
+    out[0, 1] = out[1, 0] = 0.0
+    out[0, 2] = sig * (-S * sx - C * sy)
+    out[1, 2] = sig * (C * sx - S * sy)
+    for j in range(ne):
+        yx, yy = maps.ydat[y + j], maps.ydat[y + ne + j]
+        out[0, 3 + j] = kap * (C * yx - S * yy)
+        out[1, 3 + j] = kap * (S * yx + C * yy)
+
+
+@numba.njit(cache=True, _nrt=False)
+def dgrad_jacobian_parts(mrec, k, q0, q1, f, row, col):
+    """The nonzero parts of ∂(Dᵀ f)/∂q₁ of a FRAME map (zero for LINEAR): the (θ, θ) entry (returned),
+    the θ row over q_f (``row``) and the q_f rows of the θ column (``col``)."""
+    maps = maps_view(mrec)
+    ne, y = maps.nb[k] - 3, maps.yptr[k]
+    half = 0.5 * (q1[2] - q0[2])
+    tm = q0[2] + half
+    C, S = np.cos(tm), np.sin(tm)
+    sig, dsig = sinc_half(q1[2] - q0[2])
+    kap, sn = np.cos(half), np.sin(half)
+    sx, sy = frame_offset(mrec, k, q0, q1)
+    fax = f[0] * C + f[1] * S              # Aᵀ(θ_m) f
+    fay = -f[0] * S + f[1] * C
+    h22 = dsig * (-fax * sy + fay * sx) - 0.5 * sig * (fax * sx + fay * sy)
+    for j in range(ne):
+        yx, yy = maps.ydat[y + j], maps.ydat[y + ne + j]
+        row[j] = 0.5 * sig * (fay * yx - fax * yy)
+        col[j] = -0.5 * sn * (yx * fax + yy * fay) + 0.5 * kap * (yx * fay - yy * fax)
+    return h22
+
+
+@numba.njit(cache=True, _nrt=False)
+def hessian_parts(mrec, k, q, f, row):
+    """The nonzero parts of ∂(r_qᵀ f)/∂q of a FRAME map (symmetric): the (θ, θ) entry −f·A s (returned)
+    and the (θ, q_f) entries f·A E Y_j (``row``)."""
+    maps = maps_view(mrec)
+    ne, y = maps.nb[k] - 3, maps.yptr[k]
+    sx, sy = frame_offset(mrec, k, q, q)
+    C, S = np.cos(q[2]), np.sin(q[2])
+    fax = f[0] * C + f[1] * S
+    fay = -f[0] * S + f[1] * C
+    for j in range(ne):
+        row[j] = fay * maps.ydat[y + j] - fax * maps.ydat[y + ne + j]
+    return -(fax * sx + fay * sy)
+
+
+@numba.njit(cache=True, _nrt=False)
+def velocity_jacobian_into(mrec, k, q, v, out):
+    """out[:, :n_b] = ∂(r_q v)/∂q of map k (zero for LINEAR): for FRAME only the θ and q_f columns,
+    ∂/∂θ = −ω A s + A E Y v_f, ∂/∂q_f,j = ω A E Y_j."""
+    maps = maps_view(mrec)
+    n = maps.nb[k]
+    for a in range(2):
+        for j in range(n):
+            out[a, j] = 0.0
+    if maps.kind[k] == LINEAR:
+        return
+    ne, y = n - 3, maps.yptr[k]
+    sx, sy = frame_offset(mrec, k, q, q)
+    C, S = np.cos(q[2]), np.sin(q[2])
+    w = v[2]
+    # Y v_f
+    ux, uy = 0.0, 0.0
+    for j in range(ne):
+        ux += maps.ydat[y + j] * v[3 + j]
+        uy += maps.ydat[y + ne + j] * v[3 + j]
+    # −ω A s + A E u, A E u = A (−uy, ux)
+    out[0, 2] = -w * (C * sx - S * sy) + (C * (-uy) - S * ux)
+    out[1, 2] = -w * (S * sx + C * sy) + (S * (-uy) + C * ux)
+    for j in range(ne):
+        yx, yy = maps.ydat[y + j], maps.ydat[y + ne + j]
+        out[0, 3 + j] = w * (C * (-yy) - S * yx)
+        out[1, 3 + j] = w * (S * (-yy) + C * yx)

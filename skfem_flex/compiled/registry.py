@@ -1,0 +1,131 @@
+r"""Compiled units, made on first use: what is compiled, when, and what the user is told.
+
+Every kernel (a scheme's step, a solver, an element family) is a ``numba.cfunc`` with the one
+signature of :mod:`.abi`, cached on disk; the loop and its helpers are ``numba.njit`` functions with a
+fixed signature. :func:`compiled_kernel` and :func:`compiled_function` make them when first needed:
+
+* from the cache when it holds them (milliseconds, nothing said);
+* otherwise compiled — said on the ``skfem_flex`` logger before it starts ("compiling the
+  floating-frame beam family (first use on this machine) …") and when it ends, with its time; the time
+  is added to :func:`compile_seconds`, which runs report apart from their run time.
+
+A compile runs in a worker thread while the caller waits in short slices, so that Ctrl-C is answered
+at once (``KeyboardInterrupt`` is raised in the caller; the worker, a daemon thread, dies with the
+process).
+"""
+from __future__ import annotations
+
+import logging
+import sys
+import threading
+import time
+
+from numba.core.ccallback import CFunc
+
+from .abi import KERNEL_SIGNATURE
+
+__all__ = ["compiled_kernel", "compiled_function", "compile_seconds", "compiled_names", "LOGGER"]
+
+#: the package's logger for compile notices (INFO; ``logging.getLogger("skfem_flex").setLevel(logging.WARNING)``
+#: or ``SKFEM_FLEX_QUIET=1`` silences it)
+LOGGER = logging.getLogger("skfem_flex")
+
+_KERNELS = {}
+_FUNCTIONS = {}
+_SECONDS = [0.0]
+_NAMES = []
+
+
+def compile_seconds():
+    """Seconds spent compiling in this process so far."""
+    return _SECONDS[0]
+
+
+def compiled_names():
+    """What this process compiled (not loaded from the cache), in order."""
+    return tuple(_NAMES)
+
+
+def _in_thread(work, what):
+    """Run ``work()`` in a daemon thread, waiting in slices of 0.1 s (Ctrl-C reaches the caller at once)."""
+    box = {}
+
+    def target():
+        try:
+            box["value"] = work()
+        except BaseException as exc:      # handed to the caller
+            box["error"] = exc
+    thread = threading.Thread(target=target, name=f"compile {what}", daemon=True)
+    thread.start()
+    while thread.is_alive():
+        thread.join(0.1)
+    if "error" in box:
+        raise box["error"]
+    return box.get("value")
+
+
+def _compiling(what, work):
+    """Say that ``what`` is being compiled, do it, say how long it took."""
+    LOGGER.info("compiling %s (first use on this machine, cached afterwards) ...", what)
+    start = time.perf_counter()
+    value = _in_thread(work, what)
+    seconds = time.perf_counter() - start
+    _SECONDS[0] += seconds
+    _NAMES.append(what)
+    LOGGER.info("compiled %s in %.1f s", what, seconds)
+    return value
+
+
+def compiled_kernel(pyfunc, what):
+    """The kernel compiled from ``pyfunc`` (signature :data:`~.abi.KERNEL_SIGNATURE`), from the cache or
+    compiled now. ``what`` names it in notices ("the energy-momentum step")."""
+    key = (pyfunc.__module__, pyfunc.__qualname__)
+    hit = _KERNELS.get(key)
+    if hit is not None:
+        return hit
+    res = CFunc(pyfunc, (KERNEL_SIGNATURE.args, KERNEL_SIGNATURE.return_type), locals={}, options={})
+    res.enable_caching()
+    cached = None
+    try:
+        cached = res._cache.load_overload(res._sig, res._targetdescr.target_context)
+    except Exception:                   # an unreadable cache entry: compile
+        cached = None
+    if cached is None:
+        _compiling(what, res.compile)
+    else:
+        res.compile()                   # loads the entry just found
+    _KERNELS[key] = res
+    return res
+
+
+def compiled_function(dispatcher, argtypes, what):
+    """``dispatcher`` (a ``numba.njit`` function) compiled for the argument types ``argtypes`` (a tuple of
+    numba types) or loaded from the cache, with a notice when it compiles."""
+    key = (dispatcher, argtypes)
+    if key in _FUNCTIONS or tuple(argtypes) in dispatcher.overloads:
+        return dispatcher
+    try:
+        cached = dispatcher._cache.load_overload(tuple(argtypes), dispatcher.targetctx)
+    except Exception:                   # an unreadable cache entry: compile
+        cached = None
+    if cached is None:
+        _compiling(what, lambda: dispatcher.compile(tuple(argtypes)))
+    else:
+        dispatcher.compile(tuple(argtypes))
+    _FUNCTIONS[key] = True
+    return dispatcher
+
+
+def _default_handler():
+    if any(getattr(h, "_skfem_flex", False) for h in LOGGER.handlers):
+        return
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("skfem-flex: %(message)s"))
+    handler._skfem_flex = True
+    LOGGER.addHandler(handler)
+    if LOGGER.level == logging.NOTSET:
+        LOGGER.setLevel(logging.INFO)
+    LOGGER.propagate = False
+
+
+_default_handler()

@@ -1,0 +1,150 @@
+r"""Kernels that solve the Newton system J y = r of the loop (``ctx.res`` → ``ctx.y``, ``ctx.regular``).
+
+Which one a scene gets is fixed once with its storage (:func:`skfem_flex.compiled.pack.plan_solver`):
+
+* ``dense``: the matrix stored dense: LU with partial pivoting written out for small systems (a call
+  to LAPACK costs more than the factorization below about 24 unknowns), LAPACK gesv above;
+* ``bordered band``: stored dense, solved as a band with a dense border when the scene's pattern has
+  such a plan (beams: frame coordinates and multipliers in the border), LAPACK if that solve is not
+  backward stable (:func:`skfem_flex.numerics.linear_solver.bordered_band_solve`);
+* ``bordered band (CSR)``: stored as the values of its pattern, the same elimination; a solve that is
+  not backward stable is reported singular, and the step goes back to Python.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+from ..numerics.linear_solver import bordered_band_solve, bordered_band_solve_csr
+from .abi import context_of, family_of, fmat, fvec, i1, ivec
+from .registry import compiled_kernel
+
+__all__ = ["SolverPlan", "dense_solver", "bordered_band_solver", "csr_bordered_band_solver", "SMALL_DENSE"]
+
+#: below this many unknowns the written-out LU is faster than LAPACK's
+SMALL_DENSE = 24
+
+
+class SolverPlan(NamedTuple):
+    """A band-with-border plan (:func:`~skfem_flex.numerics.linear_solver.dense_bordered_plan`): interior
+    coordinates in band order, border coordinates, and (lower, upper) bandwidth."""
+    interior: np.ndarray
+    border: np.ndarray
+    bands: np.ndarray
+
+
+@numba.njit(cache=True)
+def _view(fam):
+    return SolverPlan(i1(fam, 0), i1(fam, 1), i1(fam, 2))
+
+
+@numba.njit(cache=True)
+def small_lu_solve(a, b, x):
+    """Solve a x = b in place by LU with partial pivoting (``a`` (n, n) and ``b`` are overwritten);
+    False if a pivot is zero or not finite."""
+    n = b.size
+    for k in range(n):
+        p, big = k, abs(a[k, k])
+        for i in range(k + 1, n):
+            v = abs(a[i, k])
+            if v > big:
+                p, big = i, v
+        if not (big > 0.0 and big < np.inf):
+            return False
+        if p != k:
+            for j in range(n):
+                a[k, j], a[p, j] = a[p, j], a[k, j]
+            b[k], b[p] = b[p], b[k]
+        inv = 1.0 / a[k, k]
+        for i in range(k + 1, n):
+            f = a[i, k] * inv
+            if f != 0.0:
+                for j in range(k + 1, n):
+                    a[i, j] -= f * a[k, j]
+                b[i] -= f * b[k]
+    for i in range(n - 1, -1, -1):
+        s = b[i]
+        for j in range(i + 1, n):
+            s -= a[i, j] * x[j]
+        x[i] = s / a[i, i]
+    for i in range(n):
+        if not np.isfinite(x[i]):
+            return False
+    return True
+
+
+@numba.njit(cache=True)
+def _dense(ctx, a, res, y):
+    """The dense solve of (a, res) into y; the matrix is destroyed when small."""
+    nx = res.size
+    if nx <= SMALL_DENSE:
+        b = np.empty(nx)
+        for i in range(nx):
+            b[i] = res[i]
+        ctx.regular = 1 if small_lu_solve(a, b, y) else 0
+        return
+    try:
+        x = np.linalg.solve(a, res)
+    except Exception:                  # singular: numba raises LinAlgError
+        ctx.regular = 0
+        return
+    for i in range(nx):
+        y[i] = x[i]
+    ctx.regular = 1
+
+
+def _dense_kernel(ctx_p, fam_p):
+    ctx = context_of(ctx_p)
+    nx = ctx.nx
+    _dense(ctx, fmat(ctx.mat, nx, nx), fvec(ctx.res, nx), fvec(ctx.y, nx))
+
+
+@numba.njit(cache=True)
+def _bordered(ctx, plan):
+    nx = ctx.nx
+    a, res, y = fmat(ctx.mat, nx, nx), fvec(ctx.res, nx), fvec(ctx.y, nx)
+    x, ok = bordered_band_solve(a, res, plan.interior, plan.border, plan.bands[0], plan.bands[1])
+    if ok:
+        for i in range(nx):
+            y[i] = x[i]
+        ctx.regular = 1
+        return
+    _dense(ctx, a, res, y)
+
+
+def _bordered_kernel(ctx_p, fam_p):
+    _bordered(context_of(ctx_p), _view(family_of(fam_p)))
+
+
+@numba.njit(cache=True)
+def _bordered_csr(ctx, plan):
+    nx = ctx.nx
+    ptr = ivec(ctx.csr_ptr, nx + 1)
+    nnz = ptr[nx]
+    x, ok = bordered_band_solve_csr(fvec(ctx.mat, nnz), ptr, ivec(ctx.csr_idx, nnz), fvec(ctx.res, nx),
+                                    plan.interior, plan.border, plan.bands[0], plan.bands[1])
+    y = fvec(ctx.y, nx)
+    for i in range(nx):
+        y[i] = x[i]
+    ctx.regular = 1 if ok else 0
+
+
+def _csr_kernel(ctx_p, fam_p):
+    _bordered_csr(context_of(ctx_p), _view(family_of(fam_p)))
+
+
+def dense_solver():
+    """The dense solver's kernel."""
+    return compiled_kernel(_dense_kernel, "the dense linear solver")
+
+
+def bordered_band_solver():
+    """The bordered band solver's kernel (dense storage)."""
+    return compiled_kernel(_bordered_kernel, "the band-with-border linear solver")
+
+
+def csr_bordered_band_solver():
+    """The bordered band solver's kernel (CSR storage)."""
+    return compiled_kernel(_csr_kernel, "the band-with-border linear solver (sparse storage)")

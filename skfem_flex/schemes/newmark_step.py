@@ -1,0 +1,325 @@
+r"""The Newmark-family step (trapezoidal, generalized-α) and the consistent start: the one implementation
+of their equations (a compiled kernel).
+
+Generalized-α in the form of Arnold & Brüls (2007), unknowns x = (Δq on the free coordinates, μ = Δt λ₁):
+
+.. math::
+
+    a_1 = \frac{Δq - Δt v_0 - Δt^2(\tfrac12 - β) a_0}{β Δt^2},\quad
+    v_1 = v_0 + Δt\,((1 - γ) a_0 + γ a_1),\quad
+    \ddot q_1 = \frac{(1 - α_m) a_1 + α_m a_0 - α_f \ddot q_0}{1 - α_f}
+
+    r = Δt\,\bigl(M(q_1)\ddot q_1 - Q_v(q_1, v_1) + ∇V(q_1) - Q(q_1, v_1, t_1)\bigr) + Φ_q(q_1)^\mathsf{T} μ = 0
+
+with the constraint rows Φ(q₁, t₁) = 0 (position level, index 3) or (βΔt/γ)(Φ_q v₁ + Φ_t) = 0 (velocity
+level, index 2: the trapezoidal rule as the established codes run it). α_m = α_f = 0, β = ¼, γ = ½ is the
+trapezoidal rule. The families evaluate ∇V and Φ_q as discrete gradients at equal end points
+(:mod:`skfem_flex.compiled.tasks`): one code for every scheme.
+
+PHASE_START computes the consistent acceleration and multipliers of a state (Δq = 0, the
+acceleration the unknown, constraint rows at acceleration level): M q̈ + Φ_qᵀ λ = Q + Q_v − ∇V,
+Φ_q q̈ + ∂(Φ_q v)/∂q v + Φ_tt = 0, one linear solve; every scheme starts from it.
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+from ..compiled.abi import call_families, context_of, f1, family_of, fvec, i1, ivec
+from ..compiled.storage import add_qq, clear, storage_of
+from ..compiled.tasks import (PHASE_ACCEPT, PHASE_EVALUATE, PHASE_PREDICT, PHASE_START, ROWS_ACCELERATION,
+                              ROWS_POSITION, ROWS_VELOCITY, SCHEME_NEWMARK, STATUS_MISSED, STATUS_OK,
+                              STATUS_REFUSED, TASK_EVAL, TASK_EVAL_LOADS, TASK_LOADS, TASK_ROWS)
+from ..numerics.newton import all_finite, max_abs
+
+__all__ = ["NewmarkData", "newmark_kernel"]
+
+_TINY = 1e-300
+
+
+class NewmarkData(NamedTuple):
+    """The Newmark step's parameters, state and work vectors."""
+    params: np.ndarray      # (6,) α_m, α_f, β, γ, velocity-level rows (1/0), rheonomic constraints (1/0)
+    q: np.ndarray           # (n,) state at the start of the step
+    v: np.ndarray
+    acc: np.ndarray         # (n,) q̈
+    pseudo: np.ndarray      # (n,) generalized-α's algorithmic acceleration a
+    lam: np.ndarray         # (m,)
+    reaction: np.ndarray    # (npres,)
+    work: np.ndarray        # (3,) work done; [1] = 1 when ext0/phit0 hold the loads and Φ_t at the state;
+    #                         [2] = 1 when ``reaction`` holds the last step's forces
+    ext0: np.ndarray        # (n,) loads at the start of the step
+    phit0: np.ndarray       # (m,) Φ_t at the start of the step
+    pres_col: np.ndarray    # (npres,) column of each prescribed coordinate's law (value, rate, acceleration)
+    dq: np.ndarray          # work vectors (n,)
+    r: np.ndarray
+
+
+@numba.njit(cache=True)
+def _view(fam):
+    return NewmarkData(f1(fam, 0), f1(fam, 1), f1(fam, 2), f1(fam, 3), f1(fam, 4), f1(fam, 5), f1(fam, 6),
+                       f1(fam, 7), f1(fam, 8), f1(fam, 9), i1(fam, 10), f1(fam, 11), f1(fam, 12))
+
+
+@numba.njit(cache=True)
+def _coefficients(ctx, s):
+    """(c_a, c_v) = (∂q̈₁/∂Δq, ∂v₁/∂Δq)."""
+    am, af, beta, gamma = s.params[0], s.params[1], s.params[2], s.params[3]
+    h = ctx.h
+    return (1.0 - am) / ((1.0 - af) * beta * h * h), gamma / (beta * h)
+
+
+@numba.njit(cache=True)
+def _settings(ctx, s, c_a, c_v, rows):
+    """The families' settings (.tasks): everything at q1, gradients as discrete gradients at equal
+    points (c_dg = 2)."""
+    n, h = ctx.n, ctx.h
+    ctx.scheme = SCHEME_NEWMARK
+    ctx.rows = rows
+    ctx.w_p, ctx.w_gk, ctx.w_gp, ctx.w_ext, ctx.w_mu = h, -h, h, -h, 1.0
+    ctx.c_dg, ctx.dq1, ctx.da1, ctx.dqe, ctx.c_v = 2.0, 1.0, c_a, 1.0, c_v
+    ctx.q0, ctx.v0 = s.q.ctypes.data, s.v.ctypes.data
+    ctx.qa, ctx.qb, ctx.qe, ctx.ve = ctx.q1, ctx.q1, ctx.q1, ctx.v1
+    dv1, dve = fvec(ctx.dv1, n), fvec(ctx.dve, n)
+    for i in range(n):
+        dv1[i] = c_v
+        dve[i] = c_v
+
+
+@numba.njit(cache=True)
+def _loads_at_start(ctx, s):
+    """Loads and Φ_t at the state (the work of the first step of a chunk uses both ends)."""
+    n, m = ctx.n, ctx.m
+    q1, v1 = ctx.q1, ctx.v1
+    ctx.qe, ctx.ve = s.q.ctypes.data, s.v.ctypes.data
+    ctx.q1, ctx.v1 = ctx.qe, ctx.ve
+    ext = fvec(ctx.ext, n)
+    for i in range(n):
+        ext[i] = 0.0
+    call_families(ctx, TASK_LOADS)
+    for i in range(n):
+        s.ext0[i] = ext[i]
+    if s.params[5] != 0.0:
+        phit = fvec(ctx.phit, m)
+        call_families(ctx, TASK_ROWS)
+        for i in range(m):
+            s.phit0[i] = phit[i]
+    ctx.q1, ctx.v1 = q1, v1
+    s.work[1] = 1.0
+
+
+@numba.njit(cache=True)
+def _predict(ctx, s):
+    n, nf, m, h = ctx.n, ctx.nf, ctx.m, ctx.h
+    free, pres = ivec(ctx.free, nf), ivec(ctx.pres, ctx.npres)
+    trow = fvec(ctx.trow, ctx.ncol)
+    c_a, c_v = _coefficients(ctx, s)
+    if s.work[1] == 0.0:
+        # the start row of a chunk's table holds the functions of time at the state (.time_table)
+        _loads_at_start(ctx, s)
+    for i in range(n):
+        s.dq[i] = 0.0
+    for j in range(pres.size):
+        s.dq[pres[j]] = trow[s.pres_col[j]] - s.q[pres[j]]
+    x = fvec(ctx.x, ctx.nx)
+    xs = 0.0
+    for i in range(nf):
+        a = free[i]
+        x[i] = h * s.v[a] + 0.5 * h * h * s.acc[a]
+        xs = max(xs, abs(s.q[a]))
+    for i in range(m):
+        x[nf + i] = h * s.lam[i]
+    ctx.x_scale = xs
+    _settings(ctx, s, c_a, c_v, ROWS_VELOCITY if s.params[4] != 0.0 else ROWS_POSITION)
+
+
+@numba.njit(cache=True)
+def _assemble(ctx, s, q1, v1, acc1):
+    """Zero the parts, let the families add theirs, add the constant masses' inertia; returns the force
+    scale (False status: an element refused)."""
+    n, m = ctx.n, ctx.m
+    p, gk, gp, ext = fvec(ctx.p, n), fvec(ctx.gk, n), fvec(ctx.gp, n), fvec(ctx.ext, n)
+    dtmu, mterms, terms = fvec(ctx.dtmu, n), fvec(ctx.mterms, n), fvec(ctx.terms, n)
+    for i in range(n):
+        p[i] = gk[i] = gp[i] = ext[i] = dtmu[i] = mterms[i] = 0.0
+    phi, rscale, rmax, phit = fvec(ctx.phi, m), fvec(ctx.rscale, m), fvec(ctx.rmax, m), fvec(ctx.phit, m)
+    for i in range(m):
+        phi[i] = rscale[i] = rmax[i] = phit[i] = 0.0
+    st = storage_of(ctx)
+    clear(st)
+    ctx.missed = 0
+    call_families(ctx, TASK_EVAL)
+    if ctx.status == STATUS_OK:
+        call_families(ctx, TASK_EVAL_LOADS)
+    # the constant masses: M q̈₁, |M| terms, Δt c_a M
+    ptr = ivec(ctx.mass_ptr, n + 1)
+    nnz = ptr[n]
+    idx, dat = ivec(ctx.mass_idx, nnz), fvec(ctx.mass_dat, nnz)
+    for i in range(n):
+        acc, sa = 0.0, 0.0
+        for t in range(ptr[i], ptr[i + 1]):
+            j = idx[t]
+            acc += dat[t] * acc1[j]
+            sa += abs(dat[t]) * terms[j]
+            add_qq(ctx, st, i, j, ctx.w_p * ctx.da1 * dat[t])
+        p[i] += acc
+        mterms[i] += sa
+
+
+@numba.njit(cache=True)
+def _evaluate(ctx, s):
+    n, nf, m, h = ctx.n, ctx.nf, ctx.m, ctx.h
+    am, af, beta, gamma = s.params[0], s.params[1], s.params[2], s.params[3]
+    c_a, c_v = _coefficients(ctx, s)
+    x = fvec(ctx.x, ctx.nx)
+    free, pres = ivec(ctx.free, nf), ivec(ctx.pres, ctx.npres)
+    trow = fvec(ctx.trow, ctx.ncol)
+    q0, v0, a0, acc0 = s.q, s.v, s.pseudo, s.acc
+    q1, v1, a1 = fvec(ctx.q1, n), fvec(ctx.v1, n), fvec(ctx.a1, n)
+    terms, mu = fvec(ctx.terms, n), fvec(ctx.mu, m)
+    dq = s.dq
+    acc1 = fvec(ctx.scratch, n)          # the pseudo-acceleration a₁ lives in the scratch pool
+    for i in range(nf):
+        dq[free[i]] = x[i]
+    for i in range(m):
+        mu[i] = x[nf + i]
+    for i in range(n):
+        q1[i] = q0[i] + dq[i]
+        acc1[i] = (dq[i] - h * v0[i] - h * h * (0.5 - beta) * a0[i]) / (beta * h * h)
+        v1[i] = v0[i] + h * ((1.0 - gamma) * a0[i] + gamma * acc1[i])
+        a1[i] = ((1.0 - am) * acc1[i] + am * a0[i] - af * acc0[i]) / (1.0 - af)
+        terms[i] = abs(dq[i]) + h * abs(v0[i]) + h * h * abs(0.5 - beta) * abs(a0[i])
+    for j in range(pres.size):
+        i = pres[j]
+        v1[i], a1[i], acc1[i] = trow[s.pres_col[j] + 1], trow[s.pres_col[j] + 2], trow[s.pres_col[j] + 2]
+    _assemble(ctx, s, q1, v1, a1)
+    if ctx.status != STATUS_OK:
+        return
+    p, gk, gp, ext = fvec(ctx.p, n), fvec(ctx.gk, n), fvec(ctx.gp, n), fvec(ctx.ext, n)
+    dtmu, mterms = fvec(ctx.dtmu, n), fvec(ctx.mterms, n)
+    scale = max(max_abs(p), max_abs(gp), c_a * max_abs(mterms), max_abs(gk), max_abs(ext))
+    scale = max(h * scale, max_abs(dtmu))
+    r = s.r
+    for i in range(n):
+        r[i] = h * (p[i] + gp[i] - gk[i] - ext[i]) + dtmu[i]
+    res = fvec(ctx.res, ctx.nx)
+    err_c = _rows_error(ctx, res, nf, m, c_v)
+    for i in range(nf):
+        res[i] = r[free[i]]
+    err = max(max_abs(res[:nf]) / (ctx.rtol * max(scale, _TINY)), err_c)
+    if ctx.missed:
+        ctx.status = STATUS_MISSED
+    ctx.err = err if all_finite(res) else np.nan
+
+
+@numba.njit(cache=True)
+def _rows_error(ctx, res, nf, m, c_v):
+    """Constraint rows into the residual; their scaled error."""
+    if m == 0:
+        return 0.0
+    phi, rscale, rmax = fvec(ctx.phi, m), fvec(ctx.rscale, m), fvec(ctx.rmax, m)
+    cs, cmax = 0.0, 0.0
+    for i in range(m):
+        cs = max(cs, rscale[i])
+        cmax = max(cmax, rmax[i])
+        res[nf + i] = phi[i]
+    return max_abs(phi) / (ctx.ctol * max(cs, cmax * ctx.length_scale, _TINY))
+
+
+@numba.njit(cache=True)
+def _accept(ctx, s):
+    n, nf, m, h = ctx.n, ctx.nf, ctx.m, ctx.h
+    pres = ivec(ctx.pres, ctx.npres)
+    q1, v1, a1 = fvec(ctx.q1, n), fvec(ctx.v1, n), fvec(ctx.a1, n)
+    acc1 = fvec(ctx.scratch, n)
+    ext, mu, phit = fvec(ctx.ext, n), fvec(ctx.mu, m), fvec(ctx.phit, m)
+    if not (all_finite(q1) and all_finite(v1)):
+        ctx.status = STATUS_REFUSED
+        return
+    # work of the loads (trapezoidal in time), of the prescribed laws and of rheonomic constraints
+    w = 0.0
+    for i in range(n):
+        w += s.dq[i] * 0.5 * (s.ext0[i] + ext[i])
+    for j in range(pres.size):
+        react = s.r[pres[j]] / h
+        prev = s.reaction[j] if s.work[2] != 0.0 else react
+        w += s.dq[pres[j]] * 0.5 * (prev + react)
+        s.reaction[j] = react
+    s.work[2] = 1.0
+    if s.params[5] != 0.0:
+        s0, s1 = 0.0, 0.0
+        for i in range(m):
+            s0 += s.lam[i] * s.phit0[i]
+            s1 += mu[i] / h * phit[i]
+        w += 0.5 * h * (s0 + s1)
+    s.work[0] += w
+    for i in range(n):
+        s.q[i] = q1[i]
+        s.v[i] = v1[i]
+        s.acc[i] = a1[i]
+        s.pseudo[i] = acc1[i]
+        s.ext0[i] = ext[i]
+    for i in range(m):
+        s.lam[i] = mu[i] / h
+        s.phit0[i] = phit[i]
+
+
+@numba.njit(cache=True)
+def _start(ctx, s):
+    """The consistent acceleration and multipliers at the state, into ``ctx.x`` as (q̈_free, λ), by the
+    Newton matrix of the residual linear in them; the loop's driver solves once (Δq = 0)."""
+    n, nf, m = ctx.n, ctx.nf, ctx.m
+    free, pres = ivec(ctx.free, nf), ivec(ctx.pres, ctx.npres)
+    trow = fvec(ctx.trow, ctx.ncol)
+    x = fvec(ctx.x, ctx.nx)
+    q1, v1, a1 = fvec(ctx.q1, n), fvec(ctx.v1, n), fvec(ctx.a1, n)
+    mu, terms = fvec(ctx.mu, m), fvec(ctx.terms, n)
+    for i in range(n):
+        q1[i] = s.q[i]
+        v1[i] = s.v[i]
+        a1[i] = 0.0
+        terms[i] = 0.0
+    for i in range(nf):
+        a1[free[i]] = x[i]
+    for j in range(pres.size):
+        a1[pres[j]] = trow[s.pres_col[j] + 2]
+    for i in range(m):
+        mu[i] = x[nf + i]
+    ctx.h = 1.0
+    _settings(ctx, s, 1.0, 0.0, ROWS_ACCELERATION)
+    ctx.dq1, ctx.da1, ctx.dqe = 0.0, 1.0, 0.0
+    _assemble(ctx, s, q1, v1, a1)
+    if ctx.status != STATUS_OK:
+        return
+    p, gk, gp, ext, dtmu = fvec(ctx.p, n), fvec(ctx.gk, n), fvec(ctx.gp, n), fvec(ctx.ext, n), fvec(ctx.dtmu, n)
+    res = fvec(ctx.res, ctx.nx)
+    r = s.r
+    for i in range(n):
+        r[i] = p[i] + gp[i] - gk[i] - ext[i] + dtmu[i]
+    for i in range(nf):
+        res[i] = r[free[i]]
+    phi = fvec(ctx.phi, m)
+    for i in range(m):
+        res[nf + i] = phi[i]
+    ctx.err = 0.0 if all_finite(res) else np.nan
+
+
+def _kernel(ctx_p, fam_p):
+    ctx = context_of(ctx_p)
+    s = _view(family_of(fam_p))
+    if ctx.phase == PHASE_EVALUATE:
+        _evaluate(ctx, s)
+    elif ctx.phase == PHASE_PREDICT:
+        _predict(ctx, s)
+    elif ctx.phase == PHASE_ACCEPT:
+        _accept(ctx, s)
+    elif ctx.phase == PHASE_START:
+        _start(ctx, s)
+
+
+def newmark_kernel():
+    """The compiled kernel (a ``numba.cfunc``, compiled or loaded from the cache on first use)."""
+    from ..compiled.registry import compiled_kernel
+    return compiled_kernel(_kernel, "Newmark step")
