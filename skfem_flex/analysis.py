@@ -319,7 +319,7 @@ def static_equilibrium(scene, t=0.0, q=None, steady=False, newton=None, max_step
     The homotopy H(x, s) = R(x) − (1 − s) R(x₀) with x = (q_free, λ) and R the balance and
     constraint residuals starts at the solution x₀ (λ₀ by least squares) and ends at the
     equilibrium. Its tangent (∂x/∂s, 1) from J ∂x/∂s = −R(x₀) is normalized in the
-    scaled norm |Δq|²/σ² + Δs² (σ = |∂q/∂s| at the start, the linear response to the
+    scaled norm ‖Δq‖²/σ² + Δs² (σ = ‖∂q/∂s‖ at the start, the linear response to the
     full load), so a linear problem is solved in one step and stiff or large-rotation
     problems take as many steps as their curvature needs.
 
@@ -766,7 +766,7 @@ class Modes:
     Attributes
     ----------
     eigenvalues : ndarray of complex
-        s, 1/s, ordered by |s| (of a real pair ±σ the growing one first).
+        s, 1/s, ordered by abs(s) (of a real pair ±σ the growing one first).
     shapes : ndarray (n, n_modes)
         Shapes on all coordinates (real for undamped conservative systems, complex
         otherwise), scaled to largest entry 1 (phase of that entry 0).
@@ -798,7 +798,7 @@ class Modes:
 
     @property
     def natural_omega(self):
-        """Undamped natural angular frequencies |s|, rad/s."""
+        """Undamped natural angular frequencies abs(s), rad/s."""
         return np.abs(self.eigenvalues)
 
     @property
@@ -808,7 +808,7 @@ class Modes:
 
     @property
     def damping_ratio(self):
-        """ζ = −Re s / |s| (0 for s = 0; −1 for a real growing mode)."""
+        """ζ = −Re s / abs(s) (0 for s = 0; −1 for a real growing mode)."""
         mag = np.abs(self.eigenvalues)
         with np.errstate(invalid="ignore", divide="ignore"):
             return np.where(mag > 0, -self.eigenvalues.real / np.where(mag > 0, mag, 1.0), 0.0) + 0.0
@@ -952,7 +952,7 @@ def modes(scene, about="static", n_modes=6, t=0.0, solver="auto", newton=None):
         constant spin; frequencies are then those seen in the moving frame);
         ``"initial"``: the scene's initial state (frozen linearization of a moving state).
     n_modes : int
-        How many modes (lowest |s| first); fewer when the system has fewer.
+        How many modes (lowest abs(s) first); fewer when the system has fewer.
     t : float
         Time of the static/steady state, s.
     solver : {"auto", "symmetric", "first-order"}

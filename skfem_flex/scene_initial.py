@@ -140,7 +140,7 @@ def consistent_initial_state(scene, q, v, t=0.0, project=True, tol=1e-12, max_it
         the free coordinates. False: only check, raising on a violation
         larger than 1e-8 of the constraint's scale.
     tol : float
-        Position projection ends when |Φ_i| ≤ tol · (|Φ_q| |q|)_i for every row.
+        Position projection ends when abs(Φ_i) ≤ tol · (abs(Φ_q) abs(q))_i for every row.
     max_iterations : int
         Gauss–Newton iterations before giving up.
     max_correction : float or None

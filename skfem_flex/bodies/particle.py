@@ -25,7 +25,7 @@ class PointMass(Body):
 
     Notes
     -----
-    T = ½ m |v|², M = m I (constant).
+    T = ½ m ‖v‖², M = m I (constant).
     """
 
     constant_mass = True

@@ -75,7 +75,7 @@ class RigidBody(Body):
 
     Notes
     -----
-    T = ½ m |Ṙ|² + ½ J θ̇², M = diag(m, m, J) (constant). Linear momentum
+    T = ½ m ‖Ṙ‖² + ½ J θ̇², M = diag(m, m, J) (constant). Linear momentum
     m Ṙ; angular momentum about the global origin m (x ẏ − y ẋ) + J θ̇.
     """
 

@@ -127,7 +127,7 @@ class Constraint:
 
         ``("rows", [(term, law), ...])``: the equations in order, each block the ``compiled_form()`` of a
         :class:`~skfem_flex.elements.point_terms.Term` minus a motion law x(t) (``law`` None: no time term);
-        ``("distance", point, a, l)`` for Φ = ½(|r − a|² − l²).
+        ``("distance", point, a, l)`` for Φ = ½(‖r − a‖² − l²).
         """
         return None
 
@@ -524,7 +524,7 @@ class Driver(_TermConstraint):
 class Distance(Constraint):
     """Keeps a planar point mass at a fixed distance from a ground anchor.
 
-    Φ = (|x − a|² − l²)/2 = 0 (Lee & Yun, §4: the simple pendulum).
+    Φ = (‖x − a‖² − l²)/2 = 0 (Lee & Yun, §4: the simple pendulum).
 
     Parameters
     ----------

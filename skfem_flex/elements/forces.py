@@ -66,7 +66,7 @@ class ForceElement:
         ``("generalized force", G, F)`` for Q = Gᵀ F(t) (G constant, (k, the element's coordinates),
         F(t) of k values); ``("follower force", point, g, c, F)`` for Q = r_qᵀ A(g · q + c) F(t);
         ``("quadratic spring", g, c, k)`` for V = ½ k (g · q + c)²; ``("linear damper", g, c)`` for
-        Q = −c (g · v) g; ``("two-point spring", a, b, anchor, k, l₀)`` for V = ½ k (|r_a − r_b| − l₀)²
+        Q = −c (g · v) g; ``("two-point spring", a, b, anchor, k, l₀)`` for V = ½ k (‖r_a − r_b‖ − l₀)²
         and ``("two-point damper", a, b, anchor, c)`` for the damper along r_a − r_b (b None: the
         ground point ``anchor``). Vectors g are over the element's own coordinates.
         """
@@ -346,7 +346,7 @@ class _TwoPoint(ForceElement):
 class LinearSpring(_TwoPoint):
     """Linear spring between two body points, or a body point and a ground point.
 
-    V = ½ k (l − l₀)² with l = |r_a − r_b|.
+    V = ½ k (l − l₀)² with l = ‖r_a − r_b‖.
 
     Parameters
     ----------
@@ -383,7 +383,7 @@ class LinearSpring(_TwoPoint):
         self.name = name
 
     def length(self, q):
-        """l = |r_a − r_b| in m."""
+        """l = ‖r_a − r_b‖ in m."""
         return float(np.sqrt(self._s.value(q)[0]))
 
     def tension(self, q):

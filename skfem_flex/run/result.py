@@ -32,9 +32,9 @@ class Result:
         Work done since t = 0 by non-conservative loads, prescribed motion and
         drivers, J; the energy balance is total_energy − total_energy[0] = external_work.
     constraint_residual : ndarray (n,)
-        max |Φ(q, t)| after each step.
+        ‖Φ(q, t)‖_∞ after each step.
     velocity_constraint_residual : ndarray (n,)
-        max |Φ_q v + Φ_t|.
+        ‖Φ_q v + Φ_t‖_∞.
     newton_iterations : ndarray (n,)
         Newton iterations spent on the steps ending at each output time.
     prescribed_force : ndarray (n, n_prescribed)
@@ -107,7 +107,7 @@ class Result:
         return self.total_energy - self.total_energy[0] - self.external_work
 
     def relative_energy_error(self, reference=None):
-        """max |energy balance error| / reference (default: max(|T| + |V|) over the run)."""
+        """max abs(energy balance error) / reference (default: max(abs(T) + abs(V)) over the run)."""
         if reference is None:
             reference = float(np.max(np.abs(self.kinetic) + np.abs(self.potential)))
         return float(np.max(np.abs(self.energy_balance_error))) / max(reference, 1e-300)

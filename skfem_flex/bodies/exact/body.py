@@ -294,7 +294,7 @@ class ExactBeam(Body):
     def from_points(cls, section, start, end, n_elements=10, order=1, name="exact_beam", **kwargs):
         """A straight beam from ``start`` to ``end`` (global points in m) on ``n_elements`` elements.
 
-        Builds the mesh s ∈ [0, |end − start|] and the TimoshenkoBeam; other
+        Builds the mesh s ∈ [0, ‖end − start‖] and the TimoshenkoBeam; other
         keywords (q0, v0) go to the constructor.
         """
         if not isinstance(section, Section):
@@ -540,7 +540,7 @@ class ExactBeam(Body):
         ElementInversionError
             If q1 folds an element.
         ConvergenceError
-            If a nodal rotation increment |Δψ| reaches π (no Cayley parameter).
+            If a nodal rotation increment abs(Δψ) reaches π (no Cayley parameter).
         """
         self._kin_cached(q0)
         self._kinematics(q1)                                    # folded elements are reported here

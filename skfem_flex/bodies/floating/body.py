@@ -343,7 +343,7 @@ class FloatingBeam(FloatingFrame):
             (2/Δt) M(q1) + B(q1, v1) − Δt ∂g_kin/∂q1 − 2 ∂g_kin/∂v1 + Δt ∂g_pot/∂q1
             (dense for dense bodies, CSR in the body's fixed pattern for sparse ones).
         floor : ndarray (n,)
-            Δt |∂g_pot/∂q1| (|q0| + |q1|): round-off floor of the internal forces.
+            Δt ‖∂g_pot/∂q1‖ (‖q0‖ + ‖q1‖): round-off floor of the internal forces.
         """
         n = self.n_dofs
         q0, q1, v0, v1 = (np.ascontiguousarray(x, dtype=float) for x in (q0, q1, v0, v1))
