@@ -122,7 +122,7 @@ def call_families(ctx, task):
     for k in range(ctx.nfams):
         fam = ctx.fams + k * FAMILY_SIZE
         call(family_at(fam).kernel, ctx.self, fam)
-        if ctx.status != 0 and ctx.bad_family < 0:
+        if (ctx.status != 0 or ctx.missed != 0) and ctx.bad_family < 0:
             ctx.bad_family = k
 
 

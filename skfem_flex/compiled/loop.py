@@ -21,7 +21,7 @@ from .abi import family_at
 from .tasks import (PHASE_ACCEPT, PHASE_EVALUATE, PHASE_PREDICT, PHASE_START, STATUS_OK, TASK_ENERGY,
                     TASK_MOMENTUM, TASK_ROWS)
 
-__all__ = ["Records", "NewtonArrays", "run_steps", "start_state", "REFUSED", "DERIVED"]
+__all__ = ["Records", "NewtonArrays", "run_steps", "start_state", "evaluate_once", "REFUSED", "DERIVED"]
 
 #: status of :func:`run_steps` when an element refused a state, a Python element raised or a kernel wrote
 #: outside the Newton pattern (``ctx.status`` says which)
@@ -160,6 +160,14 @@ def run_steps(ctx, scheme, solver, hs, t0, recorded, records, newton, max_iterat
             record_step(c, records, n_rec, t)
             n_rec += 1
     return CONVERGED, hs.size, n_rec, its_total
+
+
+@numba.njit(cache=True)
+def evaluate_once(ctx, scheme, phase):
+    """One call of the scheme's kernel in ``phase`` (tests, linearization, statics)."""
+    c = ctx[0]
+    c.phase = phase
+    call(scheme[0].kernel, c.self, scheme.ctypes.data)
 
 
 @numba.njit(cache=True)

@@ -104,12 +104,13 @@ class PackedScene:
     solver: str                         # "dense" | "bordered band" | "bordered band (CSR)"
     plan: tuple                         # (interior, border, (lo, up)) or None
     python_elements: list = field(default_factory=list)
+    m: int = 0
+    rheonomic: bool = False             # a constraint depends on time (drivers): Newmark's work needs Φ_t
 
     @property
     def nx(self):
+        """Unknowns of the Newton system: free coordinates and multipliers."""
         return self.free.size + int(self.m)
-
-    m: int = 0
 
 
 _PACKED = weakref.WeakKeyDictionary()
@@ -245,7 +246,8 @@ def _pack(scene):
         free=free, pres=np.asarray(scene.prescribed_index, dtype=np.int64), fpos=fpos,
         cayley=np.asarray(scene.cayley_index, dtype=np.int64), pres_cols=np.asarray(pres_cols, dtype=np.int64),
         probe_names=probe_names, probe_maps=np.asarray(probe_maps, dtype=np.int64), storage=DENSE,
-        pattern=None, solver="dense", plan=None, python_elements=python, m=int(scene.n_constraints))
+        pattern=None, solver="dense", plan=None, python_elements=python, m=int(scene.n_constraints),
+        rheonomic=any(getattr(c, "rheonomic", False) for c in scene.constraints))
     _plan(packed, scene, packs)
     return packed
 

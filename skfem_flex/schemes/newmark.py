@@ -27,14 +27,17 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from ..compiled.abi import call_families, context_of, f1, family_of, fvec, i1, ivec
+from .base import NewmarkState, Scheme
+
+from ..compiled.abi import Fields, call_families, context_of, f1, family_of, fvec, i1, ivec
+from ..compiled.registry import compiled_kernel
 from ..compiled.storage import add_qq, clear, storage_of
 from ..compiled.tasks import (PHASE_ACCEPT, PHASE_EVALUATE, PHASE_PREDICT, PHASE_START, ROWS_ACCELERATION,
                               ROWS_POSITION, ROWS_VELOCITY, SCHEME_NEWMARK, STATUS_MISSED, STATUS_OK,
                               STATUS_REFUSED, TASK_EVAL, TASK_EVAL_LOADS, TASK_LOADS, TASK_ROWS)
 from ..numerics.newton import all_finite, max_abs
 
-__all__ = ["NewmarkData", "newmark_kernel"]
+__all__ = ["Newmark", "Trapezoidal", "GeneralizedAlpha", "NewmarkData", "start_kernel", "start_data"]
 
 _TINY = 1e-300
 
@@ -55,12 +58,13 @@ class NewmarkData(NamedTuple):
     pres_col: np.ndarray    # (npres,) column of each prescribed coordinate's law (value, rate, acceleration)
     dq: np.ndarray          # work vectors (n,)
     r: np.ndarray
+    a_next: np.ndarray      # the algorithmic acceleration a₁ of the evaluation
 
 
 @numba.njit(cache=True)
 def _view(fam):
     return NewmarkData(f1(fam, 0), f1(fam, 1), f1(fam, 2), f1(fam, 3), f1(fam, 4), f1(fam, 5), f1(fam, 6),
-                       f1(fam, 7), f1(fam, 8), f1(fam, 9), i1(fam, 10), f1(fam, 11), f1(fam, 12))
+                       f1(fam, 7), f1(fam, 8), f1(fam, 9), i1(fam, 10), f1(fam, 11), f1(fam, 12), f1(fam, 13))
 
 
 @numba.njit(cache=True)
@@ -180,7 +184,7 @@ def _evaluate(ctx, s):
     q1, v1, a1 = fvec(ctx.q1, n), fvec(ctx.v1, n), fvec(ctx.a1, n)
     terms, mu = fvec(ctx.terms, n), fvec(ctx.mu, m)
     dq = s.dq
-    acc1 = fvec(ctx.scratch, n)          # the pseudo-acceleration a₁ lives in the scratch pool
+    acc1 = s.a_next
     for i in range(nf):
         dq[free[i]] = x[i]
     for i in range(m):
@@ -230,10 +234,10 @@ def _rows_error(ctx, res, nf, m, c_v):
 
 @numba.njit(cache=True)
 def _accept(ctx, s):
-    n, nf, m, h = ctx.n, ctx.nf, ctx.m, ctx.h
+    n, m, h = ctx.n, ctx.m, ctx.h
     pres = ivec(ctx.pres, ctx.npres)
     q1, v1, a1 = fvec(ctx.q1, n), fvec(ctx.v1, n), fvec(ctx.a1, n)
-    acc1 = fvec(ctx.scratch, n)
+    acc1 = s.a_next
     ext, mu, phit = fvec(ctx.ext, n), fvec(ctx.mu, m), fvec(ctx.phit, m)
     if not (all_finite(q1) and all_finite(v1)):
         ctx.status = STATUS_REFUSED
@@ -319,7 +323,118 @@ def _kernel(ctx_p, fam_p):
         _start(ctx, s)
 
 
-def newmark_kernel():
-    """The compiled kernel (a ``numba.cfunc``, compiled or loaded from the cache on first use)."""
-    from ..compiled.registry import compiled_kernel
-    return compiled_kernel(_kernel, "Newmark step")
+def _data(packed, params, q, v, acc, pseudo, lam, reaction, work):
+    n, m = q.size, packed.m
+    z = np.zeros
+    return Fields(NewmarkData(np.asarray(params, dtype=float), np.array(q, dtype=float), np.array(v, dtype=float),
+                              np.array(acc, dtype=float), np.array(pseudo, dtype=float), np.array(lam, dtype=float),
+                              np.array(reaction, dtype=float), np.asarray(work, dtype=float), z(n), z(m),
+                              packed.pres_cols, z(n), z(n), z(n)))
+
+
+def start_kernel():
+    """The kernel that computes consistent starts (the Newmark step's, PHASE_START)."""
+    return compiled_kernel(_kernel, "the Newmark step")
+
+
+def start_data(packed, q, v):
+    """A data record for :func:`start_kernel` at the state (q, v)."""
+    n = q.size
+    return _data(packed, (0.0, 0.0, 0.25, 0.5, 0.0, 0.0), q, v, np.zeros(n), np.zeros(n), np.zeros(packed.m),
+                 np.zeros(packed.pres.size), (0.0, 0.0, 0.0))
+
+
+class Newmark(Scheme):
+    """Newmark family in generalized-α form (Chung & Hulbert 1993; Arnold & Brüls 2007).
+
+    Parameters
+    ----------
+    alpha_m, alpha_f, beta, gamma : float
+        Algorithmic parameters.
+    constraint_level : {"position", "velocity"}
+        Enforce Φ(q_{n+1}, t_{n+1}) = 0 (index 3) or Φ_q v_{n+1} + Φ_t = 0 (index 2). The velocity-level
+        row is multiplied by βΔt/γ, so that its Jacobian is Φ_q + (βΔt/γ) ∂(Φ_q v)/∂q, the same size as
+        the position-level one.
+    newton : NewtonSettings, optional
+    """
+
+    name = "newmark"
+    state_type = NewmarkState
+
+    def __init__(self, alpha_m=0.0, alpha_f=0.0, beta=0.25, gamma=0.5, newton=None, constraint_level="position"):
+        super().__init__(newton)
+        self.alpha_m, self.alpha_f, self.beta, self.gamma = map(float, (alpha_m, alpha_f, beta, gamma))
+        for name in ("alpha_m", "alpha_f", "beta", "gamma"):
+            if not np.isfinite(getattr(self, name)):
+                raise ValueError(f"{name} must be finite, got {getattr(self, name)!r}")
+        if not (self.beta > 0 and self.alpha_f < 1):
+            raise ValueError(f"Newmark needs beta > 0 and alpha_f < 1, got beta={beta!r}, alpha_f={alpha_f!r}")
+        if constraint_level not in ("position", "velocity"):
+            raise ValueError(f"constraint_level must be 'position' or 'velocity', got {constraint_level!r}")
+        self.constraint_level = constraint_level
+
+    def kernel(self):
+        return compiled_kernel(_kernel, "the Newmark step")
+
+    def pack_state(self, packed, state):
+        n, m = state.q.size, packed.m
+        acc = np.zeros(n) if state.acc is None or np.size(state.acc) != n else state.acc
+        pseudo = getattr(state, "pseudo", None)
+        pseudo = acc if pseudo is None or np.size(pseudo) != n else pseudo
+        lam = state.lam if np.size(state.lam) == m else np.zeros(m)
+        npres = packed.pres.size
+        have = np.size(state.prescribed_force) == npres and npres > 0
+        reaction = state.prescribed_force if have else np.zeros(npres)
+        params = (self.alpha_m, self.alpha_f, self.beta, self.gamma,
+                  1.0 if self.constraint_level == "velocity" else 0.0, 1.0 if packed.rheonomic else 0.0)
+        return _data(packed, params, state.q, state.v, acc, pseudo, lam, reaction,
+                     (float(state.work), 0.0, 1.0 if have else 0.0))
+
+    def unpack_state(self, fields, t):
+        a = fields.array
+        return NewmarkState(float(t), a("q").copy(), a("v").copy(), acc=a("acc").copy(), lam=a("lam").copy(),
+                            prescribed_force=a("reaction").copy(), work=float(a("work")[0]),
+                            pseudo=a("pseudo").copy())
+
+
+class Trapezoidal(Newmark):
+    """Average-acceleration Newmark (β = ¼, γ = ½) with velocity-level constraints, ``"trapezoidal"``.
+
+    Index 2, as the established multibody codes run the trapezoidal rule:
+    Φ_q(q_{n+1}) v_{n+1} + Φ_t(t_{n+1}) = 0. The position-level (index-3) form is
+    ``Newmark(constraint_level="position")``; it drives the multipliers into a growing zigzag on a
+    swinging pendulum.
+    """
+
+    name = "trapezoidal"
+
+    def __init__(self, newton=None):
+        super().__init__(0.0, 0.0, 0.25, 0.5, newton, constraint_level="velocity")
+
+
+class GeneralizedAlpha(Newmark):
+    """Chung–Hulbert generalized-α with spectral radius ρ∞ at infinite frequency.
+
+    α_m = (2ρ∞ − 1)/(ρ∞ + 1), α_f = ρ∞/(ρ∞ + 1), γ = ½ − α_m + α_f, β = ¼ (γ + ½)².
+
+    Parameters
+    ----------
+    rho_inf : float
+        ρ∞ in [0, 1]; 1 keeps every frequency, 0 annihilates the highest.
+    newton : NewtonSettings, optional
+    """
+
+    name = "generalized-alpha"
+
+    def __init__(self, rho_inf=0.9, newton=None):
+        rho = float(rho_inf)
+        if not (np.isfinite(rho) and 0.0 <= rho <= 1.0):
+            raise ValueError(f"rho_inf must be in [0, 1], got {rho_inf!r}")
+        am = (2.0 * rho - 1.0) / (rho + 1.0)
+        af = rho / (rho + 1.0)
+        gamma = 0.5 - am + af
+        super().__init__(am, af, 0.25 * (gamma + 0.5) ** 2, gamma, newton)
+        self.rho_inf = rho
+
+    def __repr__(self):
+        return f"GeneralizedAlpha(rho_inf={self.rho_inf!r})"

@@ -1,0 +1,160 @@
+r"""Steps of a scene under a scheme on the compiled core, from Python: the one driver every run uses.
+
+A :class:`Stepper` holds what a run keeps from chunk to chunk — the workspace (:mod:`skfem_flex.compiled.workspace`),
+the scheme's data record, the solver's record and the Newton core's arrays — and offers
+
+* :meth:`Stepper.start` — the consistent acceleration, multipliers and prescribed forces of a state;
+* :meth:`Stepper.advance` — many steps in one compiled call, recorded as asked;
+* :meth:`Stepper.evaluate` — one evaluation of the step's residual and Newton matrix at given unknowns
+  (tests, finite-difference checks of element kernels).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sps
+
+from ..compiled import solvers
+from ..compiled.abi import FAMILY, Fields
+from ..compiled.loop import DERIVED, NewtonArrays, Records, evaluate_once, run_steps, start_state
+from ..compiled.pack import time_table
+from ..compiled.storage import DENSE
+from ..compiled.tasks import PHASE_EVALUATE, PHASE_PREDICT, STATUS_MISSED, STATUS_OK, STATUS_PYTHON_ERROR
+from ..compiled.workspace import Workspace
+
+__all__ = ["Stepper", "Chunk"]
+
+
+@dataclass
+class Chunk:
+    """What :meth:`Stepper.advance` returns: the status (``numerics.newton`` codes, or REFUSED), the steps
+    done, the records written (``records`` arrays, first ``n_records`` rows valid), Newton iterations."""
+
+    status: int
+    steps: int
+    n_records: int
+    iterations: int
+    records: Records
+
+
+def _plan_fields(packed):
+    if packed.plan is None:
+        z = np.zeros(1, dtype=np.int64)
+        return solvers.SolverPlan(z, z, np.zeros(2, dtype=np.int64))
+    interior, border, lo, up = packed.plan
+    return solvers.SolverPlan(np.asarray(interior, dtype=np.int64), np.asarray(border, dtype=np.int64),
+                              np.array([lo, up], dtype=np.int64))
+
+
+class Stepper:
+    """The compiled run of ``scene`` under ``scheme`` (a scheme object of :mod:`skfem_flex.schemes`)."""
+
+    def __init__(self, scene, scheme):
+        self.scene, self.scheme = scene, scheme
+        self.ws = Workspace(scene, scheme.newton)
+        pk = self.packed = self.ws.packed
+        kernel = {"dense": solvers.dense_solver, "bordered band": solvers.bordered_band_solver,
+                  "bordered band (CSR)": solvers.csr_bordered_band_solver}.get(pk.solver)
+        if kernel is None:
+            raise NotImplementedError(f"no compiled solver for {pk.solver!r} storage yet")
+        self.solver_fields = Fields(_plan_fields(pk))
+        self.solver = np.zeros(1, dtype=FAMILY)
+        self.solver[0] = self.solver_fields.record(kernel().address, -1, 0)
+        nx = pk.nx
+        self.newton = NewtonArrays(np.zeros(nx), np.zeros(nx), np.zeros(nx), np.zeros(4), np.zeros(5, dtype=np.int64))
+        self.ws.ctx[0]["x"] = self.newton.x_try.ctypes.data
+        self.data = None
+        self.record = np.zeros(1, dtype=FAMILY)
+
+    # ------------------------------------------------------------------ the scheme's data
+    def load(self, state):
+        """Put ``state`` (the scheme's state dataclass) into the scheme's data record."""
+        self.data = self.scheme.pack_state(self.packed, state)
+        self.ws.bind_state(self.data)
+        self.record[0] = self.data.record(self.scheme.kernel().address, -1, 0)
+
+    def state(self, t):
+        """The scheme's state now (a new dataclass; arrays copied)."""
+        return self.scheme.unpack_state(self.data, t)
+
+    # ------------------------------------------------------------------ start, steps, evaluations
+    def start(self, t, q, v):
+        """(acceleration, λ, prescribed forces) consistent with (q, v) at time t: M q̈ + Φ_qᵀλ = Q + Q_v − ∇V,
+        Φ_q q̈ = −∂(Φ_q v)/∂q v − Φ_tt; the prescribed coordinates take their laws' accelerations.
+
+        Raises
+        ------
+        ValueError
+            If the mass/constraint matrix is singular (a coordinate without inertia, redundant constraints).
+        """
+        from ..schemes.newmark import start_kernel, start_data
+        pk = self.packed
+        data = start_data(pk, q, v)
+        self.ws.bind_state(data)
+        rec = np.zeros(1, dtype=FAMILY)
+        rec[0] = data.record(start_kernel().address, -1, 0)
+        table = time_table(pk.columns, float(t), np.zeros(0), False)
+        ok = start_state(self.ws.ctx, rec, self.solver, table)
+        self._check_status()
+        if not ok:
+            raise ValueError("the initial mass/constraint matrix is singular: a coordinate has no inertia, or "
+                             "constraints are redundant")
+        x = self.newton.x_try
+        nf = pk.free.size
+        acc = np.zeros(self.scene.n)
+        acc[pk.free] = x[:nf]
+        if pk.pres.size:
+            acc[pk.pres] = table[0, pk.pres_cols + 2]
+        lam = x[nf:].copy()
+        reaction = data.array("r")[pk.pres].copy() if pk.pres.size else np.zeros(0)
+        if self.data is not None:
+            self.ws.bind_state(self.data)
+        return acc, lam, reaction
+
+    def advance(self, t0, hs, recorded, max_iterations, line_search):
+        """Steps of sizes ``hs`` from time t0 (the loaded state); ``recorded[k]``: record step k."""
+        pk, n, m = self.packed, self.scene.n, self.packed.m
+        hs = np.ascontiguousarray(hs, dtype=float)
+        table = time_table(pk.columns, float(t0), hs, self.scheme.mid_point_loads)
+        nr = int(np.count_nonzero(recorded))
+        records = Records(np.zeros(nr), np.zeros((nr, n)), np.zeros((nr, n)), np.zeros((nr, m)), np.zeros(nr),
+                          np.zeros(nr, dtype=np.int64), np.zeros((nr, pk.pres.size)), np.zeros((nr, len(DERIVED))),
+                          np.zeros((nr, pk.probe_maps.size, 3)), pk.probe_maps)
+        status, steps, n_rec, its = run_steps(self.ws.ctx, self.record, self.solver, hs, float(t0),
+                                              np.ascontiguousarray(recorded, dtype=np.bool_), records, self.newton,
+                                              int(max_iterations), bool(line_search), table)
+        self._check_status()
+        return Chunk(int(status), int(steps), int(n_rec), int(its), records)
+
+    def evaluate(self, t0, h, x):
+        """The scheme's residual (nx,) and Newton matrix (dense (nx, nx) or CSR) at unknowns ``x`` for a step
+        of size h from the loaded state at time t0, and the scaled error."""
+        pk = self.packed
+        table = time_table(pk.columns, float(t0), np.array([float(h)]), self.scheme.mid_point_loads)
+        c = self.ws.ctx[0]
+        c["h"], c["t"] = float(h), float(t0)
+        c["trow"] = table.ctypes.data + 8 * c["ncol"]
+        c["status"], c["bad_family"] = STATUS_OK, -1
+        evaluate_once(self.ws.ctx, self.record, PHASE_PREDICT)          # the step's settings (and its start)
+        self.newton.x_try[:] = x
+        evaluate_once(self.ws.ctx, self.record, PHASE_EVALUATE)
+        self._check_status()
+        return self.ws.vectors["res"][:pk.nx].copy(), self.matrix(), float(c["err"])
+
+    def matrix(self):
+        """The Newton matrix of the last evaluation (dense (nx, nx) ndarray, or scipy CSR)."""
+        pk, nx = self.packed, self.packed.nx
+        if pk.storage == DENSE:
+            return self.ws.mat[:nx * nx].reshape(nx, nx).copy()
+        pat = pk.pattern
+        return sps.csr_matrix((self.ws.mat[:pat.nnz].copy(), pat.indices, pat.indptr), shape=(nx, nx))
+
+    def _check_status(self):
+        c = self.ws.ctx[0]
+        if c["status"] == STATUS_PYTHON_ERROR:
+            from ..compiled.families import python_elements
+            python_elements.raise_pending()
+        if c["status"] == STATUS_MISSED:
+            raise AssertionError(f"the {self.ws.family_name(int(c['bad_family']))} family wrote an entry outside "
+                                 f"the Newton matrix's pattern (a bug: please report it)")
