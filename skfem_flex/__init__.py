@@ -19,12 +19,11 @@ from .scene_initial import (InconsistentInitialConditionsError, RedundantConstra
 from .elements.forces import ForceElement, Gravity, NonlinearSpring
 from .elements.motion import MotionLaw, Prescribed, spin_up_law
 from .scene import Scene
-from .schemes.integrators import (ConvergenceError, EnergyMomentum, GeneralizedAlpha, NewtonSettings, SimulationError,
-                          Trapezoidal)
-from .errors import DivergenceError, Interrupted, OutputError
+from .schemes import EnergyMomentum, GeneralizedAlpha, Newmark, NewtonSettings, Trapezoidal
+from .errors import ConvergenceError, DivergenceError, Interrupted, OutputError, SimulationError
 from .numerics.resources import InsufficientMemoryError
 from .run.result import Result
-from .run.simulate import simulate
+from .run.simulate import Checkpointing, Control, Recording, simulate
 from .apps.sweep import open_sweep, sweep
 from .run.output import VTKSeries
 from .analysis import (CampbellDiagram, EquilibriumState, LinearSystem, Modes, campbell, linearize, modes,

@@ -42,7 +42,8 @@ import scipy.sparse.linalg as spla
 
 from .errors import ConvergenceError
 from .scene_initial import RedundantConstraintsError, consistent_initial_state
-from .schemes.integrators import EnergyMomentum, NewtonSettings, State, linear_solve, newton_solve
+from .numerics.linear_solver import linear_solve
+from .numerics.newton import NewtonSettings, newton_solve
 from .scene import add_matrices
 
 __all__ = ["EquilibriumState", "LinearSystem", "Modes", "CampbellDiagram", "static_equilibrium", "linearize",
@@ -431,7 +432,7 @@ def _check_steady(scene, state):
     if not np.any(state.v):
         return
     try:
-        acc = EnergyMomentum().start(scene, State(state.t, state.q, state.v)).acc
+        acc = _consistent(scene, state.t, state.q, state.v)[0]
     except ValueError:                      # no inertia in some direction: nothing to check against
         return
     free = scene.free_index
@@ -725,7 +726,7 @@ def linearize(scene, q, v, t=0.0, lam=None, acc=None):
             raise ValueError(f"{label} must be a finite vector of {scene.n} coordinates")
     t = float(t)
     if lam is None or acc is None:
-        start = EnergyMomentum().start(scene, State(t, q, v))
+        start = _Start(*_consistent(scene, t, q, v))
         lam = start.lam if lam is None else lam
         acc = start.acc if acc is None else acc
     lam = np.asarray(lam, dtype=float).ravel()
@@ -1177,3 +1178,17 @@ def campbell(build, parameter, values, n_modes=6, about="steady", t=0.0, **fixed
         om[i, :k], zeta[i, :k], grow[i, :k] = res.omega, res.damping_ratio, res.growth_rate
     label = about if isinstance(about, str) else "given"
     return CampbellDiagram(parameter, values, om, zeta, grow, label, name, unit)
+
+
+class _Start:
+    """(acc, lam, prescribed_force) of a consistent start as attributes."""
+
+    def __init__(self, acc, lam, prescribed_force):
+        self.acc, self.lam, self.prescribed_force = acc, lam, prescribed_force
+
+
+def _consistent(scene, t, q, v):
+    """(q̈, λ, prescribed forces) consistent with (q, v) at time t, from the compiled step's start."""
+    from .run.stepper import Stepper
+    from .schemes import EnergyMomentum
+    return Stepper(scene, EnergyMomentum()).start(t, np.asarray(q, dtype=float), np.asarray(v, dtype=float))

@@ -335,7 +335,7 @@ def _cmd_run(args):
 
     from .. import scenes
     from ..errors import DivergenceError, Interrupted
-    from ..schemes.integrators import SimulationError
+    from ..errors import SimulationError
     from ..run.files import write_text_atomically
     from ..run.output import VTKSeries
     from ..run.simulate import SignalStop, simulate
@@ -511,7 +511,7 @@ def _report(name, summary, files, out):
 
 
 def _add_run(sub):
-    from ..schemes.integrators import INTEGRATORS
+    from ..schemes import SCHEMES as INTEGRATORS
 
     p = sub.add_parser("run", help="run a catalogue scene and write VTK series, plots and a summary",
                        description="Run a catalogue scene; write the VTK time series (.vtu + .pvd), "
@@ -619,7 +619,7 @@ def _cmd_study(args):
 
 def _add_study(sub):
     from . import studies
-    from ..schemes.integrators import INTEGRATORS
+    from ..schemes import SCHEMES as INTEGRATORS
 
     p = sub.add_parser("study", help="work-precision or stability study: Markdown, CSV and PNG into --out",
                        description="Run a study over the catalogue scenes and write its table as Markdown "
@@ -915,7 +915,7 @@ def _cmd_sweep(args):
 
 
 def _add_sweep(sub):
-    from ..schemes.integrators import INTEGRATORS
+    from ..schemes import SCHEMES as INTEGRATORS
 
     p = sub.add_parser("sweep", help="run a scene over a parameter grid on Dask; results as an xarray/Zarr store",
                        description="Run a catalogue scene for every combination of the --vary values, one Dask "

@@ -228,7 +228,7 @@ def plan(scene, vary=None, cases=None, *, fixed=None, t_end=None, dt=None, integ
     TypeError
         A value that cannot be stored or keyed, an unknown simulate option.
     """
-    from ..schemes.integrators import INTEGRATORS
+    from ..schemes import SCHEMES as INTEGRATORS
 
     factory, scene_name, defaults = _factory(scene, name)
     unknown = sorted(set(options) - set(SIMULATE_OPTIONS))
@@ -787,16 +787,8 @@ def _warm_worker(specs, first, dask_worker=None):
     The first worker of a machine runs the one-step ``specs`` one after another; the others import what
     a case needs meanwhile, and no kernel (they would compile it at the same time). Nothing comes back."""
     if dask_worker is not None and dask_worker.address in first:
-        from .. import scenes
-        from ..compiled.single_body_loop import jit_cache_cold
-        for spec in specs:
-            try:                         # the worker's own view of its cache (its environment may differ)
-                factory = scenes.get(spec.scene) if isinstance(spec.scene, str) else spec.scene
-                cold = jit_cache_cold(factory(**spec.params))
-            except Exception:
-                cold = True
-            if cold:                     # a warm cache needs no warm-up: each worker loads it at its first case
-                run_case(spec)
+        for spec in specs:               # one step each: compiles what is not cached, loads the rest
+            run_case(spec)
     else:
         import xarray  # noqa: F401
 

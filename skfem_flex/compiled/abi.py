@@ -47,9 +47,9 @@ CONTEXT_FIELDS = (
     # what is asked: the scheme's phase (PHASE_*), the families' task (TASK_*), which scheme (SCHEME_*),
     # the level of the constraint rows (ROWS_*)
     ("phase", "i"), ("task", "i"), ("scheme", "i"), ("rows", "i"),
-    # the step: start time and Δt (s); weights of the residual's parts and derivatives of the states
+    # the step: start time and Δt (s), when loads and when constraint rows are evaluated (s); weights of the residual's parts and derivatives of the states
     # with respect to the unknowns (.tasks)
-    ("t", "f"), ("h", "f"), ("w_p", "f"), ("w_gk", "f"), ("w_gp", "f"), ("w_ext", "f"), ("w_mu", "f"),
+    ("t", "f"), ("h", "f"), ("te", "f"), ("t1", "f"), ("w_p", "f"), ("w_gk", "f"), ("w_gp", "f"), ("w_ext", "f"), ("w_mu", "f"),
     ("c_dg", "f"), ("dq1", "f"), ("da1", "f"), ("dqe", "f"), ("c_v", "f"),
     # states (n-vectors): start and end of the step, acceleration at the end, where loads are evaluated,
     # the end points of the discrete gradients; ∂v1/∂x and ∂v_e/∂x per coordinate

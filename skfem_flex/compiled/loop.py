@@ -21,7 +21,7 @@ from .abi import family_at
 from .tasks import (PHASE_ACCEPT, PHASE_EVALUATE, PHASE_PREDICT, PHASE_START, STATUS_OK, TASK_ENERGY,
                     TASK_MOMENTUM, TASK_ROWS)
 
-__all__ = ["Records", "NewtonArrays", "run_steps", "start_state", "evaluate_once", "REFUSED", "DERIVED"]
+__all__ = ["Records", "NewtonArrays", "run_steps", "start_state", "evaluate_once", "record_at", "REFUSED", "DERIVED"]
 
 #: status of :func:`run_steps` when an element refused a state, a Python element raised or a kernel wrote
 #: outside the Newton pattern (``ctx.status`` says which)
@@ -163,6 +163,18 @@ def run_steps(ctx, scheme, solver, hs, t0, recorded, records, newton, max_iterat
 
 
 @numba.njit(cache=True)
+def record_at(ctx, records, t, table):
+    """Record row 0 of ``records`` from the state in (ctx.q1, ctx.v1) at time t (``table``: one row at t)."""
+    c = ctx[0]
+    c.trow = table.ctypes.data
+    c.t = t
+    c.h = 0.0
+    c.te = c.t1 = t
+    c.status = STATUS_OK
+    record_step(c, records, 0, t)
+
+
+@numba.njit(cache=True)
 def evaluate_once(ctx, scheme, phase):
     """One call of the scheme's kernel in ``phase`` (tests, linearization, statics)."""
     c = ctx[0]
@@ -171,13 +183,14 @@ def evaluate_once(ctx, scheme, phase):
 
 
 @numba.njit(cache=True)
-def start_state(ctx, scheme, solver, table):
+def start_state(ctx, scheme, solver, table, t):
     """The consistent acceleration and multipliers of the scheme's state (PHASE_START of the scheme's
     kernel: a residual linear in them, solved once); returns True when the solve succeeded, with the
     solution in ``ctx.x`` and the residual at it (the prescribed coordinates' forces) in the scheme."""
     c = ctx[0]
     sch, sol = scheme.ctypes.data, solver.ctypes.data
     c.trow = table.ctypes.data
+    c.t = t
     c.status = STATUS_OK
     x = fvec(c.x, c.nx)
     for i in range(c.nx):

@@ -103,6 +103,7 @@ class PackedScene:
     pattern: object                     # scipy CSR pattern of the bordered Newton matrix (CSR storage)
     solver: str                         # "dense" | "bordered band" | "bordered band (CSR)"
     plan: tuple                         # (interior, border, (lo, up)) or None
+    #: (element, reason) of every element that runs through its Python methods
     python_elements: list = field(default_factory=list)
     m: int = 0
     rheonomic: bool = False             # a constraint depends on time (drivers): Newmark's work needs Φ_t
@@ -114,13 +115,16 @@ class PackedScene:
 
 
 _PACKED = weakref.WeakKeyDictionary()
+_PACKED_PY = weakref.WeakKeyDictionary()
 
 
-def packed_scene(scene):
-    """The scene's :class:`PackedScene`, built on first use."""
-    hit = _PACKED.get(scene)
+def packed_scene(scene, python_only=False):
+    """The scene's :class:`PackedScene`, built on first use; ``python_only``: every element through its own
+    Python methods (the Python family), for ``simulate(..., compiled=False)``."""
+    cache = _PACKED_PY if python_only else _PACKED
+    hit = cache.get(scene)
     if hit is None:
-        hit = _PACKED[scene] = _pack(scene)
+        hit = cache[scene] = _pack(scene, python_only)
     return hit
 
 
@@ -140,66 +144,78 @@ def _momentum_layout(body):
     return ix, iy, ix, iy, zero, zero, (np.array([2]) if nb >= 3 else none)
 
 
-def _pack(scene):
+def _pack(scene, python_only=False):
     packer = Packer(scene)
     n = scene.n
     items = {}                                            # family module → list of items
-    python = []
+    python, reasons = [], []                              # Python-family items; (element, why) for Result
 
     def add(mod, item):
         items.setdefault(mod, []).append(item)
+
+    def in_python(role, element, where, why):
+        python.append((role, element, where))
+        if all(e is not element for e, _ in reasons):
+            reasons.append((element, why))
 
     first_moment = {}
     mass_blocks = []
     for b in scene.bodies:
         off, nb = packer.block(b)
-        kd = _call(b, "compiled_kernel_data")
+        idx = np.arange(off, off + nb)
+        kd = None if python_only else _call(b, "compiled_kernel_data")
         if kd is not None:
             moment = _call(b, "mass_moment_map")
             add(family_for("floating frame"), (kd, b, off))
             if moment is not None:
                 first_moment[id(b)] = ("frame", moment[0], moment[1], moment[2])
             continue
-        strain = _call(b, "compiled_strain_data") if b.has_potential else None
-        if b.constant_mass and (not b.has_potential or strain is not None):
+        if b.constant_mass:
             block = sps.coo_matrix(b.mass_matrix(np.asarray(b.q0, dtype=float)))
             mass_blocks.append((block.row + off, block.col + off, block.data))
             add(family_for("constant mass"), (_momentum_layout(b), b, off))
-            try:
-                gam, c = b.mass_moment()
-                first_moment[id(b)] = ("linear", gam, c)
-            except NotImplementedError:
-                pass
+            if not python_only:
+                try:
+                    gam, c = b.mass_moment()
+                    first_moment[id(b)] = ("linear", gam, c)
+                except NotImplementedError:
+                    pass
+        else:
+            in_python("inertia", b, idx, "compiled=False" if python_only else
+                      "its mass matrix depends on q and it has no compiled_kernel_data()")
+        if b.has_potential:
+            strain = None if python_only else _call(b, "compiled_strain_data")
             if strain is not None:
                 add(family_for("exact beam"), (strain, b, off))
-            continue
-        python.append((b, "its mass matrix depends on q but it has no compiled_kernel_data()"
-                       if not b.constant_mass else "its strain energy has no compiled_strain_data()"))
+            else:
+                in_python("potential", b, idx, "compiled=False" if python_only else
+                          "its strain energy has no compiled_strain_data()")
     for f, idx in scene.conservative_forces + scene.loads:
-        form = _call(f, "compiled_form")
+        form = None if python_only else _call(f, "compiled_form")
         mod = family_for(form[0]) if form is not None else None
         if form is not None and form[0] == "gravity":
             for b in (f.bodies if f.bodies is not None else scene.bodies):
                 if id(b) in first_moment:
                     add(mod, ((first_moment[id(b)], np.asarray(form[1], dtype=float)), b, packer.block(b)))
                 else:
-                    python.append((f, f"body {b.name!r} gives no first moment of its mass"))
+                    off, nb = packer.block(b)
+                    in_python("gravity", b, (np.arange(off, off + nb), np.asarray(form[1], dtype=float)),
+                              f"body {b.name!r} gives no first moment of its mass")
         elif mod is not None:
             add(mod, (form, f, idx))
         else:
-            python.append((f, "it has no compiled form" if form is None else f"no family packs {form[0]!r}"))
+            in_python("force", f, np.asarray(idx), "compiled=False" if python_only else
+                      ("it has no compiled form" if form is None else f"no family packs {form[0]!r}"))
     for c, (idx, rows) in zip(scene.constraints, scene.constraint_layout):
-        form = _call(c, "compiled_form")
-        if form is None:
-            python.append((c, "it has no compiled form"))
+        form = None if python_only else _call(c, "compiled_form")
+        blocks = [] if form is None else (form[1] if form[0] == "rows" else [(form, None)])
+        mods = [family_for(term[0]) for term, _ in blocks]
+        if form is None or any(m_ is None for m_ in mods):
+            in_python("constraint", c, (np.asarray(idx), int(rows[0])), "compiled=False" if python_only else
+                      ("it has no compiled form" if form is None else "a block of it has no family"))
             continue
-        blocks = form[1] if form[0] == "rows" else [(form, None)]
         r = int(rows[0])
-        for term, law in blocks:
-            mod = family_for(term[0])
-            if mod is None:
-                python.append((c, f"no family packs its block {term[0]!r}"))
-                break
+        for (term, law), mod in zip(blocks, mods):
             add(mod, ((term, law), c, (np.asarray(idx), r)))
             r += mod.row_count(term)
     packs = []
@@ -246,7 +262,7 @@ def _pack(scene):
         free=free, pres=np.asarray(scene.prescribed_index, dtype=np.int64), fpos=fpos,
         cayley=np.asarray(scene.cayley_index, dtype=np.int64), pres_cols=np.asarray(pres_cols, dtype=np.int64),
         probe_names=probe_names, probe_maps=np.asarray(probe_maps, dtype=np.int64), storage=DENSE,
-        pattern=None, solver="dense", plan=None, python_elements=python, m=int(scene.n_constraints),
+        pattern=None, solver="dense", plan=None, python_elements=reasons, m=int(scene.n_constraints),
         rheonomic=any(getattr(c, "rheonomic", False) for c in scene.constraints))
     _plan(packed, scene, packs)
     return packed

@@ -16,6 +16,7 @@ process).
 from __future__ import annotations
 
 import logging
+import os
 import sys
 import threading
 import time
@@ -24,13 +25,15 @@ from numba.core.ccallback import CFunc
 
 from .abi import KERNEL_SIGNATURE
 
-__all__ = ["compiled_kernel", "compiled_function", "compile_seconds", "compiled_names", "LOGGER"]
+__all__ = ["compiled_kernel", "compiled_function", "compile_seconds", "compiled_names", "set_interrupt_check",
+           "LOGGER"]
 
 #: the package's logger for compile notices (INFO; ``logging.getLogger("skfem_flex").setLevel(logging.WARNING)``
 #: or ``SKFEM_FLEX_QUIET=1`` silences it)
 LOGGER = logging.getLogger("skfem_flex")
 
 _KERNELS = {}
+_INTERRUPT = [None]
 _FUNCTIONS = {}
 _SECONDS = [0.0]
 _NAMES = []
@@ -39,6 +42,12 @@ _NAMES = []
 def compile_seconds():
     """Seconds spent compiling in this process so far."""
     return _SECONDS[0]
+
+
+def set_interrupt_check(check):
+    """While a compile runs, ``check()`` is polled every 0.1 s; when it returns a signal number the wait ends
+    with :class:`~skfem_flex.errors.Interrupted` (None: no check)."""
+    _INTERRUPT[0] = check
 
 
 def compiled_names():
@@ -59,6 +68,13 @@ def _in_thread(work, what):
     thread.start()
     while thread.is_alive():
         thread.join(0.1)
+        check = _INTERRUPT[0]
+        signum = check() if check is not None else None
+        if signum is not None:
+            import signal
+            from ..errors import Interrupted
+            LOGGER.info("interrupted while compiling %s; stopping", what)
+            raise Interrupted(f"interrupted by {signal.Signals(signum).name} while compiling {what}", signal=signum)
     if "error" in box:
         raise box["error"]
     return box.get("value")
@@ -124,7 +140,8 @@ def _default_handler():
     handler._skfem_flex = True
     LOGGER.addHandler(handler)
     if LOGGER.level == logging.NOTSET:
-        LOGGER.setLevel(logging.INFO)
+        quiet = os.environ.get("SKFEM_FLEX_QUIET", "").strip() not in ("", "0")
+        LOGGER.setLevel(logging.WARNING if quiet else logging.INFO)
     LOGGER.propagate = False
 
 

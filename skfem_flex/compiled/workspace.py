@@ -27,6 +27,8 @@ class Workspace:
     scene : Scene
     settings : NewtonSettings
         Tolerances copied into the context.
+    python_only : bool
+        Every element through its own Python methods (``simulate(..., compiled=False)``).
 
     Attributes
     ----------
@@ -35,8 +37,8 @@ class Workspace:
     packed : PackedScene
     """
 
-    def __init__(self, scene, settings):
-        pk = self.packed = packed_scene(scene)
+    def __init__(self, scene, settings, python_only=False):
+        pk = self.packed = packed_scene(scene, python_only)
         n, m, nf = scene.n, pk.m, pk.free.size
         nx = nf + m
         self.scene = scene

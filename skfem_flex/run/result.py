@@ -68,6 +68,10 @@ class Result:
     compile_time : float
         Seconds spent compiling the Numba kernels on a first run (a cold cache); not part of
         ``wall_time``.
+    run_path : dict or None
+        Which code ran: ``loop`` ("compiled"), the linear ``solver`` and matrix ``storage``, and
+        ``python_elements``: each element that ran through its own Python methods and why (no compiled
+        form; ``compiled=False``).
     final_state : dict or None
         What the integrator carries from one step to the next at the last step done: ``t``,
         ``q``, ``v``, ``acc``, ``pseudo`` (generalized-α), ``lam``, ``prescribed_force``, the
@@ -100,6 +104,7 @@ class Result:
     stopped: str = ""
     compile_time: float = 0.0
     final_state: dict = None
+    run_path: dict = None
 
     @property
     def energy_balance_error(self):

@@ -12,13 +12,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 import scipy.sparse as sps
 
 from ..compiled import solvers
 from ..compiled.abi import FAMILY, Fields
-from ..compiled.loop import DERIVED, NewtonArrays, Records, evaluate_once, run_steps, start_state
+from ..compiled.loop import DERIVED, NewtonArrays, Records, evaluate_once, record_at, run_steps, start_state
 from ..compiled.pack import time_table
+from ..compiled.registry import compiled_function
 from ..compiled.storage import DENSE
 from ..compiled.tasks import PHASE_EVALUATE, PHASE_PREDICT, STATUS_MISSED, STATUS_OK, STATUS_PYTHON_ERROR
 from ..compiled.workspace import Workspace
@@ -38,6 +40,12 @@ class Chunk:
     records: Records
 
 
+def _call(fn, what, *args):
+    """``fn(*args)``, compiled first (with a notice) if the cache does not hold it for these argument types."""
+    compiled_function(fn, tuple(numba.typeof(a) for a in args), what)
+    return fn(*args)
+
+
 def _plan_fields(packed):
     if packed.plan is None:
         z = np.zeros(1, dtype=np.int64)
@@ -50,9 +58,9 @@ def _plan_fields(packed):
 class Stepper:
     """The compiled run of ``scene`` under ``scheme`` (a scheme object of :mod:`skfem_flex.schemes`)."""
 
-    def __init__(self, scene, scheme):
+    def __init__(self, scene, scheme, python_only=False):
         self.scene, self.scheme = scene, scheme
-        self.ws = Workspace(scene, scheme.newton)
+        self.ws = Workspace(scene, scheme.newton, python_only)
         pk = self.packed = self.ws.packed
         kernel = {"dense": solvers.dense_solver, "bordered band": solvers.bordered_band_solver,
                   "bordered band (CSR)": solvers.csr_bordered_band_solver}.get(pk.solver)
@@ -95,7 +103,7 @@ class Stepper:
         rec = np.zeros(1, dtype=FAMILY)
         rec[0] = data.record(start_kernel().address, -1, 0)
         table = time_table(pk.columns, float(t), np.zeros(0), False)
-        ok = start_state(self.ws.ctx, rec, self.solver, table)
+        ok = _call(start_state, "the consistent start", self.ws.ctx, rec, self.solver, table, float(t))
         self._check_status()
         if not ok:
             raise ValueError("the initial mass/constraint matrix is singular: a coordinate has no inertia, or "
@@ -112,18 +120,37 @@ class Stepper:
             self.ws.bind_state(self.data)
         return acc, lam, reaction
 
+    def _records(self, nr):
+        pk, n, m = self.packed, self.scene.n, self.packed.m
+        return Records(np.zeros(nr), np.zeros((nr, n)), np.zeros((nr, n)), np.zeros((nr, m)), np.zeros(nr),
+                       np.zeros(nr, dtype=np.int64), np.zeros((nr, pk.pres.size)), np.zeros((nr, len(DERIVED))),
+                       np.zeros((nr, pk.probe_maps.size, 3)), pk.probe_maps)
+
+    def record_now(self, t):
+        """One record (:class:`~skfem_flex.compiled.loop.Records`) of the loaded state at time t."""
+        pk = self.packed
+        records = self._records(1)
+        table = time_table(pk.columns, float(t), np.zeros(0), False)
+        self.ws.vectors["q1"][:self.scene.n] = self.data.array("q")
+        self.ws.vectors["v1"][:self.scene.n] = self.data.array("v")
+        _call(record_at, "the recorder", self.ws.ctx, records, float(t), table)
+        self._check_status()
+        return records
+
+    def raise_python_error(self):
+        """Raise what a Python element raised in the last call, if anything."""
+        from ..compiled.families import python_elements
+        python_elements.raise_pending()
+
     def advance(self, t0, hs, recorded, max_iterations, line_search):
         """Steps of sizes ``hs`` from time t0 (the loaded state); ``recorded[k]``: record step k."""
-        pk, n, m = self.packed, self.scene.n, self.packed.m
+        pk = self.packed
         hs = np.ascontiguousarray(hs, dtype=float)
         table = time_table(pk.columns, float(t0), hs, self.scheme.mid_point_loads)
-        nr = int(np.count_nonzero(recorded))
-        records = Records(np.zeros(nr), np.zeros((nr, n)), np.zeros((nr, n)), np.zeros((nr, m)), np.zeros(nr),
-                          np.zeros(nr, dtype=np.int64), np.zeros((nr, pk.pres.size)), np.zeros((nr, len(DERIVED))),
-                          np.zeros((nr, pk.probe_maps.size, 3)), pk.probe_maps)
-        status, steps, n_rec, its = run_steps(self.ws.ctx, self.record, self.solver, hs, float(t0),
-                                              np.ascontiguousarray(recorded, dtype=np.bool_), records, self.newton,
-                                              int(max_iterations), bool(line_search), table)
+        records = self._records(int(np.count_nonzero(recorded)))
+        status, steps, n_rec, its = _call(run_steps, "the time loop", self.ws.ctx, self.record, self.solver, hs,
+                                          float(t0), np.ascontiguousarray(recorded, dtype=np.bool_), records,
+                                          self.newton, int(max_iterations), bool(line_search), table)
         self._check_status()
         return Chunk(int(status), int(steps), int(n_rec), int(its), records)
 
@@ -136,7 +163,7 @@ class Stepper:
         c["h"], c["t"] = float(h), float(t0)
         c["trow"] = table.ctypes.data + 8 * c["ncol"]
         c["status"], c["bad_family"] = STATUS_OK, -1
-        evaluate_once(self.ws.ctx, self.record, PHASE_PREDICT)          # the step's settings (and its start)
+        _call(evaluate_once, "the single evaluation", self.ws.ctx, self.record, PHASE_PREDICT)   # the step's settings
         self.newton.x_try[:] = x
         evaluate_once(self.ws.ctx, self.record, PHASE_EVALUATE)
         self._check_status()
@@ -153,8 +180,7 @@ class Stepper:
     def _check_status(self):
         c = self.ws.ctx[0]
         if c["status"] == STATUS_PYTHON_ERROR:
-            from ..compiled.families import python_elements
-            python_elements.raise_pending()
+            self.raise_python_error()
         if c["status"] == STATUS_MISSED:
             raise AssertionError(f"the {self.ws.family_name(int(c['bad_family']))} family wrote an entry outside "
                                  f"the Newton matrix's pattern (a bug: please report it)")

@@ -132,6 +132,7 @@ def _predict(ctx, s):
     ctx.q0, ctx.v0 = s.q.ctypes.data, s.v.ctypes.data
     ctx.qa, ctx.qb = ctx.q0, ctx.q1
     ctx.qe, ctx.ve = s.qm.ctypes.data, s.vm.ctypes.data
+    ctx.te, ctx.t1 = ctx.t + 0.5 * h, ctx.t + h
 
 
 @numba.njit(cache=True)

@@ -86,6 +86,7 @@ def _settings(ctx, s, c_a, c_v, rows):
     ctx.c_dg, ctx.dq1, ctx.da1, ctx.dqe, ctx.c_v = 2.0, 1.0, c_a, 1.0, c_v
     ctx.q0, ctx.v0 = s.q.ctypes.data, s.v.ctypes.data
     ctx.qa, ctx.qb, ctx.qe, ctx.ve = ctx.q1, ctx.q1, ctx.q1, ctx.v1
+    ctx.te = ctx.t1 = ctx.t + h
     dv1, dve = fvec(ctx.dv1, n), fvec(ctx.dve, n)
     for i in range(n):
         dv1[i] = c_v
@@ -96,9 +97,12 @@ def _settings(ctx, s, c_a, c_v, rows):
 def _loads_at_start(ctx, s):
     """Loads and Φ_t at the state (the work of the first step of a chunk uses both ends)."""
     n, m = ctx.n, ctx.m
-    q1, v1 = ctx.q1, ctx.v1
+    q1, v1, trow, te, t1 = ctx.q1, ctx.v1, ctx.trow, ctx.te, ctx.t1
     ctx.qe, ctx.ve = s.q.ctypes.data, s.v.ctypes.data
     ctx.q1, ctx.v1 = ctx.qe, ctx.ve
+    # the table row before the step's is the one at the state's time (row 0 of a chunk: its start)
+    ctx.trow = trow - 8 * ctx.ncol
+    ctx.te = ctx.t1 = ctx.t
     ext = fvec(ctx.ext, n)
     for i in range(n):
         ext[i] = 0.0
@@ -110,7 +114,7 @@ def _loads_at_start(ctx, s):
         call_families(ctx, TASK_ROWS)
         for i in range(m):
             s.phit0[i] = phit[i]
-    ctx.q1, ctx.v1 = q1, v1
+    ctx.q1, ctx.v1, ctx.trow, ctx.te, ctx.t1 = q1, v1, trow, te, t1
     s.work[1] = 1.0
 
 
@@ -294,6 +298,7 @@ def _start(ctx, s):
     ctx.h = 1.0
     _settings(ctx, s, 1.0, 0.0, ROWS_ACCELERATION)
     ctx.dq1, ctx.da1, ctx.dqe = 0.0, 1.0, 0.0
+    ctx.te = ctx.t1 = ctx.t
     _assemble(ctx, s, q1, v1, a1)
     if ctx.status != STATUS_OK:
         return

@@ -1,0 +1,95 @@
+"""The divergence rule: a run stops, with a DivergenceError, when its state leaves every sane bound."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import DivergenceError
+
+__all__ = ["DivergenceGuard", "DIVERGENCE_FACTOR"]
+
+
+#: a run is diverged when a coordinate exceeds this many times the scene's size, or the energy this
+#: many times its initial scale plus the work done
+DIVERGENCE_FACTOR = 1e6
+#: recorded states over which the energy scale of the divergence rule is taken
+_SCALE_RECORDS = 10
+
+
+class DivergenceGuard:
+    """Stops runs whose solution left every sane bound (DivergenceError, "diverged at t = …").
+
+    * a coordinate or velocity is not finite;
+    * a coordinate exceeds 10⁶ × max(scene size, largest initial coordinate, 1) — lengths in m,
+      angles in rad (a body spinning at 10 rad/s needs 10⁵ s to reach it);
+    * |T + V| exceeds 10⁶ × (E_s + max |W|), W the work done so far and E_s the largest |T| + |V|
+      of the first :data:`_SCALE_RECORDS` recorded states (the scale a run released from rest
+      establishes in its first steps; energy-conserving schemes keep T + V = E₀ + W, so this
+      catches the others).
+    """
+
+    def __init__(self, scene, q0, kinetic, potential, work):
+        """``q0``: the first recorded coordinates; ``kinetic``, ``potential``, ``work``: the records so far
+        (J; at least one)."""
+        q0 = np.asarray(q0, dtype=float)
+        size = max(float(scene.length_scale), float(np.max(np.abs(q0), initial=0.0)), 1.0)
+        self.q_bound = DIVERGENCE_FACTOR * size
+        kinetic, potential = np.asarray(kinetic, dtype=float), np.asarray(potential, dtype=float)
+        self.e_scale = float(np.max(np.abs(kinetic[:_SCALE_RECORDS]) + np.abs(potential[:_SCALE_RECORDS])))
+        self.w_max = float(np.max(np.abs(np.asarray(work, dtype=float)), initial=0.0))
+        self.count = kinetic.size
+
+    def check_state(self, state):
+        if not (np.all(np.isfinite(state.q)) and np.all(np.isfinite(state.v))):
+            raise DivergenceError(f"diverged at t = {state.t:.6g} s: the state is not finite")
+        big = float(np.max(np.abs(state.q), initial=0.0))
+        if big > self.q_bound:
+            raise DivergenceError(f"diverged at t = {state.t:.6g} s: a coordinate reached {big:.3g}, more than "
+                                  f"{DIVERGENCE_FACTOR:.0e} times the scene's size ({self.q_bound / DIVERGENCE_FACTOR:.3g})")
+
+    def first_energy_violation(self, t, kinetic, potential, work):
+        """Index of the first record of a compiled block (not yet stored) at which :meth:`check_energy`
+        would stop the run, or None; the guard's energy scale and work bound advance over the
+        records before it (then store the block up to that record and call :meth:`check_energy`)."""
+        first = self.count                                     # index of the block's first record
+        n_early = min(t.size, max(0, _SCALE_RECORDS - first))  # these still set the scale: in order
+        for i in range(n_early):
+            w_max = max(self.w_max, abs(work[i]))
+            e_scale = max(self.e_scale, abs(kinetic[i]) + abs(potential[i]))
+            if self._violated(kinetic[i] + potential[i], e_scale + w_max):
+                return i
+            self.w_max, self.e_scale = w_max, e_scale
+            self.count += 1
+        if n_early == t.size:
+            return None
+        w_max = np.maximum.accumulate(np.fmax(np.abs(work[n_early:]), self.w_max))
+        energy = kinetic[n_early:] + potential[n_early:]
+        scale = self.e_scale + w_max
+        bad = ~np.isfinite(energy) | ((scale > 0) & (np.abs(energy) > DIVERGENCE_FACTOR * scale))
+        if bad.any():
+            i = int(np.argmax(bad))
+            if i:
+                self.w_max = float(w_max[i - 1])
+            self.count += i
+            return n_early + i
+        self.w_max = float(w_max[-1])
+        self.count += t.size - n_early
+        return None
+
+    @staticmethod
+    def _violated(energy, scale):
+        return not math.isfinite(energy) or (scale > 0 and abs(energy) > DIVERGENCE_FACTOR * scale)
+
+    def check_energy(self, t, kinetic, potential, work):
+        """The energy rule at the next record: time ``t`` (s), kinetic and potential energy and the
+        work done so far (J)."""
+        self.count += 1
+        self.w_max = max(self.w_max, abs(work))
+        energy = kinetic + potential
+        if self.count <= _SCALE_RECORDS:
+            self.e_scale = max(self.e_scale, abs(kinetic) + abs(potential))
+        scale = self.e_scale + self.w_max
+        if self._violated(energy, scale):
+            raise DivergenceError(f"diverged at t = {t:.6g} s: energy {energy:.3g} J against an initial energy "
+                                  f"scale plus work done of {scale:.3g} J")
