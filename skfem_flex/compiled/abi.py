@@ -28,8 +28,8 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 from numba.np.arrayobj import make_array, populate_array
 
-__all__ = ["CONTEXT", "CONTEXT_FIELDS", "FAMILY", "FAMILY_SIZE", "KERNEL_SIGNATURE", "call", "call_families", "fvec",
-           "fmat", "ivec", "imat", "context_of", "context_at", "family_of", "family_at", "Fields", "f1", "f2", "f3",
+__all__ = ["CONTEXT", "CONTEXT_FIELDS", "FAMILY", "FAMILY_SIZE", "KERNEL_SIGNATURE", "call", "call_pointers", "call_families", "fvec",
+           "fmat", "ivec", "i32vec", "imat", "context_of", "context_at", "family_of", "family_at", "Fields", "f1", "f2", "f3",
            "i1", "i2"]
 
 
@@ -115,6 +115,22 @@ def call(typingctx, kernel, ctx_address, fam_address):
     return sig, codegen
 
 
+@intrinsic
+def call_pointers(typingctx, function, addresses):
+    """Call the C or Fortran function at ``function`` with the pointers in the tuple ``addresses`` (int64
+    each; LAPACK takes every argument by reference)."""
+    sig = types.void(function, addresses)
+    count = len(addresses)
+
+    def codegen(context, builder, signature, llargs):
+        i8p = ir.IntType(8).as_pointer()
+        values = cgutils.unpack_tuple(builder, llargs[1], count)
+        fnty = ir.FunctionType(ir.VoidType(), [i8p] * count)
+        builder.call(builder.inttoptr(llargs[0], fnty.as_pointer()), [builder.inttoptr(v, i8p) for v in values])
+        return context.get_dummy_value()
+    return sig, codegen
+
+
 @numba.njit(cache=True)
 def call_families(ctx, task):
     """Ask every family of the scene to do ``task`` (ctx: the context record)."""
@@ -162,6 +178,13 @@ def fmat(typingctx, address, n, m):
 def ivec(typingctx, address, n):
     """The int64 array of length n at ``address``."""
     aryty = types.Array(types.int64, 1, "C")
+    return aryty(address, n), lambda c, b, s, a: _array_value(c, b, aryty, a[0], a[1:])
+
+
+@intrinsic
+def i32vec(typingctx, address, n):
+    """The int32 array of length n at ``address`` (Fortran integers for LAPACK)."""
+    aryty = types.Array(types.int32, 1, "C")
     return aryty(address, n), lambda c, b, s, a: _array_value(c, b, aryty, a[0], a[1:])
 
 

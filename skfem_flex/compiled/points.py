@@ -22,34 +22,34 @@ import numba
 import numpy as np
 
 from ..numerics.rotations import sinc_half
-from .abi import f1, f2, i1
+from .abi import f1, f2, i2
 
-__all__ = ["LINEAR", "FRAME", "MapData", "MapStore", "maps_view", "position_into", "jacobian_into",
+__all__ = ["LINEAR", "FRAME", "KIND", "OFF", "NB", "GPTR", "YPTR", "M_R", "CX", "CY", "Y0X", "Y0Y", "MapData", "MapStore", "maps_view", "position_into", "jacobian_into",
            "dgrad_into", "dgrad_jacobian_parts", "frame_offset", "hessian_parts", "velocity_jacobian_into"]
 
 LINEAR, FRAME = 0, 1
 
 
+#: columns of MapData.ints: kind (LINEAR, FRAME), offset and size of the body's block, where its G and Y start
+KIND, OFF, NB, GPTR, YPTR = range(5)
+#: columns of MapData.floats: m_R, c (2), y₀ (2)
+M_R, CX, CY, Y0X, Y0Y = range(5)
+
+
 class MapData(NamedTuple):
-    """Every map of a scene (k maps): kind, body block offset and size, m_R, c (k, 2), y₀ (k, 2), the
-    flattened G (2 × n_b each, at gptr[k]) and Y (2 × (n_b − 3) each, at yptr[k])."""
-    kind: np.ndarray
-    off: np.ndarray
-    nb: np.ndarray
-    m_r: np.ndarray
-    c: np.ndarray
-    y0: np.ndarray
+    """Every map of a scene (k maps): per map the integers (k, 5) and floats (k, 5) named by the column
+    constants above, and the flattened G (2 × n_b each, from ints[k, GPTR]) and Y (2 × (n_b − 3) each, from
+    ints[k, YPTR])."""
+    ints: np.ndarray
+    floats: np.ndarray
     gdat: np.ndarray
-    gptr: np.ndarray
     ydat: np.ndarray
-    yptr: np.ndarray
 
 
 @numba.njit(cache=True, _nrt=False)
 def maps_view(fam):
-    """The :class:`MapData` of a maps record."""
-    return MapData(i1(fam, 0), i1(fam, 1), i1(fam, 2), f1(fam, 3), f2(fam, 4), f2(fam, 5), f1(fam, 6), i1(fam, 7),
-                   f1(fam, 8), i1(fam, 9))
+    """The :class:`MapData` of a maps record (build it once per kernel call and pass it on)."""
+    return MapData(i2(fam, 0), f2(fam, 1), f1(fam, 2), f1(fam, 3))
 
 
 class MapStore:
@@ -94,22 +94,19 @@ class MapStore:
         return off + cols.astype(np.int64)
 
     def data(self):
-        k = len(self.rows)
-        col = list(zip(*self.rows)) if k else [()] * 8
-        return MapData(np.asarray(col[0], dtype=np.int64), np.asarray(col[1], dtype=np.int64),
-                       np.asarray(col[2], dtype=np.int64), np.asarray(col[3], dtype=float),
-                       np.asarray(col[4], dtype=float).reshape(k, 2), np.asarray(col[5], dtype=float).reshape(k, 2),
-                       np.concatenate(self.g + [np.zeros(1)]), np.asarray(col[6], dtype=np.int64),
-                       np.concatenate(self.y + [np.zeros(1)]), np.asarray(col[7], dtype=np.int64))
+        ints = np.array([(kind, off, nb, gp, yp) for kind, off, nb, _, _, _, gp, yp in self.rows],
+                        dtype=np.int64).reshape(-1, 5)
+        floats = np.array([(m_r, c[0], c[1], y0[0], y0[1]) for _, _, _, m_r, c, y0, _, _ in self.rows],
+                          dtype=float).reshape(-1, 5)
+        return MapData(ints, floats, np.concatenate(self.g + [np.zeros(1)]), np.concatenate(self.y + [np.zeros(1)]))
 
 
 @numba.njit(cache=True, _nrt=False)
-def frame_offset(mrec, k, qa, qb):
+def frame_offset(maps, k, qa, qb):
     """(s_x, s_y) = y₀ + Y (q_a,f + q_b,f)/2 of FRAME map k (q_a = q_b: at that state, exactly)."""
-    maps = maps_view(mrec)
-    ne = maps.nb[k] - 3
-    y = maps.yptr[k]
-    sx, sy = maps.y0[k, 0], maps.y0[k, 1]
+    ne = maps.ints[k, NB] - 3
+    y = maps.ints[k, YPTR]
+    sx, sy = maps.floats[k, Y0X], maps.floats[k, Y0Y]
     for j in range(ne):
         qm = 0.5 * (qa[3 + j] + qb[3 + j])
         sx += maps.ydat[y + j] * qm
@@ -118,38 +115,36 @@ def frame_offset(mrec, k, qa, qb):
 
 
 @numba.njit(cache=True, _nrt=False)
-def position_into(mrec, k, q, out):
+def position_into(maps, k, q, out):
     """out[0:2] = r(q) of map k, m."""
-    maps = maps_view(mrec)
-    if maps.kind[k] == LINEAR:
-        n, g0 = maps.nb[k], maps.gptr[k]
+    if maps.ints[k, KIND] == LINEAR:
+        n, g0 = maps.ints[k, NB], maps.ints[k, GPTR]
         for a in range(2):
-            s = maps.c[k, a]
+            s = maps.floats[k, CX + a]
             for j in range(n):
                 s += maps.gdat[g0 + a * n + j] * q[j]
             out[a] = s
         return
-    sx, sy = frame_offset(mrec, k, q, q)
+    sx, sy = frame_offset(maps, k, q, q)
     C, S = np.cos(q[2]), np.sin(q[2])
-    out[0] = maps.m_r[k] * q[0] + C * sx - S * sy
-    out[1] = maps.m_r[k] * q[1] + S * sx + C * sy
+    out[0] = maps.floats[k, M_R] * q[0] + C * sx - S * sy
+    out[1] = maps.floats[k, M_R] * q[1] + S * sx + C * sy
 
 
 @numba.njit(cache=True, _nrt=False)
-def jacobian_into(mrec, k, q, out):
+def jacobian_into(maps, k, q, out):
     """out[:, :n_b] = ∂r/∂q of map k."""
-    maps = maps_view(mrec)
-    n = maps.nb[k]
-    if maps.kind[k] == LINEAR:
-        g0 = maps.gptr[k]
+    n = maps.ints[k, NB]
+    if maps.ints[k, KIND] == LINEAR:
+        g0 = maps.ints[k, GPTR]
         for a in range(2):
             for j in range(n):
                 out[a, j] = maps.gdat[g0 + a * n + j]
         return
-    ne, y = n - 3, maps.yptr[k]
-    sx, sy = frame_offset(mrec, k, q, q)
+    ne, y = n - 3, maps.ints[k, YPTR]
+    sx, sy = frame_offset(maps, k, q, q)
     C, S = np.cos(q[2]), np.sin(q[2])
-    out[0, 0] = out[1, 1] = maps.m_r[k]
+    out[0, 0] = out[1, 1] = maps.floats[k, M_R]
     out[0, 1] = out[1, 0] = 0.0
     out[0, 2] = -S * sx - C * sy            # A E s, E = [[0, −1], [1, 0]]
     out[1, 2] = C * sx - S * sy
@@ -160,20 +155,19 @@ def jacobian_into(mrec, k, q, out):
 
 
 @numba.njit(cache=True, _nrt=False)
-def dgrad_into(mrec, k, q0, q1, out):
+def dgrad_into(maps, k, q0, q1, out):
     """out[:, :n_b] = the exact discrete gradient D of map k: D (q₁ − q₀) = r(q₁) − r(q₀)."""
-    maps = maps_view(mrec)
-    if maps.kind[k] == LINEAR:
-        jacobian_into(mrec, k, q0, out)
+    if maps.ints[k, KIND] == LINEAR:
+        jacobian_into(maps, k, q0, out)
         return
-    n = maps.nb[k]
-    ne, y = n - 3, maps.yptr[k]
+    n = maps.ints[k, NB]
+    ne, y = n - 3, maps.ints[k, YPTR]
     half = 0.5 * (q1[2] - q0[2])
     tm = q0[2] + half
     C, S = np.cos(tm), np.sin(tm)
     sig, kap = sinc_half(q1[2] - q0[2])[0], np.cos(half)
-    sx, sy = frame_offset(mrec, k, q0, q1)
-    out[0, 0] = out[1, 1] = maps.m_r[k]
+    sx, sy = frame_offset(maps, k, q0, q1)
+    out[0, 0] = out[1, 1] = maps.floats[k, M_R]
     out[0, 1] = out[1, 0] = 0.0
     out[0, 2] = sig * (-S * sx - C * sy)
     out[1, 2] = sig * (C * sx - S * sy)
@@ -184,17 +178,16 @@ def dgrad_into(mrec, k, q0, q1, out):
 
 
 @numba.njit(cache=True, _nrt=False)
-def dgrad_jacobian_parts(mrec, k, q0, q1, f, row, col):
+def dgrad_jacobian_parts(maps, k, q0, q1, f, row, col):
     """The nonzero parts of ∂(Dᵀ f)/∂q₁ of a FRAME map (zero for LINEAR): the (θ, θ) entry (returned),
     the θ row over q_f (``row``) and the q_f rows of the θ column (``col``)."""
-    maps = maps_view(mrec)
-    ne, y = maps.nb[k] - 3, maps.yptr[k]
+    ne, y = maps.ints[k, NB] - 3, maps.ints[k, YPTR]
     half = 0.5 * (q1[2] - q0[2])
     tm = q0[2] + half
     C, S = np.cos(tm), np.sin(tm)
     sig, dsig = sinc_half(q1[2] - q0[2])
     kap, sn = np.cos(half), np.sin(half)
-    sx, sy = frame_offset(mrec, k, q0, q1)
+    sx, sy = frame_offset(maps, k, q0, q1)
     fax = f[0] * C + f[1] * S              # Aᵀ(θ_m) f
     fay = -f[0] * S + f[1] * C
     h22 = dsig * (-fax * sy + fay * sx) - 0.5 * sig * (fax * sx + fay * sy)
@@ -206,12 +199,11 @@ def dgrad_jacobian_parts(mrec, k, q0, q1, f, row, col):
 
 
 @numba.njit(cache=True, _nrt=False)
-def hessian_parts(mrec, k, q, f, row):
+def hessian_parts(maps, k, q, f, row):
     """The nonzero parts of ∂(r_qᵀ f)/∂q of a FRAME map (symmetric): the (θ, θ) entry −f·A s (returned)
     and the (θ, q_f) entries f·A E Y_j (``row``)."""
-    maps = maps_view(mrec)
-    ne, y = maps.nb[k] - 3, maps.yptr[k]
-    sx, sy = frame_offset(mrec, k, q, q)
+    ne, y = maps.ints[k, NB] - 3, maps.ints[k, YPTR]
+    sx, sy = frame_offset(maps, k, q, q)
     C, S = np.cos(q[2]), np.sin(q[2])
     fax = f[0] * C + f[1] * S
     fay = -f[0] * S + f[1] * C
@@ -221,18 +213,17 @@ def hessian_parts(mrec, k, q, f, row):
 
 
 @numba.njit(cache=True, _nrt=False)
-def velocity_jacobian_into(mrec, k, q, v, out):
+def velocity_jacobian_into(maps, k, q, v, out):
     """out[:, :n_b] = ∂(r_q v)/∂q of map k (zero for LINEAR): for FRAME only the θ and q_f columns,
     ∂/∂θ = −ω A s + A E Y v_f, ∂/∂q_f,j = ω A E Y_j."""
-    maps = maps_view(mrec)
-    n = maps.nb[k]
+    n = maps.ints[k, NB]
     for a in range(2):
         for j in range(n):
             out[a, j] = 0.0
-    if maps.kind[k] == LINEAR:
+    if maps.ints[k, KIND] == LINEAR:
         return
-    ne, y = n - 3, maps.yptr[k]
-    sx, sy = frame_offset(mrec, k, q, q)
+    ne, y = n - 3, maps.ints[k, YPTR]
+    sx, sy = frame_offset(maps, k, q, q)
     C, S = np.cos(q[2]), np.sin(q[2])
     w = v[2]
     # Y v_f

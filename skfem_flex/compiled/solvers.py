@@ -3,7 +3,8 @@ r"""Kernels that solve the Newton system J y = r of the loop (``ctx.res`` → ``
 Which one a scene gets is fixed once with its storage (:func:`skfem_flex.compiled.pack.plan_solver`):
 
 * ``dense``: the matrix stored dense: LU with partial pivoting written out for small systems (a call
-  to LAPACK costs more than the factorization below about 24 unknowns), LAPACK gesv above;
+  to LAPACK costs more than the factorization below about 24 unknowns), LAPACK getrf/getrs above (called
+  by address: :func:`lapack_address`, nothing of numba's linear algebra to compile);
 * ``bordered band``: stored dense, solved as a band with a dense border when the scene's pattern has
   such a plan (beams: frame coordinates and multipliers in the border), LAPACK if that solve is not
   backward stable (:func:`skfem_flex.numerics.linear_solver.bordered_band_solve`);
@@ -12,13 +13,15 @@ Which one a scene gets is fixed once with its storage (:func:`skfem_flex.compile
 """
 from __future__ import annotations
 
+import ctypes
 from typing import NamedTuple
 
 import numba
 import numpy as np
+from scipy.linalg import cython_lapack
 
 from ..numerics.linear_solver import bordered_band_solve, bordered_band_solve_csr
-from .abi import context_of, family_of, fmat, fvec, i1, ivec
+from .abi import call_pointers, context_of, family_of, fmat, fvec, i1, i32vec, ivec
 from .registry import compiled_kernel
 
 __all__ = ["SolverPlan", "dense_solver", "bordered_band_solver", "csr_bordered_band_solver", "SMALL_DENSE"]
@@ -29,20 +32,39 @@ SMALL_DENSE = 24
 
 class SolverPlan(NamedTuple):
     """A band-with-border plan (:func:`~skfem_flex.numerics.linear_solver.dense_bordered_plan`): interior
-    coordinates in band order, border coordinates, and (lower, upper) bandwidth."""
+    coordinates in band order, border coordinates, (lower, upper) bandwidth; and the addresses of LAPACK's
+    dgetrf and dgetrs and of an int32 work array of nx + 8 entries (:func:`lapack_work`)."""
     interior: np.ndarray
     border: np.ndarray
     bands: np.ndarray
+    lapack: np.ndarray
 
 
 @numba.njit(cache=True)
 def _view(fam):
-    return SolverPlan(i1(fam, 0), i1(fam, 1), i1(fam, 2))
+    return SolverPlan(i1(fam, 0), i1(fam, 1), i1(fam, 2), i1(fam, 3))
 
 
-@numba.njit(cache=True)
+def lapack_address(name):
+    """The address of LAPACK's routine ``name`` (scipy's, as its Cython interface exports it)."""
+    cap = cython_lapack.__pyx_capi__[name]
+    api = ctypes.pythonapi
+    api.PyCapsule_GetName.restype = ctypes.c_char_p
+    api.PyCapsule_GetName.argtypes = [ctypes.py_object]
+    api.PyCapsule_GetPointer.restype = ctypes.c_void_p
+    api.PyCapsule_GetPointer.argtypes = [ctypes.py_object, ctypes.c_char_p]
+    return api.PyCapsule_GetPointer(cap, api.PyCapsule_GetName(cap))
+
+
+def lapack_work(nx):
+    """(int32 work array, the ``lapack`` field of a SolverPlan) for a system of nx unknowns."""
+    work = np.zeros(nx + 8, dtype=np.int32)
+    return work, np.array([lapack_address("dgetrf"), lapack_address("dgetrs"), work.ctypes.data], dtype=np.int64)
+
+
+@numba.njit(cache=True, _nrt=False)
 def small_lu_solve(a, b, x):
-    """Solve a x = b in place by LU with partial pivoting (``a`` (n, n) and ``b`` are overwritten);
+    """Solve a x = b by LU with partial pivoting (``a`` (n, n) and ``b`` are overwritten; x may be b);
     False if a pivot is zero or not finite."""
     n = b.size
     for k in range(n):
@@ -75,30 +97,41 @@ def small_lu_solve(a, b, x):
     return True
 
 
-@numba.njit(cache=True)
-def _dense(ctx, a, res, y):
-    """The dense solve of (a, res) into y; the matrix is destroyed when small."""
+@numba.njit(cache=True, _nrt=False)
+def _lapack_solve(lapack, a, y):
+    """y ← a⁻¹ y by LAPACK (dgetrf, dgetrs) for the row-major ``a`` (destroyed): Fortran sees aᵀ, so the
+    solve is done with its transpose ('T'); True if it succeeded."""
+    n = y.size
+    w = i32vec(lapack[2], n + 8)
+    w[0], w[1], w[2], w[3], w[4] = n, 1, n, 0, 84           # n, nrhs, lda, info, 'T'
+    d = lapack[2]
+    call_pointers(lapack[0], (d, d, a.ctypes.data, d + 8, d + 32, d + 12))
+    if w[3] != 0:
+        return False
+    call_pointers(lapack[1], (d + 16, d, d + 4, a.ctypes.data, d + 8, d + 32, y.ctypes.data, d + 8, d + 12))
+    return w[3] == 0
+
+
+@numba.njit(cache=True, _nrt=False)
+def _dense(ctx, a, res, y, lapack):
+    """The dense solve of (a, res) into y; the matrix is destroyed."""
     nx = res.size
-    if nx <= SMALL_DENSE:
-        b = np.empty(nx)
-        for i in range(nx):
-            b[i] = res[i]
-        ctx.regular = 1 if small_lu_solve(a, b, y) else 0
-        return
-    try:
-        x = np.linalg.solve(a, res)
-    except Exception:                  # singular: numba raises LinAlgError
-        ctx.regular = 0
-        return
     for i in range(nx):
-        y[i] = x[i]
-    ctx.regular = 1
+        y[i] = res[i]
+    if nx <= SMALL_DENSE:
+        ok = small_lu_solve(a, y, y)
+    else:
+        ok = _lapack_solve(lapack, a, y)
+        for i in range(nx):
+            if not np.isfinite(y[i]):
+                ok = False
+    ctx.regular = 1 if ok else 0
 
 
 def _dense_kernel(ctx_p, fam_p):
     ctx = context_of(ctx_p)
     nx = ctx.nx
-    _dense(ctx, fmat(ctx.mat, nx, nx), fvec(ctx.res, nx), fvec(ctx.y, nx))
+    _dense(ctx, fmat(ctx.mat, nx, nx), fvec(ctx.res, nx), fvec(ctx.y, nx), _view(family_of(fam_p)).lapack)
 
 
 @numba.njit(cache=True)
@@ -111,7 +144,7 @@ def _bordered(ctx, plan):
             y[i] = x[i]
         ctx.regular = 1
         return
-    _dense(ctx, a, res, y)
+    _dense(ctx, a, res, y, plan.lapack)
 
 
 def _bordered_kernel(ctx_p, fam_p):

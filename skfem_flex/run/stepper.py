@@ -40,19 +40,25 @@ class Chunk:
     records: Records
 
 
+_READY = set()
+
+
 def _call(fn, what, *args):
-    """``fn(*args)``, compiled first (with a notice) if the cache does not hold it for these argument types."""
-    compiled_function(fn, tuple(numba.typeof(a) for a in args), what)
+    """``fn(*args)``, compiled first (with a notice) if the cache does not hold it for these argument types
+    (checked once per function and process: every later call has the same types)."""
+    if fn not in _READY:
+        compiled_function(fn, tuple(numba.typeof(a) for a in args), what)
+        _READY.add(fn)
     return fn(*args)
 
 
-def _plan_fields(packed):
+def _plan_fields(packed, lapack):
     if packed.plan is None:
         z = np.zeros(1, dtype=np.int64)
-        return solvers.SolverPlan(z, z, np.zeros(2, dtype=np.int64))
+        return solvers.SolverPlan(z, z, np.zeros(2, dtype=np.int64), lapack)
     interior, border, lo, up = packed.plan
     return solvers.SolverPlan(np.asarray(interior, dtype=np.int64), np.asarray(border, dtype=np.int64),
-                              np.array([lo, up], dtype=np.int64))
+                              np.array([lo, up], dtype=np.int64), lapack)
 
 
 class Stepper:
@@ -66,7 +72,8 @@ class Stepper:
                   "bordered band (CSR)": solvers.csr_bordered_band_solver}.get(pk.solver)
         if kernel is None:
             raise NotImplementedError(f"no compiled solver for {pk.solver!r} storage yet")
-        self.solver_fields = Fields(_plan_fields(pk))
+        self.lapack_work, lapack = solvers.lapack_work(pk.nx)
+        self.solver_fields = Fields(_plan_fields(pk, lapack))
         self.solver = np.zeros(1, dtype=FAMILY)
         self.solver[0] = self.solver_fields.record(kernel().address, -1, 0)
         nx = pk.nx

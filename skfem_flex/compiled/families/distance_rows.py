@@ -69,7 +69,8 @@ def _evaluate(ctx, d):
     mu = fvec(ctx.mu, ctx.m)
     st = storage_of(ctx)
     scratch = fvec(ctx.scratch, ctx.nscratch)
-    r, ra, rb = np.empty(2), np.empty(2), np.empty(2)
+    top = ctx.nscratch
+    r, ra, rb = scratch[top - 6:top - 4], scratch[top - 4:top - 2], scratch[top - 2:top]
     for i in range(d.rows.shape[0]):
         row, k = d.rows[i]
         o, nb = maps.off[k], maps.nb[k]

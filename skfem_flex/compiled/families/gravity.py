@@ -50,7 +50,7 @@ def _evaluate(ctx, d):
     qa, qb, gp, floor = fvec(ctx.qa, n), fvec(ctx.qb, n), fvec(ctx.gp, n), fvec(ctx.floor, n)
     st = storage_of(ctx)
     scratch = fvec(ctx.scratch, ctx.nscratch)
-    f = np.empty(2)
+    f = scratch[ctx.nscratch - 2:ctx.nscratch]
     for i in range(d.maps.size):
         k = d.maps[i]
         o, nb = maps.off[k], maps.nb[k]
@@ -81,7 +81,7 @@ def _energy(ctx, d):
     mrec = family_at(ctx.maps)
     maps = maps_view(mrec)
     q, out = fvec(ctx.q1, n), fvec(ctx.out, 7)
-    r = np.empty(2)
+    r = fvec(ctx.scratch, ctx.nscratch)[ctx.nscratch - 2:ctx.nscratch]
     for i in range(d.maps.size):
         k = d.maps[i]
         o = maps.off[k]

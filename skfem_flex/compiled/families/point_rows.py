@@ -98,7 +98,7 @@ def _evaluate(ctx, d):
     evaluate = ctx.task == TASK_EVAL
     rate = needs_rate_jacobian(ctx)
     scratch = fvec(ctx.scratch, ctx.nscratch)
-    r = np.empty(2)
+    r = scratch[ctx.nscratch - 2:ctx.nscratch]
     for b in range(d.blocks.shape[0]):
         row, projected, t0, t1, c0, c1 = d.blocks[b]
         nc = c1 - c0
