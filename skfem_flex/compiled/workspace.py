@@ -56,8 +56,8 @@ class Workspace:
         for name in ("res", "y"):
             self._vector(name, nx)
         self._vector("out", 8)
-        self._vector("scratch", max(4 * n, 64))
-        c["nscratch"] = max(4 * n, 64)
+        self._vector("scratch", max(32 * n, 64))
+        c["nscratch"] = max(32 * n, 64)
         # the matrix
         if pk.storage == DENSE:
             self.mat = np.zeros(nx * nx)
