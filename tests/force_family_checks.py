@@ -76,6 +76,12 @@ def run_new(scene, scheme_name, t_end, dt):
     return chunk.records
 
 
+def initial_energy(scene):
+    """T + V of the scene's initial state, J (the Records hold the steps after it)."""
+    q0, v0 = scene.initial_state()
+    return scene.kinetic_energy(q0, v0) + scene.potential_energy(q0)
+
+
 def compare_runs(factory, scheme_name, t_end, dt):
     """The new core's and the old Python path's runs of ``factory()``: (new records, old result, largest q
     difference relative to max |q|)."""
