@@ -54,6 +54,8 @@ def _view(fam):
 
 
 def pack(items, packer):
+    """Linear dampers ("linear damper", g, c) and two-point dampers ("two-point damper", a, b, anchor, c), g over
+    the element's own coordinates; each couples its coordinates (g's, or its points' maps' supports)."""
     lin, lin_c, idx, coef, couplings, pairs = [], [], [], [], [], []
     for item in items:
         form, element, where = item
@@ -191,4 +193,6 @@ def _kernel(ctx_p, fam_p):
 
 
 def kernel():
+    """The family's compiled kernel (:func:`~skfem_flex.compiled.registry.compiled_kernel`), from the cache or
+    compiled on first use."""
     return compiled_kernel(_kernel, "the damper family")

@@ -44,6 +44,9 @@ def _view(fam):
 
 
 def pack(items, packer):
+    """Point forces ("point force", point, F), follower forces ("follower force", point, g, c, F) and generalized
+    forces ("generalized force", G, F): F(t) as time-table columns at the scheme's load points; followers couple
+    their point's map support and g, point forces on frame maps their map's support."""
     force, angle0, gen, idx, coef, couplings = [], [], [], [], [], []
     for form, element, where in items:
         where = np.asarray(where, dtype=np.int64)
@@ -140,4 +143,6 @@ def _kernel(ctx_p, fam_p):
 
 
 def kernel():
+    """The family's compiled kernel (:func:`~skfem_flex.compiled.registry.compiled_kernel`), from the cache or
+    compiled on first use."""
     return compiled_kernel(_kernel, "the point-load family")

@@ -137,4 +137,6 @@ def _kernel(ctx_p, fam_p):
 
 
 def kernel():
+    """The family's compiled kernel (:func:`~skfem_flex.compiled.registry.compiled_kernel`), from the cache or
+    compiled on first use."""
     return compiled_kernel(_kernel, "the springs family")

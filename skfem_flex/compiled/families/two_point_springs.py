@@ -67,6 +67,7 @@ def pack_pairs(items, packer, what):
 
 
 def pack(items, packer):
+    """Two-point springs ("two-point spring", a, b, anchor, k, l₀): maps, k, l₀ and the ground point."""
     maps, anchors, couplings = pack_pairs(items, packer, "two-point spring")
     par = np.column_stack([[float(f[4]) for f, _, _ in items], [float(f[5]) for f, _, _ in items], anchors])
     return FamilyPack(data=Data(maps, par.reshape(-1, 4)), count=len(items), couplings=couplings)
@@ -189,4 +190,6 @@ def _kernel(ctx_p, fam_p):
 
 
 def kernel():
+    """The family's compiled kernel (:func:`~skfem_flex.compiled.registry.compiled_kernel`), from the cache or
+    compiled on first use."""
     return compiled_kernel(_kernel, "the two-point-spring family")
