@@ -1,7 +1,8 @@
 """Shared checks of the force-element families of the compiled core (tests/test_family_*.py of springs,
 two-point springs, point loads and dampers): a scene run by :class:`~skfem_flex.run.stepper.Stepper`, its
 Newton matrix against differences of its residual, its residual parts against the elements' numpy
-contracts, and its trajectories against the old Python path (``sf.simulate(..., compiled=False)``)."""
+contracts, and its trajectories against the Python path (``sf.simulate(..., compiled=False)``: every element
+through its own numpy methods)."""
 import numpy as np
 
 import skfem_flex as sf
@@ -67,6 +68,7 @@ def run_new(scene, scheme_name, t_end, dt):
     """Steps of the new core from the scene's initial state (consistent start): its Records."""
     scheme = SCHEMES[scheme_name]()
     st = Stepper(scene, scheme)
+    assert not st.packed.python_elements            # every element in a compiled family
     q0, v0 = scene.initial_state()
     acc, lam, reaction = st.start(0.0, q0, v0)
     st.load(scheme.make_state(0.0, q0, v0, acc=acc, pseudo=acc.copy(), lam=lam, prescribed_force=reaction))
@@ -83,7 +85,7 @@ def initial_energy(scene):
 
 
 def compare_runs(factory, scheme_name, t_end, dt):
-    """The new core's and the old Python path's runs of ``factory()``: (new records, old result, largest q
+    """The new core's and the Python path's runs (compiled=False) of ``factory()``: (new records, old result, largest q
     difference relative to max |q|)."""
     new = run_new(factory(), scheme_name, t_end, dt)
     old = sf.simulate(factory(), t_end, dt, integrator=scheme_name, compiled=False)

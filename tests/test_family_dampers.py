@@ -5,17 +5,19 @@ Q = −c (g·v) g (RotationalDamper, to the ground and between bodies) and two-p
 1. At random states and unknowns, the Newton matrix of the energy-momentum and trapezoidal steps equals
    5-point central differences of the residual (∂Q/∂q and ∂Q/∂v through ∂v/∂x), and the load part Q of
    the residual equals the dampers' own ``generalized_force`` where the scheme evaluates loads.
-2. Runs of ≤ 200 steps equal the old Python path under energy-momentum, trapezoidal and generalized-α,
+2. Runs of ≤ 200 steps equal the Python path (compiled=False) under energy-momentum, trapezoidal and generalized-α,
    external work included.
 3. Energy-momentum: each step's work is the dissipated −Δt Σ c ṡ², ṡ the dampers' rates at the mid-point
    (from the points' own position and velocity methods), and T + V − work stays constant.
 4. A two-point damper whose points coincide refuses the state (ctx.status = STATUS_REFUSED, the loop
-   returns REFUSED), and the Python path raises the damper's ValueError.
+   returns REFUSED), the element's numpy method raises the damper's ValueError, and the family's
+   ``refusal_error`` hands that error to the driver.
 """
 import numpy as np
 import pytest
 
 import skfem_flex as sf
+from skfem_flex.compiled.families import dampers
 from skfem_flex.compiled.loop import REFUSED
 from skfem_flex.compiled.tasks import STATUS_OK, STATUS_REFUSED
 from skfem_flex.run.stepper import Stepper
@@ -40,8 +42,8 @@ def free_dampers(forces=True):
 
 
 def torsion_mechanism():
-    """The old tests' torsion mechanism: two hinged bars, the first pinned, torsion springs and dampers on the
-    pivot and the hinge, gravity."""
+    """The former compiled-scene tests' torsion mechanism: two hinged bars, the first pinned, torsion springs
+    and dampers on the pivot and the hinge, gravity."""
     a = sf.RigidBody.bar(1.0, 1.0, start=(0.0, 0.0), angle=-0.3, name="upper")
     b = sf.RigidBody.bar(0.6, 0.8, start=(np.cos(-0.3), np.sin(-0.3)), angle=-1.2, name="lower")
     cons = [sf.Pin(a.point((-0.5, 0.0)), (0.0, 0.0)), sf.Revolute(a.point((0.5, 0.0)), b.point((-0.4, 0.0)))]
@@ -52,8 +54,8 @@ def torsion_mechanism():
 
 
 def spring_mechanism():
-    """The old tests' spring mechanism: a pinned bar, a free bar and a point mass joined by two-point springs
-    and dampers (between the bars and to the ground), under gravity."""
+    """The former compiled-scene tests' spring mechanism: a pinned bar, a free bar and a point mass joined by
+    two-point springs and dampers (between the bars and to the ground), under gravity."""
     a = sf.RigidBody.bar(1.0, 1.0, start=(0.0, 0.0), angle=-0.3, name="pinned")
     b = sf.RigidBody.bar(0.5, 0.6, start=(1.2, 0.3), angle=0.5, name="free")
     m = sf.PointMass(0.3, [0.2, -0.5])
@@ -93,7 +95,7 @@ def test_newton_matrix_and_load_part_follow_the_specification(scheme):
 @pytest.mark.parametrize("scheme", ["energy-momentum", "trapezoidal", "generalized-alpha"])
 @pytest.mark.parametrize("factory, t_end, dt", [(free_dampers, 0.5, 0.005), (torsion_mechanism, 0.5, 0.005),
                                                 (spring_mechanism, 0.5, 0.005)])
-def test_runs_equal_the_old_python_path(factory, t_end, dt, scheme):
+def test_runs_equal_the_python_path(factory, t_end, dt, scheme):
     """q to 1e-10 relative (they agree to ~1e-15), the external work to 1e-10 of the energy scale."""
     new, old, dq = compare_runs(factory, scheme, t_end, dt)
     assert dq <= 1e-10, dq
@@ -157,6 +159,12 @@ def test_a_damper_whose_points_coincide_refuses_and_python_raises(scheme):
     np.testing.assert_array_equal(st.state(0.0).q, q0)
     with pytest.raises(ValueError, match="coincide"):
         scene.external_force(q0, v0, 0.0)
+    # the driver's way to that error: the family's refusal_error at the loads' evaluation point
+    st.evaluate(0.0, 1e-2, np.zeros(st.packed.nx))
+    _, (qe, ve, te) = evaluation_points(st, 0.0, 1e-2)
+    err = dampers.refusal_error(scene, qe, ve, te)
+    assert isinstance(err, ValueError) and "coincide" in str(err)
+    assert dampers.refusal_error(scene, qe + 0.1, ve, te) is None
     # a step later the points are apart: the same run goes on
     q0[3] += 0.1
     st.load(scheme_obj.make_state(0.0, q0, v0, acc=np.zeros(q0.size), pseudo=np.zeros(q0.size),

@@ -6,7 +6,7 @@ Q = J_rᵀ A(ϑ) F(t) and point moments Q = M(t) ∇ϑ, with constant and time-d
    5-point central differences of the residual, and the load part Q of the residual equals the elements'
    own ``generalized_force`` where the scheme evaluates loads (energy-momentum: the mid-point q0 + Δq/2,
    v̄ = Δq/Δt, t0 + Δt/2; Newmark: q1, v1, t1).
-2. Runs of ≤ 200 steps equal the old Python path under energy-momentum, trapezoidal and generalized-α,
+2. Runs of ≤ 200 steps equal the Python path (compiled=False) under energy-momentum, trapezoidal and generalized-α,
    external work included (the Newmark work uses TASK_LOADS at the start of a chunk).
 3. Energy-momentum: the recorded work equals Σ Q(q_m, v̄, t_m)·Δq recomputed from the recorded states
    with the elements' numpy methods, and T + V − work stays constant to the Newton tolerance.
@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 import skfem_flex as sf
-from force_family_checks import (compare_runs, derivative_check, evaluation_points, initial_energy, local, random_stepper,
+from force_family_checks import (compare_runs, derivative_check, evaluation_points, initial_energy, local,
+                                 random_stepper,
                                  run_new, scatter)
 
 
@@ -76,7 +77,7 @@ def test_newton_matrix_and_load_part_follow_the_specification(scheme):
 
 @pytest.mark.parametrize("scheme", ["energy-momentum", "trapezoidal", "generalized-alpha"])
 @pytest.mark.parametrize("factory, t_end, dt", [(free_loads, 0.5, 0.005), (loaded_mechanism, 0.5, 0.005)])
-def test_runs_equal_the_old_python_path(factory, t_end, dt, scheme):
+def test_runs_equal_the_python_path(factory, t_end, dt, scheme):
     """q to 1e-10 relative (they agree to ~1e-15), the external work to 1e-10 of its scale."""
     new, old, dq = compare_runs(factory, scheme, t_end, dt)
     assert dq <= 1e-10, dq

@@ -4,7 +4,7 @@ V = ½ k u^p (NonlinearSpring) and quadratic springs V = ½ k (g·q + c)² (Rota
 1. At random states and unknowns, the Newton matrix of the energy-momentum and trapezoidal steps equals
    5-point central differences of the residual, and the potential part g_p of the residual equals the
    elements' own ``potential_discrete_gradient`` (energy-momentum: from q0 to q1; Newmark: at q1, q1).
-2. Runs of ≤ 200 steps equal the old Python path under energy-momentum, trapezoidal and generalized-α,
+2. Runs of ≤ 200 steps equal the Python path (compiled=False) under energy-momentum, trapezoidal and generalized-α,
    and the recorded potential (TASK_ENERGY) equals the elements' ``potential_energy``.
 3. Energy-momentum conserves T + V to the Newton tolerance.
 """
@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 import skfem_flex as sf
-from force_family_checks import (compare_runs, derivative_check, evaluation_points, initial_energy, local, random_stepper,
+from force_family_checks import (compare_runs, derivative_check, evaluation_points, initial_energy, local,
+                                 random_stepper,
                                  scatter)
 
 
@@ -41,7 +42,7 @@ def torsion_springs(forces=True):
 
 def torsion_mechanism():
     """Two bars hinged together, the first pinned to the ground, under gravity: torsion springs to the
-    ground and between the bars (as the old tests' torsion mechanism, without its dampers)."""
+    ground and between the bars (as the former compiled-scene tests' torsion mechanism, without its dampers)."""
     a = sf.RigidBody.bar(1.0, 1.0, start=(0.0, 0.0), angle=-0.3, name="upper")
     b = sf.RigidBody.bar(0.6, 0.8, start=(np.cos(-0.3), np.sin(-0.3)), angle=-1.2, name="lower")
     cons = [sf.Pin(a.point((-0.5, 0.0)), (0.0, 0.0)), sf.Revolute(a.point((0.5, 0.0)), b.point((-0.4, 0.0)))]
@@ -100,7 +101,7 @@ def test_coordinate_spring_tangent_at_equal_points_is_half_the_hessian():
 @pytest.mark.parametrize("scheme", ["energy-momentum", "trapezoidal", "generalized-alpha"])
 @pytest.mark.parametrize("factory, t_end, dt", [(spring_mass, 1.0, 0.01), (coordinate_springs, 1.0, 0.01),
                                                 (torsion_mechanism, 0.5, 0.005)])
-def test_runs_equal_the_old_python_path(factory, t_end, dt, scheme):
+def test_runs_equal_the_python_path(factory, t_end, dt, scheme):
     """q to 1e-10 relative (they agree to ~1e-15), the recorded potential to 1e-12 of the energy scale;
     energy-momentum keeps T + V − work to the Newton tolerance."""
     new, old, dq = compare_runs(factory, scheme, t_end, dt)

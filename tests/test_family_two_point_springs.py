@@ -5,7 +5,7 @@ l₀ = 0 (κ = ½ k), on rigid bodies (frame maps: ∂(Dᵀf)/∂q_b) and point 
 1. At random states and unknowns, the Newton matrix of the energy-momentum and trapezoidal steps equals
    5-point central differences of the residual, and the potential part g_p of the residual equals the
    springs' own ``potential_discrete_gradient`` (energy-momentum: from q0 to q1; Newmark: at q1, q1).
-2. Runs of ≤ 200 steps equal the old Python path under energy-momentum, trapezoidal and generalized-α,
+2. Runs of ≤ 200 steps equal the Python path (compiled=False) under energy-momentum, trapezoidal and generalized-α,
    and the recorded potential (TASK_ENERGY) equals the springs' ``potential_energy``.
 3. Energy-momentum conserves T + V to the Newton tolerance.
 """
@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 import skfem_flex as sf
-from force_family_checks import (compare_runs, derivative_check, evaluation_points, initial_energy, local, random_stepper,
+from force_family_checks import (compare_runs, derivative_check, evaluation_points, initial_energy, local,
+                                 random_stepper,
                                  scatter)
 
 
@@ -34,8 +35,8 @@ def free_springs(forces=True):
 
 
 def spring_mechanism():
-    """The old tests' spring mechanism without its dampers: a pinned bar, a free bar and a point mass joined
-    by two-point springs (l₀ > 0, to a ground point, l₀ = 0), under gravity."""
+    """The former compiled-scene tests' spring mechanism without its dampers: a pinned bar, a free bar and a
+    point mass joined by two-point springs (l₀ > 0, to a ground point, l₀ = 0), under gravity."""
     a = sf.RigidBody.bar(1.0, 1.0, start=(0.0, 0.0), angle=-0.3, name="pinned")
     b = sf.RigidBody.bar(0.5, 0.6, start=(1.2, 0.3), angle=0.5, name="free")
     m = sf.PointMass(0.3, [0.2, -0.5])
@@ -78,7 +79,7 @@ def test_newton_matrix_and_potential_part_follow_the_specification(factory, sche
 @pytest.mark.parametrize("scheme", ["energy-momentum", "trapezoidal", "generalized-alpha"])
 @pytest.mark.parametrize("factory, t_end, dt", [(free_springs, 0.5, 0.005),
                                                 (spring_mechanism, 0.5, 0.005)])
-def test_runs_equal_the_old_python_path(factory, t_end, dt, scheme):
+def test_runs_equal_the_python_path(factory, t_end, dt, scheme):
     """q to 1e-10 relative (they agree to ~1e-15), the recorded potential to 1e-12 of the energy scale;
     energy-momentum keeps T + V − work to the Newton tolerance."""
     new, old, dq = compare_runs(factory, scheme, t_end, dt)

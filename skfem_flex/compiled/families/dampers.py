@@ -18,7 +18,8 @@ r"""Dampers: forces linear in the velocities.
 TASK_EVAL_LOADS adds Q(q_e, v_e) into ``ext`` and w_ext (∂Q/∂q dqe + ∂Q/∂v dve) into the Newton matrix;
 TASK_LOADS adds Q only. A two-point damper whose points coincide (l = 0: no direction) sets
 ``ctx.status = STATUS_REFUSED``: the step is handed back, and the element's own
-``generalized_force`` raises its ValueError ("… its two points coincide …") on the Python path.
+``generalized_force`` raises its ValueError ("… its two points coincide …") on the Python path;
+:func:`refusal_error` gives that error for the driver.
 """
 from __future__ import annotations
 
@@ -182,6 +183,31 @@ def _two_point(ctx, fam, tangent):
                 for j in range(nb - 3):
                     add_qq(ctx, st, o + 2, o + 3 + j, w * row[j])
                     add_qq(ctx, st, o + 3 + j, o + 2, w * row[j])
+
+
+def refusal_error(scene, q, v, t):
+    """The error the Python path raises where this family refused a state (``ctx.status = STATUS_REFUSED``,
+    ``ctx.bad_family`` this family): the ValueError of the first two-point damper whose own
+    ``generalized_force`` raises at the loads' evaluation point, or None.
+
+    Parameters
+    ----------
+    scene : Scene
+    q, v : ndarray
+        Coordinates and velocities where the loads were evaluated (the context's q_e, v_e), m, rad and
+        m/s, rad/s.
+    t : float
+        Its time (the context's t_e), s.
+    """
+    for f, idx in scene.loads:
+        form = f.compiled_form() if hasattr(f, "compiled_form") else None
+        if form is not None and form[0] == "two-point damper":
+            idx = np.asarray(idx)
+            try:
+                f.generalized_force(q[idx], v[idx], t)
+            except ValueError as exc:
+                return exc
+    return None
 
 
 def _kernel(ctx_p, fam_p):
