@@ -31,6 +31,10 @@ FAMILY_MODULES = (
     "point_rows",
     "linear_rows",
     "distance_rows",
+    "springs",
+    "two_point_springs",
+    "point_loads",
+    "dampers",
 )
 
 
