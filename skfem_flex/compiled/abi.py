@@ -131,7 +131,7 @@ def call_pointers(typingctx, function, addresses):
     return sig, codegen
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def call_families(ctx, task):
     """Ask every family of the scene to do ``task`` (ctx: the context record)."""
     ctx.task = task

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..numerics.newton import CONVERGED, EVALUATE, newton_evaluated, newton_reset, newton_solved
 from .abi import call, call_families, fvec, ivec
-from .points import maps_view, position_into
+from .points import NB, OFF, maps_view, position_into
 from .abi import family_at
 from .tasks import (PHASE_ACCEPT, PHASE_EVALUATE, PHASE_PREDICT, PHASE_START, STATUS_OK, TASK_ENERGY,
                     TASK_MOMENTUM, TASK_ROWS)
@@ -54,7 +54,7 @@ class NewtonArrays(NamedTuple):
     ints: np.ndarray
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _mass_times(ctx, v, p):
     """p = M v of the scene's constant masses."""
     n = ctx.n
@@ -68,7 +68,7 @@ def _mass_times(ctx, v, p):
         p[i] = s
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def record_step(ctx, records, i, t):
     """Record row i at time t from the state (ctx.q1, ctx.v1, the scheme's λ, work and reactions)."""
     n, m = ctx.n, ctx.m
@@ -100,22 +100,21 @@ def record_step(ctx, records, i, t):
     phi_max, rate_max = 0.0, 0.0
     if m:
         call_families(ctx, TASK_ROWS)
-        phi, phit = fvec(ctx.phi, m), fvec(ctx.phit, m)
+        phi, rate = fvec(ctx.phi, m), fvec(ctx.ddphi, m)
         for j in range(m):
             phi_max = max(phi_max, abs(phi[j]))
-            rate_max = max(rate_max, abs(phit[j]))
+            rate_max = max(rate_max, abs(rate[j]))
     d[8] = phi_max
     d[9] = rate_max
     if records.probe_maps.size:
-        mrec = family_at(ctx.maps)
-        maps = maps_view(mrec)
+        maps = maps_view(family_at(ctx.maps))
         for j in range(records.probe_maps.size):
             k = records.probe_maps[j]
-            o = maps.off[k]
-            position_into(mrec, k, q[o:o + maps.nb[k]], records.probes[i, j])
+            o = maps.ints[k, OFF]
+            position_into(maps, k, q[o:o + maps.ints[k, NB]], records.probes[i, j])
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def run_steps(ctx, scheme, solver, hs, t0, recorded, records, newton, max_iterations, line_search, table):
     """Advance ``hs.size`` steps from time t0; returns (status, steps done, records written, Newton iterations).
 
@@ -162,7 +161,7 @@ def run_steps(ctx, scheme, solver, hs, t0, recorded, records, newton, max_iterat
     return CONVERGED, hs.size, n_rec, its_total
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def record_at(ctx, records, t, table):
     """Record row 0 of ``records`` from the state in (ctx.q1, ctx.v1) at time t (``table``: one row at t)."""
     c = ctx[0]
@@ -174,7 +173,7 @@ def record_at(ctx, records, t, table):
     record_step(c, records, 0, t)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def evaluate_once(ctx, scheme, phase):
     """One call of the scheme's kernel in ``phase`` (tests, linearization, statics)."""
     c = ctx[0]
@@ -182,7 +181,7 @@ def evaluate_once(ctx, scheme, phase):
     call(scheme[0].kernel, c.self, scheme.ctypes.data)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def start_state(ctx, scheme, solver, table, t):
     """The consistent acceleration and multipliers of the scheme's state (PHASE_START of the scheme's
     kernel: a residual linear in them, solved once); returns True when the solve succeeded, with the

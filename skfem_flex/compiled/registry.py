@@ -92,14 +92,17 @@ def _compiling(what, work):
     return value
 
 
-def compiled_kernel(pyfunc, what):
+def compiled_kernel(pyfunc, what, nrt=False):
     """The kernel compiled from ``pyfunc`` (signature :data:`~.abi.KERNEL_SIGNATURE`), from the cache or
-    compiled now. ``what`` names it in notices ("the energy-momentum step")."""
+    compiled now. ``what`` names it in notices ("the energy-momentum step"). ``nrt``: the kernel allocates
+    (numba's reference-counted memory); without it no array a kernel passes on is reference counted, which
+    is most of a small scene's cost otherwise."""
     key = (pyfunc.__module__, pyfunc.__qualname__)
     hit = _KERNELS.get(key)
     if hit is not None:
         return hit
-    res = CFunc(pyfunc, (KERNEL_SIGNATURE.args, KERNEL_SIGNATURE.return_type), locals={}, options={})
+    res = CFunc(pyfunc, (KERNEL_SIGNATURE.args, KERNEL_SIGNATURE.return_type), locals={},
+                options={} if nrt else {"_nrt": False})
     res.enable_caching()
     cached = None
     try:

@@ -9,7 +9,7 @@ calls :func:`finish_row`, which writes what the task and the row level need (:mo
   and the border row — position: Φ, Φ_q dq1; velocity: (Φ_q v₁ + Φ_t)/c_v,
   (∂(Φ_q v₁)/∂q dq1 + Φ_q dv1)/c_v; acceleration: Φ_q a₁ + ∂(Φ_q v₁)/∂q v₁ + Φ_tt, Φ_q da1; the row's
   scale Σ|Φ_q||q₁| (velocity rows also Σ|Φ_q||v₁|/c_v and |Φ_t|/c_v) and max|Φ_q|; D·(q_b − q_a) and Φ_t;
-* TASK_ROWS: Φ into ``phi`` and Φ_q v₁ + Φ_t into ``phit``.
+* TASK_ROWS: Φ into ``phi``, Φ_t into ``phit`` and Φ_q v₁ + Φ_t into ``ddphi``.
 
 The second-derivative term w_mu c_dg dq1 ∂(Dᵀμ)/∂q_b is the family's own (it knows its structure).
 """
@@ -24,13 +24,13 @@ from .tasks import ROWS_ACCELERATION, ROWS_POSITION, ROWS_VELOCITY, TASK_EVAL, T
 __all__ = ["finish_row", "needs_rate_jacobian"]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def needs_rate_jacobian(ctx):
     """True when the rows need ∂(Φ_q v₁)/∂q (velocity or acceleration level)."""
     return ctx.task == TASK_EVAL and ctx.rows != ROWS_POSITION
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def finish_row(ctx, st, row, value, phi_t, phi_tt, cols, cq, d, cv, k):
     """Write constraint row ``row`` (module docstring); ``cols[:k]`` the coordinates it touches, ``cq``,
     ``d``, ``cv`` its Φ_q, D and ∂(Φ_q v₁)/∂q there (``cv`` read only when :func:`needs_rate_jacobian`)."""
@@ -42,7 +42,8 @@ def finish_row(ctx, st, row, value, phi_t, phi_tt, cols, cq, d, cv, k):
         for t in range(k):
             s += cq[t] * v1[cols[t]]
         phi[row] = value
-        phit[row] = s
+        phit[row] = phi_t
+        fvec(ctx.ddphi, m)[row] = s
         return
     if ctx.task != TASK_EVAL:
         return

@@ -40,7 +40,7 @@ class SolverPlan(NamedTuple):
     lapack: np.ndarray
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _view(fam):
     return SolverPlan(i1(fam, 0), i1(fam, 1), i1(fam, 2), i1(fam, 3))
 
@@ -175,9 +175,9 @@ def dense_solver():
 
 def bordered_band_solver():
     """The bordered band solver's kernel (dense storage)."""
-    return compiled_kernel(_bordered_kernel, "the band-with-border linear solver")
+    return compiled_kernel(_bordered_kernel, "the band-with-border linear solver", nrt=True)
 
 
 def csr_bordered_band_solver():
     """The bordered band solver's kernel (CSR storage)."""
-    return compiled_kernel(_csr_kernel, "the band-with-border linear solver (sparse storage)")
+    return compiled_kernel(_csr_kernel, "the band-with-border linear solver (sparse storage)", nrt=True)

@@ -24,7 +24,7 @@ __all__ = ["DENSE", "CSR", "storage_of", "add_qq", "add_qm", "add_mq", "add_at",
 DENSE, CSR = 0, 1
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def storage_of(ctx):
     """The context's Newton matrix as a tuple (mat: values, fpos: free position of each coordinate, −1
     for a prescribed one, kind: DENSE or CSR, nx, nf, ptr and idx: the CSR pattern, unused when dense)."""
@@ -40,7 +40,7 @@ def storage_of(ctx):
     return mat, ivec(ctx.fpos, ctx.n), ctx.storage, nx, ctx.nf, ptr, idx
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def slot(s, i, j):
     """Position of entry (i, j) (bordered indices) in the values, or −1 outside a CSR pattern."""
     mat, fpos, kind, nx, nf, ptr, idx = s
@@ -59,7 +59,7 @@ def slot(s, i, j):
     return -1
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def add_at(ctx, s, i, j, val):
     """Add ``val`` at bordered indices (i, j); a nonzero value outside the pattern is counted."""
     k = slot(s, i, j)
@@ -69,7 +69,7 @@ def add_at(ctx, s, i, j, val):
         ctx.missed += 1
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def add_qq(ctx, s, i, j, val):
     """Add ``val`` to ∂r_i/∂Δq_j (coordinates i, j; skipped where either is prescribed)."""
     fpos = s[1]
@@ -78,7 +78,7 @@ def add_qq(ctx, s, i, j, val):
         add_at(ctx, s, a, b, val)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def add_qm(ctx, s, i, row, val):
     """Add ``val`` to ∂r_i/∂μ_row (coordinate i, constraint row)."""
     a = s[1][i]
@@ -86,7 +86,7 @@ def add_qm(ctx, s, i, row, val):
         add_at(ctx, s, a, s[4] + row, val)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def add_mq(ctx, s, row, j, val):
     """Add ``val`` to ∂c_row/∂Δq_j (constraint row, coordinate j)."""
     b = s[1][j]
@@ -94,7 +94,7 @@ def add_mq(ctx, s, row, j, val):
         add_at(ctx, s, s[4] + row, b, val)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def scale_row(s, i, factor):
     """Multiply bordered row i of the matrix by ``factor``."""
     mat, fpos, kind, nx, nf, ptr, idx = s
@@ -106,7 +106,7 @@ def scale_row(s, i, factor):
             mat[t] *= factor
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def clear(s):
     """Zero every stored value."""
     mat = s[0]

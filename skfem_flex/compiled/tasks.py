@@ -48,7 +48,8 @@ momentum about the origin into ``out[1:4]`` and ``out[4:7]`` (planar bodies: (p_
 
 ``TASK_ENERGY`` — potential energy V(q₁) into ``out[0]``.
 
-``TASK_ROWS`` — constraint rows at (q₁, v₁, t₁): Φ into ``ctx.phi``, Φ_q v₁ + Φ_t into ``ctx.phit``.
+``TASK_ROWS`` — constraint rows at (q₁, v₁, t₁): Φ into ``ctx.phi``, Φ_t into ``ctx.phit`` and
+Φ_q v₁ + Φ_t into ``ctx.ddphi``.
 
 ``TASK_LOADS`` — only the loads and dampers: Q(q_e, v_e, t) into ``ctx.ext`` (no matrix).
 """

@@ -63,14 +63,14 @@ class EnergyMomentumData(NamedTuple):
     r: np.ndarray
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _view(fam):
     return EnergyMomentumData(f1(fam, 0), f1(fam, 1), f1(fam, 2), f1(fam, 3), f1(fam, 4), f1(fam, 5), f1(fam, 6),
                               i1(fam, 7), i1(fam, 8), f1(fam, 9), f1(fam, 10), f1(fam, 11), f1(fam, 12), f1(fam, 13),
                               f1(fam, 14), f1(fam, 15), f1(fam, 16))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _momentum_at_start(ctx, s):
     """p(q, v) into s.p0 (the families' MOMENTUM task at the state, with the constant masses)."""
     n = ctx.n
@@ -85,7 +85,7 @@ def _momentum_at_start(ctx, s):
     s.work[1] = 1.0
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _constant_momentum(ctx, v, p):
     """p = M v of the scene's constant masses."""
     n = ctx.n
@@ -99,7 +99,7 @@ def _constant_momentum(ctx, v, p):
         p[i] = acc
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _predict(ctx, s):
     n, nf, m, h = ctx.n, ctx.nf, ctx.m, ctx.h
     free = ivec(ctx.free, nf)
@@ -135,7 +135,7 @@ def _predict(ctx, s):
     ctx.te, ctx.t1 = ctx.t + 0.5 * h, ctx.t + h
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _evaluate(ctx, s):
     n, nf, m, h = ctx.n, ctx.nf, ctx.m, ctx.h
     x = fvec(ctx.x, ctx.nx)
@@ -233,7 +233,7 @@ def _evaluate(ctx, s):
     ctx.err = err if all_finite(res) else np.nan
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _dot(a, b):
     s = 0.0
     for i in range(a.size):
@@ -241,7 +241,7 @@ def _dot(a, b):
     return s
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _accept(ctx, s):
     n, m, h = ctx.n, ctx.m, ctx.h
     pres = ivec(ctx.pres, ctx.npres)

@@ -61,13 +61,13 @@ class NewmarkData(NamedTuple):
     a_next: np.ndarray      # the algorithmic acceleration a₁ of the evaluation
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _view(fam):
     return NewmarkData(f1(fam, 0), f1(fam, 1), f1(fam, 2), f1(fam, 3), f1(fam, 4), f1(fam, 5), f1(fam, 6),
                        f1(fam, 7), f1(fam, 8), f1(fam, 9), i1(fam, 10), f1(fam, 11), f1(fam, 12), f1(fam, 13))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _coefficients(ctx, s):
     """(c_a, c_v) = (∂q̈₁/∂Δq, ∂v₁/∂Δq)."""
     am, af, beta, gamma = s.params[0], s.params[1], s.params[2], s.params[3]
@@ -75,7 +75,7 @@ def _coefficients(ctx, s):
     return (1.0 - am) / ((1.0 - af) * beta * h * h), gamma / (beta * h)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _settings(ctx, s, c_a, c_v, rows):
     """The families' settings (.tasks): everything at q1, gradients as discrete gradients at equal
     points (c_dg = 2)."""
@@ -93,7 +93,7 @@ def _settings(ctx, s, c_a, c_v, rows):
         dve[i] = c_v
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _loads_at_start(ctx, s):
     """Loads and Φ_t at the state (the work of the first step of a chunk uses both ends)."""
     n, m = ctx.n, ctx.m
@@ -118,7 +118,7 @@ def _loads_at_start(ctx, s):
     s.work[1] = 1.0
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _predict(ctx, s):
     n, nf, m, h = ctx.n, ctx.nf, ctx.m, ctx.h
     free, pres = ivec(ctx.free, nf), ivec(ctx.pres, ctx.npres)
@@ -143,7 +143,7 @@ def _predict(ctx, s):
     _settings(ctx, s, c_a, c_v, ROWS_VELOCITY if s.params[4] != 0.0 else ROWS_POSITION)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _assemble(ctx, s, q1, v1, acc1):
     """Zero the parts, let the families add theirs, add the constant masses' inertia; returns the force
     scale (False status: an element refused)."""
@@ -176,7 +176,7 @@ def _assemble(ctx, s, q1, v1, acc1):
         mterms[i] += sa
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _evaluate(ctx, s):
     n, nf, m, h = ctx.n, ctx.nf, ctx.m, ctx.h
     am, af, beta, gamma = s.params[0], s.params[1], s.params[2], s.params[3]
@@ -222,7 +222,7 @@ def _evaluate(ctx, s):
     ctx.err = err if all_finite(res) else np.nan
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _rows_error(ctx, res, nf, m, c_v):
     """Constraint rows into the residual; their scaled error."""
     if m == 0:
@@ -236,7 +236,7 @@ def _rows_error(ctx, res, nf, m, c_v):
     return max_abs(phi) / (ctx.ctol * max(cs, cmax * ctx.length_scale, _TINY))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _accept(ctx, s):
     n, m, h = ctx.n, ctx.m, ctx.h
     pres = ivec(ctx.pres, ctx.npres)
@@ -274,7 +274,7 @@ def _accept(ctx, s):
         s.phit0[i] = phit[i]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _start(ctx, s):
     """The consistent acceleration and multipliers at the state, into ``ctx.x`` as (q̈_free, λ), by the
     Newton matrix of the residual linear in them; the loop's driver solves once (Δq = 0)."""

@@ -31,7 +31,7 @@ class Data(NamedTuple):
     ia: np.ndarray      # angle coordinates (p[ia] adds to L)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _view(fam):
     return Data(i1(fam, 0), i1(fam, 1), i1(fam, 2), i1(fam, 3), f1(fam, 4), f1(fam, 5), i1(fam, 6))
 
@@ -46,7 +46,7 @@ def pack(items, packer):
     return FamilyPack(data=data, count=len(items))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _momenta(ctx, d):
     n = ctx.n
     q, p, out = fvec(ctx.q1, n), fvec(ctx.p, n), fvec(ctx.out, 7)

@@ -28,8 +28,8 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from ..abi import context_of, f1, f2, family_at, family_of, fvec, i1, i2
-from ..points import LINEAR, hessian_parts, jacobian_into, maps_view, velocity_jacobian_into
+from ..abi import context_of, f1, f2, family_at, family_of, fmat, fvec, i1, i2
+from ..points import KIND, LINEAR, NB, OFF, hessian_parts, jacobian_into, maps_view, velocity_jacobian_into
 from ..registry import compiled_kernel
 from ..storage import add_qq, storage_of
 from ..tasks import STATUS_REFUSED, TASK_EVAL_LOADS, TASK_LOADS
@@ -106,15 +106,14 @@ def _two_point(ctx, fam, tangent):
     d = _view(fam)
     st = storage_of(ctx)
     n = ctx.n
-    mrec = family_at(ctx.maps)
-    maps = maps_view(mrec)
+    maps = maps_view(family_at(ctx.maps))
     q, v, ext, dve = fvec(ctx.qe, n), fvec(ctx.ve, n), fvec(ctx.ext, n), fvec(ctx.dve, n)
     scratch = fvec(ctx.scratch, ctx.nscratch)
     wq = ctx.w_ext * ctx.dqe
     for e in range(d.pair.shape[0]):
         ka, kb = d.pair[e, 0], d.pair[e, 1]
         c = d.pair_par[e, 0]
-        dx, dy = pair_distance(mrec, ka, kb, d.pair_par[e, 1], d.pair_par[e, 2], q, scratch)
+        dx, dy = pair_distance(maps, ka, kb, d.pair_par[e, 1], d.pair_par[e, 2], q, scratch)
         ln = np.hypot(dx, dy)
         if ln == 0.0:                   # the direction is undefined: the Python path raises the damper's error
             ctx.status = STATUS_REFUSED
@@ -126,9 +125,9 @@ def _two_point(ctx, fam, tangent):
         for s in range(nsides):
             k = ka if s == 0 else kb
             sg = 1.0 if s == 0 else -1.0
-            o, nb = maps.off[k], maps.nb[k]
-            J = scratch[:2 * nb].reshape(2, nb)
-            jacobian_into(mrec, k, q[o:o + nb], J)
+            o, nb = maps.ints[k, OFF], maps.ints[k, NB]
+            J = fmat(scratch.ctypes.data + 8 * (0), 2, nb)
+            jacobian_into(maps, k, q[o:o + nb], J)
             for j in range(nb):
                 wx += sg * J[0, j] * v[o + j]
                 wy += sg * J[1, j] * v[o + j]
@@ -137,9 +136,9 @@ def _two_point(ctx, fam, tangent):
         for sa in range(nsides):
             kA = ka if sa == 0 else kb
             sgA = 1.0 if sa == 0 else -1.0
-            oA, nA = maps.off[kA], maps.nb[kA]
-            JA = scratch[:2 * nA].reshape(2, nA)
-            jacobian_into(mrec, kA, q[oA:oA + nA], JA)
+            oA, nA = maps.ints[kA, OFF], maps.ints[kA, NB]
+            JA = fmat(scratch.ctypes.data + 8 * (0), 2, nA)
+            jacobian_into(maps, kA, q[oA:oA + nA], JA)
             for a in range(nA):
                 ext[oA + a] -= c * rate * (sgA * JA[0, a] * ux + sgA * JA[1, a] * uy)
             if not tangent:
@@ -147,11 +146,11 @@ def _two_point(ctx, fam, tangent):
             for sb in range(nsides):
                 kB = ka if sb == 0 else kb
                 sgB = 1.0 if sb == 0 else -1.0
-                oB, nB = maps.off[kB], maps.nb[kB]
-                JB = scratch[2 * nA:2 * nA + 2 * nB].reshape(2, nB)
-                VB = scratch[2 * nA + 2 * nB:2 * nA + 4 * nB].reshape(2, nB)
-                jacobian_into(mrec, kB, q[oB:oB + nB], JB)
-                velocity_jacobian_into(mrec, kB, q[oB:oB + nB], v[oB:oB + nB], VB)
+                oB, nB = maps.ints[kB, OFF], maps.ints[kB, NB]
+                JB = fmat(scratch.ctypes.data + 8 * (2 * nA), 2, nB)
+                VB = fmat(scratch.ctypes.data + 8 * (2 * nA + 2 * nB), 2, nB)
+                jacobian_into(maps, kB, q[oB:oB + nB], JB)
+                velocity_jacobian_into(maps, kB, q[oB:oB + nB], v[oB:oB + nB], VB)
                 for a in range(nA):
                     ja0, ja1 = sgA * JA[0, a], sgA * JA[1, a]
                     jtua = ja0 * ux + ja1 * uy
@@ -170,14 +169,14 @@ def _two_point(ctx, fam, tangent):
             # −c (u·w) ∂(J_dᵀ u)/∂q at fixed u (FRAME maps)
             for s in range(nsides):
                 k = ka if s == 0 else kb
-                if maps.kind[k] == LINEAR:
+                if maps.ints[k, KIND] == LINEAR:
                     continue
                 sg = 1.0 if s == 0 else -1.0
-                o, nb = maps.off[k], maps.nb[k]
+                o, nb = maps.ints[k, OFF], maps.ints[k, NB]
                 f = scratch[:2]
                 f[0], f[1] = sg * ux, sg * uy
                 row = scratch[2:nb - 1]
-                h22 = hessian_parts(mrec, k, q[o:o + nb], f, row)
+                h22 = hessian_parts(maps, k, q[o:o + nb], f, row)
                 w = wq * (-c * rate)
                 add_qq(ctx, st, o + 2, o + 2, w * h22)
                 for j in range(nb - 3):

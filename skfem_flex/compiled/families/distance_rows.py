@@ -10,8 +10,8 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from ..abi import context_of, f1, f2, family_at, family_of, fvec, i1, i2
-from ..points import jacobian_into, maps_view, position_into
+from ..abi import context_of, f1, f2, family_at, family_of, fmat, fvec, i1, i2
+from ..points import NB, OFF, jacobian_into, maps_view, position_into
 from ..registry import compiled_kernel
 from ..rows import finish_row
 from ..storage import add_qq, storage_of
@@ -34,7 +34,7 @@ class Data(NamedTuple):
     cptr: np.ndarray        # (k + 1,)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _view(fam):
     return Data(i2(fam, 0), f2(fam, 1), f1(fam, 2), i1(fam, 3), i1(fam, 4))
 
@@ -60,11 +60,10 @@ def pack(items, packer):
     return FamilyPack(data=data, count=n, couplings=[s for _, s in support], rows=support)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _evaluate(ctx, d):
     n = ctx.n
-    mrec = family_at(ctx.maps)
-    maps = maps_view(mrec)
+    maps = maps_view(family_at(ctx.maps))
     q1, qa, qb, v1 = fvec(ctx.q1, n), fvec(ctx.qa, n), fvec(ctx.qb, n), fvec(ctx.v1, n)
     mu = fvec(ctx.mu, ctx.m)
     st = storage_of(ctx)
@@ -73,14 +72,14 @@ def _evaluate(ctx, d):
     r, ra, rb = scratch[top - 6:top - 4], scratch[top - 4:top - 2], scratch[top - 2:top]
     for i in range(d.rows.shape[0]):
         row, k = d.rows[i]
-        o, nb = maps.off[k], maps.nb[k]
-        J = scratch[:2 * nb].reshape(2, nb)
+        o, nb = maps.ints[k, OFF], maps.ints[k, NB]
+        J = fmat(scratch.ctypes.data + 8 * (0), 2, nb)
         cq, dd, cv = scratch[2 * nb:3 * nb], scratch[3 * nb:4 * nb], scratch[4 * nb:5 * nb]
-        position_into(mrec, k, q1[o:o + nb], r)
-        jacobian_into(mrec, k, q1[o:o + nb], J)
+        position_into(maps, k, q1[o:o + nb], r)
+        jacobian_into(maps, k, q1[o:o + nb], J)
         dx, dy = r[0] - d.anchor[i, 0], r[1] - d.anchor[i, 1]
-        position_into(mrec, k, qa[o:o + nb], ra)
-        position_into(mrec, k, qb[o:o + nb], rb)
+        position_into(maps, k, qa[o:o + nb], ra)
+        position_into(maps, k, qb[o:o + nb], rb)
         mx = 0.5 * (ra[0] + rb[0]) - d.anchor[i, 0]
         my = 0.5 * (ra[1] + rb[1]) - d.anchor[i, 1]
         wx, wy = 0.0, 0.0

@@ -11,8 +11,8 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from ..abi import context_of, f2, family_at, family_of, fvec, i1
-from ..points import LINEAR, dgrad_into, dgrad_jacobian_parts, maps_view, position_into
+from ..abi import context_of, f2, family_at, family_of, fmat, fvec, i1
+from ..points import KIND, LINEAR, NB, OFF, dgrad_into, dgrad_jacobian_parts, maps_view, position_into
 from ..registry import compiled_kernel
 from ..storage import add_qq, storage_of
 from ..tasks import TASK_ENERGY, TASK_EVAL
@@ -27,7 +27,7 @@ class Data(NamedTuple):
     g: np.ndarray       # (k, 2) gravitational acceleration, m/s²
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _view(fam):
     return Data(i1(fam, 0), f2(fam, 1))
 
@@ -41,28 +41,27 @@ def pack(items, packer):
                       couplings=[packer.maps_support(k) for k in maps])
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _evaluate(ctx, d):
     """g_p += −Dᵀg from q_a to q_b; the frame maps' w_gp c_dg ∂(−Dᵀg)/∂q_b and round-off floor."""
     n = ctx.n
-    mrec = family_at(ctx.maps)
-    maps = maps_view(mrec)
+    maps = maps_view(family_at(ctx.maps))
     qa, qb, gp, floor = fvec(ctx.qa, n), fvec(ctx.qb, n), fvec(ctx.gp, n), fvec(ctx.floor, n)
     st = storage_of(ctx)
     scratch = fvec(ctx.scratch, ctx.nscratch)
     f = scratch[ctx.nscratch - 2:ctx.nscratch]
     for i in range(d.maps.size):
         k = d.maps[i]
-        o, nb = maps.off[k], maps.nb[k]
-        dk = scratch[:2 * nb].reshape(2, nb)
-        dgrad_into(mrec, k, qa[o:o + nb], qb[o:o + nb], dk)
+        o, nb = maps.ints[k, OFF], maps.ints[k, NB]
+        dk = fmat(scratch.ctypes.data + 8 * (0), 2, nb)
+        dgrad_into(maps, k, qa[o:o + nb], qb[o:o + nb], dk)
         f[0], f[1] = -d.g[i, 0], -d.g[i, 1]
         for j in range(nb):
             gp[o + j] += f[0] * dk[0, j] + f[1] * dk[1, j]
-        if maps.kind[k] == LINEAR:
+        if maps.ints[k, KIND] == LINEAR:
             continue
         row, col = scratch[2 * nb:3 * nb - 3], scratch[3 * nb:4 * nb - 3]
-        h22 = dgrad_jacobian_parts(mrec, k, qa[o:o + nb], qb[o:o + nb], f, row, col)
+        h22 = dgrad_jacobian_parts(maps, k, qa[o:o + nb], qb[o:o + nb], f, row, col)
         w = ctx.w_gp * ctx.c_dg * ctx.dq1
         a2 = abs(qa[o + 2]) + abs(qb[o + 2])
         add_qq(ctx, st, o + 2, o + 2, w * h22)
@@ -75,17 +74,16 @@ def _evaluate(ctx, d):
         floor[o + 2] += fl2
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _energy(ctx, d):
     n = ctx.n
-    mrec = family_at(ctx.maps)
-    maps = maps_view(mrec)
+    maps = maps_view(family_at(ctx.maps))
     q, out = fvec(ctx.q1, n), fvec(ctx.out, 7)
     r = fvec(ctx.scratch, ctx.nscratch)[ctx.nscratch - 2:ctx.nscratch]
     for i in range(d.maps.size):
         k = d.maps[i]
-        o = maps.off[k]
-        position_into(mrec, k, q[o:o + maps.nb[k]], r)
+        o = maps.ints[k, OFF]
+        position_into(maps, k, q[o:o + maps.ints[k, NB]], r)
         out[0] -= d.g[i, 0] * r[0] + d.g[i, 1] * r[1]
 
 

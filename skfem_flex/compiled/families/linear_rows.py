@@ -31,7 +31,7 @@ class Data(NamedTuple):
     coef: np.ndarray        # g
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _view(fam):
     return Data(i2(fam, 0), f1(fam, 1), i1(fam, 2), f1(fam, 3))
 
@@ -57,7 +57,7 @@ def pack(items, packer):
     return FamilyPack(data=data, count=k, rows=row_support)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _evaluate(ctx, d):
     n = ctx.n
     q1 = fvec(ctx.q1, n)

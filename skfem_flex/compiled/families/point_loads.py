@@ -18,8 +18,8 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from ..abi import context_of, f1, family_at, family_of, fvec, i1, i2
-from ..points import FRAME, LINEAR, hessian_parts, jacobian_into, maps_view
+from ..abi import context_of, f1, family_at, family_of, fmat, fvec, i1, i2
+from ..points import FRAME, KIND, LINEAR, NB, OFF, hessian_parts, jacobian_into, maps_view
 from ..registry import compiled_kernel
 from ..storage import add_qq, storage_of
 from ..tasks import TASK_EVAL_LOADS, TASK_LOADS
@@ -90,8 +90,7 @@ def _loads(ctx, fam, tangent):
     """Q(q_e, t) into ``ext``; with ``tangent`` also w_ext dqe ∂Q/∂q into the Newton matrix."""
     d = _view(fam)
     n = ctx.n
-    mrec = family_at(ctx.maps)
-    maps = maps_view(mrec)
+    maps = maps_view(family_at(ctx.maps))
     q, ext = fvec(ctx.qe, n), fvec(ctx.ext, n)
     trow = fvec(ctx.trow, ctx.ncol)
     scratch = fvec(ctx.scratch, ctx.nscratch)
@@ -100,10 +99,10 @@ def _loads(ctx, fam, tangent):
     for e in range(d.force.shape[0]):
         # Q = Jᵀ f, f = F(t) or A(ϑ) F(t), ϑ = g·q + c
         k, col, follower, g0, g1 = d.force[e, 0], d.force[e, 1], d.force[e, 2], d.force[e, 3], d.force[e, 4]
-        o, nb = maps.off[k], maps.nb[k]
+        o, nb = maps.ints[k, OFF], maps.ints[k, NB]
         qb = q[o:o + nb]
-        jac = scratch[:2 * nb].reshape(2, nb)
-        jacobian_into(mrec, k, qb, jac)
+        jac = fmat(scratch.ctypes.data + 8 * (0), 2, nb)
+        jacobian_into(maps, k, qb, jac)
         fx, fy = trow[col], trow[col + 1]
         if follower:
             ang = d.angle0[e]
@@ -118,11 +117,11 @@ def _loads(ctx, fam, tangent):
                         add_qq(ctx, st, o + a, d.idx[t], w * jef * d.coef[t])
         for a in range(nb):
             ext[o + a] += jac[0, a] * fx + jac[1, a] * fy
-        if tangent and maps.kind[k] != LINEAR:      # ∂(Jᵀ f)/∂q at fixed f
+        if tangent and maps.ints[k, KIND] != LINEAR:      # ∂(Jᵀ f)/∂q at fixed f
             f = scratch[2 * nb:2 * nb + 2]
             f[0], f[1] = fx, fy
             row = scratch[2 * nb + 2:3 * nb - 1]
-            h22 = hessian_parts(mrec, k, qb, f, row)
+            h22 = hessian_parts(maps, k, qb, f, row)
             add_qq(ctx, st, o + 2, o + 2, w * h22)
             for j in range(nb - 3):
                 add_qq(ctx, st, o + 2, o + 3 + j, w * row[j])

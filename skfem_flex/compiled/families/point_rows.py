@@ -12,9 +12,9 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from ..abi import context_of, f1, f2, family_at, family_of, fvec, i1, i2
-from ..points import LINEAR, dgrad_into, dgrad_jacobian_parts, jacobian_into, maps_view, position_into, \
-    velocity_jacobian_into
+from ..abi import context_of, f1, f2, family_at, family_of, fmat, fvec, i1, i2
+from ..points import (KIND, LINEAR, NB, OFF, dgrad_into, dgrad_jacobian_parts, jacobian_into, maps_view, position_into,
+                      velocity_jacobian_into)
 from ..registry import compiled_kernel
 from ..rows import finish_row, needs_rate_jacobian
 from ..storage import add_qq, storage_of
@@ -41,7 +41,7 @@ class Data(NamedTuple):
     cols: np.ndarray        # the coordinates each block touches (its maps' blocks, merged)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _view(fam):
     return Data(i2(fam, 0), f2(fam, 1), f2(fam, 2), i1(fam, 3), f1(fam, 4), i1(fam, 5), i1(fam, 6), i1(fam, 7))
 
@@ -87,11 +87,10 @@ def pack(items, packer):
     return FamilyPack(data=data, count=k, couplings=couplings, rows=rows)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _evaluate(ctx, d):
     n = ctx.n
-    mrec = family_at(ctx.maps)
-    maps = maps_view(mrec)
+    maps = maps_view(family_at(ctx.maps))
     q1, qa, qb, v1 = fvec(ctx.q1, n), fvec(ctx.qa, n), fvec(ctx.qb, n), fvec(ctx.v1, n)
     mu = fvec(ctx.mu, ctx.m)
     st = storage_of(ctx)
@@ -107,32 +106,32 @@ def _evaluate(ctx, d):
         buf = scratch[:6 * nc]
         for i in range(6 * nc):
             buf[i] = 0.0
-        cq = buf[:2 * nc].reshape(2, nc)
-        dd = buf[2 * nc:4 * nc].reshape(2, nc)
-        cv = buf[4 * nc:6 * nc].reshape(2, nc)
+        cq = fmat(buf.ctypes.data + 8 * (0), 2, nc)
+        dd = fmat(buf.ctypes.data + 8 * (2 * nc), 2, nc)
+        cv = fmat(buf.ctypes.data + 8 * (4 * nc), 2, nc)
         acc0, acc1 = -d.const[b, 0], -d.const[b, 1]
         nbmax = 0
         for t in range(t0, t1):
-            nbmax = max(nbmax, maps.nb[d.term_map[t]])
+            nbmax = max(nbmax, maps.ints[d.term_map[t], NB])
         work = scratch[6 * nc:6 * nc + 8 * nbmax]
         jac = work[:2 * nbmax]
         dk = work[2 * nbmax:4 * nbmax]
         vj = work[4 * nbmax:6 * nbmax]
         for t in range(t0, t1):
             k, s = d.term_map[t], d.term_sign[t]
-            o, nb = maps.off[k], maps.nb[k]
+            o, nb = maps.ints[k, OFF], maps.ints[k, NB]
             slot = d.slots[d.term_slot[t]:d.term_slot[t] + nb]
-            J = jac[:2 * nb].reshape(2, nb)
-            D = dk[:2 * nb].reshape(2, nb)
-            position_into(mrec, k, q1[o:o + nb], r)
+            J = fmat(jac.ctypes.data + 8 * (0), 2, nb)
+            D = fmat(dk.ctypes.data + 8 * (0), 2, nb)
+            position_into(maps, k, q1[o:o + nb], r)
             acc0 += s * r[0]
             acc1 += s * r[1]
-            jacobian_into(mrec, k, q1[o:o + nb], J)
+            jacobian_into(maps, k, q1[o:o + nb], J)
             if evaluate:
-                dgrad_into(mrec, k, qa[o:o + nb], qb[o:o + nb], D)
+                dgrad_into(maps, k, qa[o:o + nb], qb[o:o + nb], D)
             if rate:
-                V = vj[:2 * nb].reshape(2, nb)
-                velocity_jacobian_into(mrec, k, q1[o:o + nb], v1[o:o + nb], V)
+                V = fmat(vj.ctypes.data + 8 * (0), 2, nb)
+                velocity_jacobian_into(maps, k, q1[o:o + nb], v1[o:o + nb], V)
             for j in range(nb):
                 sj = slot[j]
                 for a in range(2):
@@ -141,14 +140,14 @@ def _evaluate(ctx, d):
                         dd[a, sj] += s * D[a, j]
                     if rate:
                         cv[a, sj] += s * vj[a * nb + j]
-            if evaluate and maps.kind[k] != LINEAR:
+            if evaluate and maps.ints[k, KIND] != LINEAR:
                 # w_mu c_dg dq1 ∂(D_kᵀ f)/∂q_b with f = s μ (rows) or s μ n (projected)
                 if projected:
                     f0 = s * d.nrm[b, 0] * mu[row]
                     f1 = s * d.nrm[b, 1] * mu[row]
                 else:
                     f0, f1 = s * mu[row], s * mu[row + 1]
-                _add_map_dgrad_jacobian(ctx, st, mrec, k, qa[o:o + nb], qb[o:o + nb], f0, f1,
+                _add_map_dgrad_jacobian(ctx, st, maps, k, qa[o:o + nb], qb[o:o + nb], f0, f1,
                                         ctx.w_mu * ctx.c_dg * ctx.dq1, work[6 * nbmax:])
         if projected:
             nx_, ny_ = d.nrm[b, 0], d.nrm[b, 1]
@@ -162,15 +161,14 @@ def _evaluate(ctx, d):
             finish_row(ctx, st, row + 1, acc1, 0.0, 0.0, cols, cq[1], dd[1], cv[1], nc)
 
 
-@numba.njit(cache=True)
-def _add_map_dgrad_jacobian(ctx, st, mrec, k, qa, qb, f0, f1, w, work):
+@numba.njit(cache=True, _nrt=False)
+def _add_map_dgrad_jacobian(ctx, st, maps, k, qa, qb, f0, f1, w, work):
     """Newton matrix += w ∂(D_kᵀ f)/∂q_b of a FRAME map k (body block qa, qb; ``work`` ≥ 2 n_b)."""
-    maps = maps_view(mrec)
-    o, nb = maps.off[k], maps.nb[k]
+    o, nb = maps.ints[k, OFF], maps.ints[k, NB]
     f = work[:2]
     f[0], f[1] = f0, f1
     row, col = work[2:nb - 1], work[nb - 1:2 * nb - 4]
-    h22 = dgrad_jacobian_parts(mrec, k, qa, qb, f, row, col)
+    h22 = dgrad_jacobian_parts(maps, k, qa, qb, f, row, col)
     add_qq(ctx, st, o + 2, o + 2, w * h22)
     for j in range(nb - 3):
         add_qq(ctx, st, o + 2, o + 3 + j, w * row[j])

@@ -29,8 +29,8 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from ..abi import context_of, f2, family_at, family_of, fvec, i2
-from ..points import LINEAR, dgrad_into, dgrad_jacobian_parts, jacobian_into, maps_view, position_into
+from ..abi import context_of, f2, family_at, family_of, fmat, fvec, i2
+from ..points import KIND, LINEAR, NB, OFF, dgrad_into, dgrad_jacobian_parts, jacobian_into, maps_view, position_into
 from ..registry import compiled_kernel
 from ..storage import add_qq, storage_of
 from ..tasks import TASK_ENERGY, TASK_EVAL
@@ -74,33 +74,31 @@ def pack(items, packer):
 
 
 @numba.njit(cache=True, _nrt=False)
-def pair_distance(mrec, ka, kb, ax, ay, q, r):
+def pair_distance(maps, ka, kb, ax, ay, q, r):
     """d = r_a − r_b at the global coordinates q (b: map kb or, if −1, the ground point (ax, ay)), m;
     ``r``: 2 floats to work in."""
-    maps = maps_view(mrec)
-    o = maps.off[ka]
-    position_into(mrec, ka, q[o:o + maps.nb[ka]], r)
+    o = maps.ints[ka, OFF]
+    position_into(maps, ka, q[o:o + maps.ints[ka, NB]], r)
     dx, dy = r[0], r[1]
     if kb < 0:
         return dx - ax, dy - ay
-    o = maps.off[kb]
-    position_into(mrec, kb, q[o:o + maps.nb[kb]], r)
+    o = maps.ints[kb, OFF]
+    position_into(maps, kb, q[o:o + maps.ints[kb, NB]], r)
     return dx - r[0], dy - r[1]
 
 
 @numba.njit(cache=True, _nrt=False)
-def add_frame_dgrad_jacobian(ctx, st, mrec, k, qa, qb, fx, fy, w, work, floor):
+def add_frame_dgrad_jacobian(ctx, st, maps, k, qa, qb, fx, fy, w, work, floor):
     """Newton matrix += w ∂(D_kᵀ f)/∂q_b of map k (zero for LINEAR), and its round-off floor
     |w ∂(Dᵀf)/∂q_b| (|q_a| + |q_b|) into ``floor`` (global); qa, qb the global coordinates, ``work`` ≥
     2 n_b + 2 floats."""
-    maps = maps_view(mrec)
-    if maps.kind[k] == LINEAR:
+    if maps.ints[k, KIND] == LINEAR:
         return
-    o, nb = maps.off[k], maps.nb[k]
+    o, nb = maps.ints[k, OFF], maps.ints[k, NB]
     f = work[:2]
     f[0], f[1] = fx, fy
     row, col = work[2:nb - 1], work[nb - 1:2 * nb - 4]
-    h22 = dgrad_jacobian_parts(mrec, k, qa[o:o + nb], qb[o:o + nb], f, row, col)
+    h22 = dgrad_jacobian_parts(maps, k, qa[o:o + nb], qb[o:o + nb], f, row, col)
     a2 = abs(qa[o + 2]) + abs(qb[o + 2])
     add_qq(ctx, st, o + 2, o + 2, w * h22)
     fl2 = abs(w * h22) * a2
@@ -116,8 +114,7 @@ def add_frame_dgrad_jacobian(ctx, st, mrec, k, qa, qb, fx, fy, w, work, floor):
 def _evaluate(ctx, fam):
     d = _view(fam)
     n = ctx.n
-    mrec = family_at(ctx.maps)
-    maps = maps_view(mrec)
+    maps = maps_view(family_at(ctx.maps))
     qa, qb, gp, floor = fvec(ctx.qa, n), fvec(ctx.qb, n), fvec(ctx.gp, n), fvec(ctx.floor, n)
     st = storage_of(ctx)
     scratch = fvec(ctx.scratch, ctx.nscratch)
@@ -125,8 +122,8 @@ def _evaluate(ctx, fam):
     for e in range(d.maps.shape[0]):
         ka, kb = d.maps[e, 0], d.maps[e, 1]
         k, lr, ax, ay = d.par[e, 0], d.par[e, 1], d.par[e, 2], d.par[e, 3]
-        d0x, d0y = pair_distance(mrec, ka, kb, ax, ay, qa, scratch)
-        d1x, d1y = pair_distance(mrec, ka, kb, ax, ay, qb, scratch)
+        d0x, d0y = pair_distance(maps, ka, kb, ax, ay, qa, scratch)
+        d1x, d1y = pair_distance(maps, ka, kb, ax, ay, qb, scratch)
         l0, l1 = np.hypot(d0x, d0y), np.hypot(d1x, d1y)
         kap = 0.5 * k * (1.0 - 2.0 * lr / (l0 + l1)) if lr > 0.0 else 0.5 * k
         c2 = k * lr / (2.0 * l1 * (l0 + l1) ** 2) if lr > 0.0 else 0.0
@@ -137,18 +134,18 @@ def _evaluate(ctx, fam):
         for sa in range(nsides):
             kA = ka if sa == 0 else kb
             sgA = 1.0 if sa == 0 else -1.0
-            oA, nA = maps.off[kA], maps.nb[kA]
-            DA = scratch[:2 * nA].reshape(2, nA)
-            dgrad_into(mrec, kA, qa[oA:oA + nA], qb[oA:oA + nA], DA)
+            oA, nA = maps.ints[kA, OFF], maps.ints[kA, NB]
+            DA = fmat(scratch.ctypes.data + 8 * (0), 2, nA)
+            dgrad_into(maps, kA, qa[oA:oA + nA], qb[oA:oA + nA], DA)
             for a in range(nA):
                 dd0, dd1 = sgA * DA[0, a], sgA * DA[1, a]
                 gp[oA + a] += kap * (sx * dd0 + sy * dd1)
             for sb in range(nsides):
                 kB = ka if sb == 0 else kb
                 sgB = 1.0 if sb == 0 else -1.0
-                oB, nB = maps.off[kB], maps.nb[kB]
-                JB = scratch[2 * nA:2 * nA + 2 * nB].reshape(2, nB)
-                jacobian_into(mrec, kB, qb[oB:oB + nB], JB)
+                oB, nB = maps.ints[kB, OFF], maps.ints[kB, NB]
+                JB = fmat(scratch.ctypes.data + 8 * (2 * nA), 2, nB)
+                jacobian_into(maps, kB, qb[oB:oB + nB], JB)
                 for a in range(nA):
                     ia = oA + a
                     dd0, dd1 = sgA * DA[0, a], sgA * DA[1, a]
@@ -163,7 +160,7 @@ def _evaluate(ctx, fam):
         for side in range(nsides):
             kk = ka if side == 0 else kb
             sign = 1.0 if side == 0 else -1.0
-            add_frame_dgrad_jacobian(ctx, st, mrec, kk, qa, qb, sign * kap * sx, sign * kap * sy, th, scratch,
+            add_frame_dgrad_jacobian(ctx, st, maps, kk, qa, qb, sign * kap * sx, sign * kap * sy, th, scratch,
                                      floor)
 
 
@@ -171,12 +168,12 @@ def _evaluate(ctx, fam):
 def _energy(ctx, fam):
     """out[0] += Σ ½ k (l(q₁) − l₀)², J."""
     d = _view(fam)
-    mrec = family_at(ctx.maps)
+    maps = maps_view(family_at(ctx.maps))
     q, out = fvec(ctx.q1, ctx.n), fvec(ctx.out, 7)
     r = fvec(ctx.scratch, 2)
     pot = 0.0
     for e in range(d.maps.shape[0]):
-        dx, dy = pair_distance(mrec, d.maps[e, 0], d.maps[e, 1], d.par[e, 2], d.par[e, 3], q, r)
+        dx, dy = pair_distance(maps, d.maps[e, 0], d.maps[e, 1], d.par[e, 2], d.par[e, 3], q, r)
         pot += 0.5 * d.par[e, 0] * (np.hypot(dx, dy) - d.par[e, 1]) ** 2
     out[0] += pot
 
