@@ -54,8 +54,10 @@ class Workspace:
         for name in ("res", "y"):
             self._vector(name, nx)
         self._vector("out", 8)
-        self._vector("scratch", max(4 * n, 64))
-        c["nscratch"] = max(4 * n, 64)
+        # the families' work space for one call (.abi): 32 n, what the constraint families need for a
+        # block over a whole large body (its Φ_q, D, ∂(Φ_q v)/∂q and the maps' Jacobians)
+        self._vector("scratch", max(32 * n, 64))
+        c["nscratch"] = max(32 * n, 64)
         # the matrix
         if pk.storage == DENSE:
             self.mat = np.zeros(nx * nx)

@@ -31,6 +31,9 @@ FAMILY_MODULES = (
     "point_rows",
     "linear_rows",
     "distance_rows",
+    "floating_frame",
+    "exact_beam",
+    "rotated_rows",
 )
 
 
