@@ -40,7 +40,20 @@ _NKD = len(ExactKernelData._fields)
 
 
 def pack(items, packer):
-    """The beams' strain data side by side (``items``: (kd, body, offset) per beam)."""
+    """The family's data: each beam's ExactKernelData fields one after another (``b<k>_<name>``), after the
+    offsets of the beams' blocks and the positions of their tangents' entries (set by ``finish``).
+
+    Parameters
+    ----------
+    items : list of (ExactKernelData, ExactBeam, int)
+        Per beam its ``compiled_strain_data()``, the beam and the offset of its block.
+    packer : Packer
+
+    Returns
+    -------
+    FamilyPack
+        ``entries``: every entry of the beams' tangent patterns (their element blocks), in scene coordinates.
+    """
     names, arrays = ["offs", "pos", "pos_ptr"], [None, None, None]
     offs, rows, cols, ptr = [], [], [], [0]
     for b, (kd, body, off) in enumerate(items):
@@ -64,6 +77,7 @@ def pack(items, packer):
 
 @numba.njit(cache=True)
 def _beams(ctx, fam):
+    """Every beam's part of TASK_EVAL or TASK_ENERGY (module docstring); ``fam``: the family record."""
     n = ctx.n
     offs, pos_all, ptr = i1(fam, 0), i1(fam, 1), i1(fam, 2)
     for b in range(offs.size):
@@ -99,10 +113,12 @@ def _beams(ctx, fam):
 
 
 def _kernel(ctx_p, fam_p):
+    """The family's kernel (signature of :mod:`..abi`): TASK_EVAL and TASK_ENERGY."""
     ctx = context_of(ctx_p)
     if ctx.task == TASK_EVAL or ctx.task == TASK_ENERGY:
         _beams(ctx, family_of(fam_p))
 
 
 def kernel():
+    """The compiled kernel (from the cache, or compiled now)."""
     return compiled_kernel(_kernel, "the exact-beam family")

@@ -104,7 +104,20 @@ def pattern_positions(rows, cols, layout):
 
 
 def pack(items, packer):
-    """The bodies' kernel data side by side (``items``: (kd, body, offset) per body)."""
+    """The family's data: each body's FloatingKernelData fields one after another (field names ``b<k>_<name>``,
+    after the offsets of the bodies' blocks and the positions of their tangents' entries, set by ``finish``).
+
+    Parameters
+    ----------
+    items : list of (FloatingKernelData, Body, int)
+        Per body its ``compiled_kernel_data()``, the body and the offset of its block in the scene's coordinates.
+    packer : Packer
+
+    Returns
+    -------
+    FamilyPack
+        ``entries``: every entry of the bodies' tangent patterns, in scene coordinates.
+    """
     names, arrays = ["offs", "pos", "pos_ptr"], [None, None, None]
     offs, rows, cols, ptr = [], [], [], [0]
     for b, (kd, body, off) in enumerate(items):
@@ -146,6 +159,7 @@ def _add(dst, o, src):
 
 @numba.njit(cache=True)
 def _bodies(ctx, fam):
+    """Every body's part of the context's task (module docstring); ``fam``: the family record."""
     n = ctx.n
     task = ctx.task
     offs, pos_all, ptr = i1(fam, 0), i1(fam, 1), i1(fam, 2)
@@ -219,6 +233,7 @@ def _bodies(ctx, fam):
 
 
 def _kernel(ctx_p, fam_p):
+    """The family's kernel (signature of :mod:`..abi`): TASK_EVAL, TASK_MOMENTUM and TASK_ENERGY."""
     ctx = context_of(ctx_p)
     task = ctx.task
     if task == TASK_EVAL or task == TASK_MOMENTUM or task == TASK_ENERGY:
@@ -226,4 +241,5 @@ def _kernel(ctx_p, fam_p):
 
 
 def kernel():
+    """The compiled kernel (from the cache, or compiled now)."""
     return compiled_kernel(_kernel, "the floating-frame family")

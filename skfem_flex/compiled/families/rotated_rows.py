@@ -67,7 +67,21 @@ def _view(fam):
 
 
 def pack(items, packer):
-    """The blocks of the items ((("rotated projected", g, c, n_loc, points), None), constraint, (idx, row))."""
+    """The family's data from the items ((("rotated projected", g, c, n_loc, points), law), constraint,
+    (coordinates, row)): g over the constraint's coordinates (rad per m or per rad), c (rad), n_loc the unit
+    normal at ϑ = 0, ``points`` = ("points", [(point, sign), ...], c_e (m)).
+
+    Returns
+    -------
+    FamilyPack
+        ``rows``: each block's row and the coordinates Φ_q may touch (its maps' supports and the angle's
+        coordinates); ``couplings``: the same sets (∂(Dᵀμ)/∂q couples them).
+
+    Raises
+    ------
+    ValueError
+        If a block has a motion law or a point has no compiled map.
+    """
     blocks, vals, lin_idx, lin_coef, lin_slot = [], [], [], [], []
     tmap, tsign, tslot, slots, cols = [], [], [], [], []
     rows, couplings = [], []
@@ -101,7 +115,7 @@ def pack(items, packer):
         rows.append((row, support))
         couplings.append(support)
     k = len(blocks)
-    i64 = lambda a: np.asarray(a, dtype=np.int64)           # noqa: E731
+    i64 = lambda a: np.asarray(a, dtype=np.int64)           # noqa: E731 (a one-line converter)
     data = Data(i64(blocks).reshape(k, 7), np.asarray(vals, dtype=float).reshape(k, 5), i64(lin_idx),
                 np.asarray(lin_coef, dtype=float), i64(lin_slot), i64(tmap), np.asarray(tsign, dtype=float),
                 i64(tslot), i64(slots), i64(cols))
@@ -110,6 +124,7 @@ def pack(items, packer):
 
 @numba.njit(cache=True)
 def _evaluate(ctx, d):
+    """Every block's row for TASK_EVAL or TASK_ROWS (module docstring; ``d``: the family's Data)."""
     n = ctx.n
     mrec = family_at(ctx.maps)
     maps = maps_view(mrec)
@@ -231,10 +246,12 @@ def _add_map_dgrad_jacobian(ctx, st, mrec, k, qa, qb, f0, f1, work):
 
 
 def _kernel(ctx_p, fam_p):
+    """The family's kernel (signature of :mod:`..abi`): TASK_EVAL and TASK_ROWS."""
     ctx = context_of(ctx_p)
     if ctx.task == TASK_EVAL or ctx.task == TASK_ROWS:
         _evaluate(ctx, _view(family_of(fam_p)))
 
 
 def kernel():
+    """The compiled kernel (from the cache, or compiled now)."""
     return compiled_kernel(_kernel, "the family of lines on moving bodies")
