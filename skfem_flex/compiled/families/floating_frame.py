@@ -216,20 +216,33 @@ def _bodies(ctx, fam):
             _scatter(mat, pos, data, ctx.w_p * dq1)
             continue
         # Δq fixed (the start): the tangent is w_p da1 M(q1) alone; M by columns, M e_j = p(q1, e_j)
-        mcol = np.empty((nb, nb))
-        e = np.zeros(nb)
+        w = ctx.w_p * ctx.da1
+        e = fvec(ctx.scratch, ctx.nscratch)[:nb]
+        for i in range(nb):
+            e[i] = 0.0
+        pp, pi = kd.pat_ptr, kd.pat_idx
         for j in range(nb):
             e[j] = 1.0
             col = momentum(kd, qb1, e)
             e[j] = 0.0
             for i in range(nb):
-                mcol[i, j] = col[i]
-        w = ctx.w_p * ctx.da1
-        pp, pi = kd.pat_ptr, kd.pat_idx
-        for i in range(nb):
-            for t in range(pp[i], pp[i + 1]):
-                if pos[t] >= 0:
-                    mat[pos[t]] += w * mcol[i, pi[t]]
+                t = _entry(pi, pp[i], pp[i + 1], j)
+                if t >= 0 and pos[t] >= 0:
+                    mat[pos[t]] += w * col[i]
+
+
+@numba.njit(cache=True, _nrt=False)
+def _entry(idx, lo, hi, j):
+    """Position of column j among the sorted idx[lo:hi] (a CSR row), or −1."""
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if idx[mid] < j:
+            lo = mid + 1
+        elif idx[mid] > j:
+            hi = mid
+        else:
+            return mid
+    return -1
 
 
 def _kernel(ctx_p, fam_p):

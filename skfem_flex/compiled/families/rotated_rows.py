@@ -135,7 +135,7 @@ def _evaluate(ctx, d):
     rate = needs_rate_jacobian(ctx)
     w = ctx.w_mu * ctx.c_dg * ctx.dq1
     scratch = fvec(ctx.scratch, ctx.nscratch)
-    r = np.empty(2)
+    r = scratch[ctx.nscratch - 2:]              # a point's position (the blocks' work space stays below 11 n)
     for b in range(d.blocks.shape[0]):
         row, l0, l1, t0, t1, c0, c1 = d.blocks[b]
         nc = c1 - c0
