@@ -35,6 +35,9 @@ FAMILY_MODULES = (
     "two_point_springs",
     "point_loads",
     "dampers",
+    "floating_frame",
+    "exact_beam",
+    "rotated_rows",
 )
 
 

@@ -34,11 +34,21 @@ def _view(fam):
 
 def pack(items, packer):
     maps, g = [], []
+    rows, cols = [], []
     for (entry, gvec), body, (off, nb) in items:
-        maps.append(packer.maps.add(entry, off, nb))
+        k = packer.maps.add(entry, off, nb)
+        maps.append(k)
         g.append(np.asarray(gvec, dtype=float).reshape(2))
+        if entry[0] == "frame":
+            # the tangent of a frame map's −Dᵀg has only the θ row and column (a first moment's support is the
+            # whole body: as a dense block it would fill a large beam's Newton matrix); a linear map has none
+            sup = packer.maps_support(k)
+            theta = np.full(sup.size, off + 2, dtype=np.int64)
+            rows += [theta, sup]
+            cols += [sup, theta]
+    entries = (np.concatenate(rows), np.concatenate(cols)) if rows else None
     return FamilyPack(data=Data(np.asarray(maps, dtype=np.int64), np.asarray(g).reshape(-1, 2)), count=len(items),
-                      couplings=[packer.maps_support(k) for k in maps])
+                      entries=entries)
 
 
 @numba.njit(cache=True, _nrt=False)
