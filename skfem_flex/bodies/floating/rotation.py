@@ -128,7 +128,7 @@ def centrifugal_equilibrium(body, omega, tol=1e-12, max_iterations=50):
             if ds < _MIN_LOAD_STEP:
                 raise ValueError(f"centrifugal equilibrium at omega = {om} did not converge: the load stepping in "
                                  f"omega^2 reached omega = {np.sqrt(s) * abs(om):.6g} rad/s and could go no "
-                                 f"further (a divergence speed, or an element folding): {last}") from None
+                                 f"further (beyond a divergence speed?): {last}") from None
             continue
         s, x = s_try, x_new
         ds = min(2.0 * ds, 1.0)
