@@ -18,8 +18,8 @@ Bad input is not in the family: arguments that cannot be used raise ``ValueError
 :class:`~skfem_flex.scene_initial.InconsistentInitialConditionsError` and
 :class:`~skfem_flex.numerics.resources.InsufficientMemoryError` are such value errors).
 
-The classes are defined here and nowhere else; :mod:`skfem_flex.schemes.integrators` and the
-package root re-export them (``sf.SimulationError`` is this class). They live in their own
+The classes are defined here and nowhere else; the package root re-exports them
+(``sf.SimulationError`` is this class), as may modules that raise them. They live in their own
 module so that bodies can raise them without importing the integrators (imports point one
 way: docs/ARCHITECTURE.md).
 
