@@ -160,6 +160,9 @@ class EquilibriumState:
         Newton iterations over all steps.
     steady : bool
         True for a relative equilibrium under the scene's steady motion.
+    residual_tolerance : float
+        The largest force imbalance (N) the solve accepted as zero:
+        rtol · max(largest force term, start imbalance) + 16 ε ‖|∇²V| |q|‖∞ (0 if unknown).
     """
 
     t: float
@@ -173,6 +176,7 @@ class EquilibriumState:
     steps: int = 0
     iterations: int = 0
     steady: bool = False
+    residual_tolerance: float = 0.0
 
 
 class _Statics:
@@ -231,6 +235,101 @@ class _Statics:
 
 class _SingularStart(ValueError):
     """The load path cannot start at the given state: no stiffness meets the loads there."""
+
+
+def _translation_fields(scene, q):
+    """W (2, n) with rows the generalized rigid translations t_x, t_y of the whole scene, or None.
+
+    For bodies whose linear momentum is p = G v with M t = Gᵀ (every body of the package: a
+    rigid translation moves every mass element by the same vector), W = G M⁻¹, and W f is the
+    resultant (N) of a generalized force f. None when a body gives no momentum or M is singular.
+    """
+    g = np.zeros((2, scene.n))
+    for b in scene.bodies:
+        sl = scene.slice(b)
+        qb, e = q[sl], np.zeros(b.n_dofs)
+        for j in range(b.n_dofs):
+            e[j] = 1.0
+            p = b.linear_momentum(qb, e)
+            e[j] = 0.0
+            if p is None:
+                return None
+            g[:, sl.start + j] = p
+    mass = scene.mass_matrix(q)
+    try:
+        w = np.array([linear_solve(mass, row) for row in g])
+    except np.linalg.LinAlgError:
+        return None
+    return w if np.all(np.isfinite(w)) else None
+
+
+def _check_held(scene, q, v, a, t):
+    """ValueError if nothing holds the scene against the resultant of its loads (no rest state).
+
+    A direction d of rigid translation is free when no constraint, prescribed coordinate or
+    stiffness to the ground can exert a force along it: d · W Φ_qᵀ = 0, d · W e_p = 0 for the
+    prescribed coordinates p, and d · W K = 0 (internal forces and joints between bodies have no
+    resultant). If the loads' resultant W(Q − F_internal) has a component along a free direction,
+    the scene accelerates whatever its configuration (a free-flying body under a load, a body
+    falling freely): there is no state at rest to find or to linearize about.
+    """
+    w = _translation_fields(scene, q)
+    if w is None:
+        return
+    force, stiff = force_balance(scene, q, v, a, t)[:2]
+    absw = np.abs(w)
+    cols = [(stiff.T @ w.T).T, (_abs(stiff).T @ absw.T).T]
+    if scene.n_constraints:
+        cq = scene.constraint_jacobian(q, t)
+        cols += [(cq @ w.T).T, (_abs(cq) @ absw.T).T]
+    pres = scene.prescribed_index
+    cols += [w[:, pres], absw[:, pres]]
+    held = np.hstack(cols[0::2])
+    size = np.linalg.norm(np.hstack(cols[1::2]), axis=0)
+    norm = np.linalg.norm(held, axis=0)
+    keep = norm > 1e-8 * np.maximum(size, _TINY)       # forces a support exerts on a rigid translation
+    free = np.eye(2)
+    if np.any(keep):
+        u, sv, _ = np.linalg.svd(held[:, keep] / norm[keep], full_matrices=True)
+        free = u[:, sv.size:] if sv.size < 2 else u[:, sv <= 1e-6 * sv[0]]
+    size = max(float(np.linalg.norm(absw @ np.abs(force))), _TINY)
+    free = free[:, [_translates_freely(scene, q, v, a, t, w, force, d, size) for d in free.T]]
+    if free.shape[1] == 0:
+        return
+    resultant = -(w @ force) + 0.0                    # + 0.0: no "-0" in the message
+    along = free.T @ resultant
+    if np.linalg.norm(along) <= 1e-8 * size:
+        return
+    what = ("in any direction" if free.shape[1] == 2 else
+            f"along ({free[0, 0]:.3g}, {free[1, 0]:.3g})")
+    raise ValueError(f"scene {scene.name!r} has no rest state: nothing holds it {what} (no support, prescribed "
+                     f"coordinate or stiffness to the ground), and its loads at t = {t:g} s have a resultant "
+                     f"force ({resultant[0]:.4g}, {resultant[1]:.4g}) N, so it accelerates (a free-flying body "
+                     f"under loads, or a body falling freely); linearize it about its initial state "
+                     f"(about='initial') or about a state of a run instead")
+
+
+def _translates_freely(scene, q, v, a, t, w, force, d, size):
+    """True if a finite rigid translation along d changes neither Φ nor the loads' resultant along d.
+
+    The first-order test of :func:`_check_held` is local: a pendulum held horizontal has a rod whose
+    Jacobian is blind to a vertical translation (Φ changes by ½δ² only), yet the rod holds it. A
+    translation by a tenth of the scene's size tells supports that act at some distance from
+    ones that never act (joints between bodies, internal forces: translation invariant exactly).
+    """
+    td = d @ w
+    delta = 0.1 * scene.length_scale
+    q1 = q + delta * td
+    if scene.n_constraints:
+        dphi = scene.constraint_value(q1, t) - scene.constraint_value(q, t)
+        reach = _inf(_abs(scene.constraint_jacobian(q, t)) @ np.abs(td)) + _inf(td) * scene.length_scale
+        if _inf(dphi) > 1e-8 * delta * max(reach, _TINY):
+            return False
+    try:
+        force1 = force_balance(scene, q1, v, a, t)[0]
+    except (ValueError, ConvergenceError):     # a body that cannot be moved there is held somehow
+        return False
+    return abs(float(d @ (w @ (force1 - force)))) <= 1e-8 * size
 
 
 def _initial_multipliers(scene, q, v, a, t):
@@ -354,12 +453,18 @@ def static_equilibrium(scene, t=0.0, q=None, steady=False, newton=None, max_step
         try:
             return _continuation(scene, q0, v, a, t, settings, int(max_steps), float(min_step), steady)
         except _SingularStart as exc:
-            # no stiffness meets the loads at the start (a pendulum held horizontal): let the scene
-            # settle to rest under its loads first, then finish from there
+            # no stiffness meets the loads at the start: either nothing ever will (a free-flying
+            # body under loads: say so), or the scene has a rest state elsewhere (a pendulum held
+            # horizontal): let it settle to rest under its loads first, then finish from there
+            _check_held(scene, q0, v, a, t)
             q0 = _settle(scene, q0, t, settings, exc)
             return _continuation(scene, q0, v, a, t, settings, int(max_steps), float(min_step), steady)
     for _ in range(4):                     # steady: the constraint velocities follow the solution
-        state = _continuation(scene, q0, v, a, t, settings, int(max_steps), float(min_step), steady)
+        try:
+            state = _continuation(scene, q0, v, a, t, settings, int(max_steps), float(min_step), steady)
+        except _SingularStart:
+            _check_held(scene, q0, v, a, t)
+            raise
         if not steady or not scene.n_constraints:
             break
         v_new = _steady_velocity(scene, state.q, t)
@@ -428,7 +533,16 @@ def _pad(mat, m):
 
 
 def _check_steady(scene, state):
-    """ValueError unless the unknown coordinates stay at rest in the steady state (a relative equilibrium)."""
+    """ValueError unless the unknown coordinates stay at rest in the steady state (a relative equilibrium).
+
+    The inertia force M_ff a_f the steady velocities demand must vanish: it may not exceed 10⁻⁶ of
+    the largest force of the steady motion, nor a hundred times the imbalance the equilibrium
+    solve accepted as zero. The second bound is the scene's own scale where the forces of the
+    motion are tiny (a spin of 10⁻⁶ rad/s gives centrifugal forces 10¹² times smaller than the
+    stiff internal forces whose round-off and start imbalance set the solve's tolerance); an
+    absolute comparison with the forces of the motion alone took that round-off for an
+    acceleration.
+    """
     if not np.any(state.v):
         return
     try:
@@ -438,7 +552,7 @@ def _check_steady(scene, state):
     free = scene.free_index
     inertia = _sub(scene.mass_matrix(state.q), free, free) @ acc[free]
     scale = force_balance(scene, state.q, state.v, state.acc, state.t)[3]
-    if _inf(inertia) > 1e-6 * max(scale, _TINY):
+    if _inf(inertia) > max(1e-6 * scale, 100.0 * state.residual_tolerance, _TINY):
         raise ValueError(f"scene {scene.name!r} has no steady state: with the velocities of its steady motion "
                          f"the unknown coordinates must accelerate (inertia force {_inf(inertia):.3g} against "
                          f"forces of {scale:.3g}); a relative equilibrium needs a steady motion along "
@@ -453,10 +567,12 @@ def _continuation(scene, q0, v, a, t, settings, max_steps, min_step, steady):
     name = "static equilibrium"
 
     def done(x, s, steps, its):
-        sys_.evaluate(x)                     # the force balance at x, for the prescribed coordinates' forces
+        # the force balance at x, for the prescribed coordinates' forces and the accepted imbalance
+        _, _, (scale, floor, _) = sys_.evaluate(x)
+        tolerance = settings.rtol * max(scale, _inf(r0[:nf])) + 16 * _EPS * floor
         q = sys_.full_q(x)
         lam = x[nf:]
-        return _equilibrium_state(scene, t, q, v, a, lam, s, steps, its, steady, sys_.last_force)
+        return _equilibrium_state(scene, t, q, v, a, lam, s, steps, its, steady, sys_.last_force, tolerance)
 
     if sys_.error(r0, sc0) <= 1.0:
         return done(x0, 1.0, 0, 0)
@@ -569,11 +685,12 @@ def _corrector(sys_, y_pred, tau, weight, r0, settings, name):
     return y, its
 
 
-def _equilibrium_state(scene, t, q, v, a, lam, s, steps, its, steady, force):
+def _equilibrium_state(scene, t, q, v, a, lam, s, steps, its, steady, force, tolerance):
     pres = scene.prescribed_index
     return EquilibriumState(t=t, q=q, v=v.copy(), lam=np.array(lam, dtype=float), acc=a.copy(),
                             reactions=scene.constraint_reactions(q, lam), prescribed_force=force[pres].copy(),
-                            load_factor=float(s), steps=steps, iterations=its, steady=bool(steady))
+                            load_factor=float(s), steps=steps, iterations=its, steady=bool(steady),
+                            residual_tolerance=float(tolerance))
 
 
 # ======================================================================= linearization

@@ -121,10 +121,11 @@ def test_cantilever_sagging_under_gravity_and_a_run_started_there(integrator):
 
 
 def test_static_without_any_rest_state_is_refused():
-    # a mass falling freely under gravity has no rest state: settling never ends, and the refusal
-    # says why instead of returning a state that is not at rest
+    # a mass falling freely under gravity has no rest state: nothing holds it against its weight,
+    # and the refusal says so instead of returning a state that is not at rest
     scene = sf.Scene([sf.PointMass(1.0, [0.0, 0.0], [0.0, 0.0])], forces=[sf.Gravity((0.0, -G))])
-    with pytest.raises(ValueError, match="singular point of the load path.*did not come to rest"):
+    with pytest.raises(ValueError, match=r"has no rest state: nothing holds it in any direction.*resultant force "
+                                         r"\(0, -9.81\) N"):
         sf.static_equilibrium(scene)
     scene = scenes.flexible_pendulum()
     with pytest.raises(ValueError, match="q must be a finite vector"):
@@ -412,3 +413,50 @@ def test_cli_bad_analysis_input_is_one_line(tmp_path, monkeypatch, capsys):
         assert cli.main(argv) == 2, argv
         err = capsys.readouterr().err
         assert err.count("\n") == 1 and err.startswith("skfem-flex: error:"), (argv, err)
+
+
+# ------------------------------------------------------------- tiny spin rates, scenes without rest
+def test_modes_about_a_very_slow_spin_equal_those_at_rest():
+    """ω = 1e-6 rad/s is a steady state like any other: its centrifugal forces (1e-11 N) are far below
+    the round-off and start imbalance of the stiff beam's balance, which the steady test now compares
+    against. The Southwell shift (S − 1) ω²/(2 ω₁²) ≈ 7e-15 is below the eigensolvers' accuracy, so
+    the frequencies equal the rotating-frame frequencies at rest (first-order solve, 1e-9) and the
+    modes at ω = 0 (symmetric solve, whose stiff shear modes limit it to about 1e-8)."""
+    slow = sf.modes(scenes.rotating_beam(omega=1e-6), about="steady", n_modes=3)
+    still = sf.modes(scenes.rotating_beam(omega=0.0), about="steady", n_modes=3)
+    np.testing.assert_allclose(slow.omega, scenes.rotating_beam_frequencies(0.0, n_modes=3), rtol=1e-9)
+    np.testing.assert_allclose(slow.omega, still.omega, rtol=1e-7)
+
+
+def test_campbell_through_a_very_slow_spin():
+    values = [0.0, 1e-6, 1e-4, 1e-3, 4.0]
+    diagram = sf.campbell("rotating_beam", "omega", values, n_modes=2)
+    assert np.all(np.isfinite(diagram.omega))
+    for i, om in enumerate(values):
+        np.testing.assert_allclose(diagram.omega[i], scenes.rotating_beam_frequencies(om, n_modes=2), rtol=1e-7)
+
+
+def test_free_flying_beam_has_no_rest_state():
+    with pytest.raises(ValueError, match=r"'flying_beam' has no rest state: nothing holds it.*resultant force "
+                                         r"\(8, 0\) N"):
+        sf.static_equilibrium(scenes.flying_beam())
+    with pytest.raises(ValueError, match="has no rest state"):
+        sf.modes(scenes.flying_beam(), about="static", n_modes=3)
+    # about its initial state it linearizes: three rigid-body zero modes of the free beam
+    free = sf.modes(scenes.flying_beam(), about="initial", n_modes=4)
+    assert np.count_nonzero(np.abs(free.eigenvalues) < 1e-6) == 3
+
+
+def test_a_held_scene_with_a_singular_start_still_settles():
+    """The check does not refuse a scene whose supports take up the loads: the pendulum held
+    horizontal settles to hanging (a rest state exists)."""
+    scene = scenes.pendulum(v0=0.0)
+    st = sf.static_equilibrium(scene, q=[0.5, 0.0])
+    np.testing.assert_allclose(st.q, [0.0, -0.5], atol=1e-9)
+
+
+def test_cli_modes_of_the_flying_beam_says_why_in_one_line(tmp_path):
+    proc = _cli(["modes", "flying_beam"], tmp_path)
+    assert proc.returncode == 2
+    assert proc.stderr.count("\n") == 1 and "has no rest state" in proc.stderr and "free-flying" in proc.stderr
+    assert "folds inside out" not in proc.stderr and "Traceback" not in proc.stderr

@@ -170,3 +170,71 @@ def test_parser_has_subcommands():
     parser = cli.build_parser()
     sub = next(a for a in parser._actions if a.dest == "command")
     assert {"run", "list"} <= set(sub.choices)
+
+
+# ---------------------------------------------------------------- first-hour surprises
+def _one_error_line(capsys):
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("skfem-flex: error:"), err
+    assert "internal error" not in err and "please report" not in err
+    return err
+
+
+@pytest.mark.parametrize("mesh, why", [("/nonexistent.msh", "does not exist"),
+                                       (".", "is a directory"),
+                                       ("summary.txt", "is not a mesh meshio can read")])
+def test_a_missing_or_unreadable_mesh_file_is_bad_input_naming_the_file(mesh, why, capsys, tmp_path, monkeypatch):
+    """slider_crank takes a mesh file (``mesh``, for the plane-stress rod)."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "summary.txt").write_text("not a mesh\n")
+    assert cli.main(["run", "slider_crank", "--set", "body=plane-stress", f"mesh={mesh}", "--quiet"]) == 2
+    err = _one_error_line(capsys)
+    assert f"mesh file {mesh!r} {why}" in err
+
+
+def test_resume_to_a_time_the_run_already_passed_is_refused(capsys, tmp_path):
+    out = tmp_path / "o"
+    assert cli.main(["run", "spring_mass", "--t-end", "1.1", "--dt", "0.1", "--out", str(out), "--quiet"]) == 0
+    assert cli.main(["run", "--resume", str(out), "--t-end", "0.5", "--quiet"]) == 2
+    err = _one_error_line(capsys)
+    assert "already reached t = 1.1 s" in err and "--t-end must be beyond it" in err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["t_end"] == 1.1 and summary["t_reached"] == pytest.approx(1.1)     # untouched
+    # beyond it, the run goes on
+    assert cli.main(["run", "--resume", str(out), "--t-end", "1.5", "--quiet"]) == 0
+    assert json.loads((out / "summary.json").read_text())["t_reached"] == pytest.approx(1.5)
+
+
+@pytest.mark.parametrize("argv, wrong", [
+    (["campbell", "rotating_beam", "--vary", "omega=0,fast"], "--vary omega=fast: omega needs a number"),
+    (["campbell", "rotating_beam", "--vary", "omega=0:4:many"], "--vary omega=many: omega needs an integer"),
+    (["sweep", "spring_mass", "--vary", "m=1,heavy"], "--vary m=heavy: m needs a number"),
+])
+def test_errors_of_vary_values_name_vary(argv, wrong, capsys, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(argv) == 2
+    err = _one_error_line(capsys)
+    assert wrong in err and "--set" not in err
+
+
+def test_the_report_says_the_step_the_run_took(capsys, tmp_path):
+    """A run shorter than its step takes one step of t_end (the last step lands on t_end)."""
+    assert cli.main(["run", "spring_mass", "--t-end", "0.01", "--dt", "0.5", "--out", str(tmp_path / "a"),
+                     "--no-vtk"]) == 0
+    out = capsys.readouterr().out
+    assert "spring_mass: 1 step of 0.01 s to t = 0.01 s" in out
+    assert cli.main(["run", "spring_mass", "--t-end", "1.05", "--dt", "0.1", "--out", str(tmp_path / "b"),
+                     "--no-vtk"]) == 0
+    assert "spring_mass: 11 steps of 0.1 s (the last one 0.05 s) to t = 1.05 s" in capsys.readouterr().out
+
+
+def test_probe_plots_label_their_units():
+    from skfem_flex.run.plots import plot_probes, probe_units
+
+    scene = sf.scenes.pendulum()
+    assert probe_units(scene) == {"position": "m"}            # a PointProbe: a position
+    assert probe_units(sf.scenes.rotating_beam()) == {"tip": "m"}
+    assert probe_units(sf.scenes.spring_mass()) == {"u": "SI"}  # a plain function: SI, nothing more known
+    result = sf.simulate(scene, 0.02, 0.01)
+    fig = plot_probes(result, units=probe_units(scene))
+    assert fig.axes[0].get_ylabel() == "position (m)"

@@ -112,16 +112,25 @@ _TRUE = {"1", "true", "yes", "on", "y", "t"}
 _FALSE = {"0", "false", "no", "off", "n", "f"}
 
 
-def convert_setting(key, text, default):
+def convert_setting(key, text, default, option="--set"):
     """Convert ``text`` to the type of the parameter's ``default`` (bool, int, float or str).
 
     A parameter without a default (or with default None) takes an int, a
     float or, failing both, the string.
 
+    Parameters
+    ----------
+    key, text : str
+        Parameter name and the value as typed.
+    default
+        The parameter's default (its type is the target type), or None.
+    option : str
+        The command-line option the value came with (``--set``, ``--vary``), for messages.
+
     Raises
     ------
     UsageError
-        Naming the parameter and the value.
+        Naming the option, the parameter and the value.
     """
     if isinstance(default, bool):
         low = text.strip().lower()
@@ -129,7 +138,7 @@ def convert_setting(key, text, default):
             return True
         if low in _FALSE:
             return False
-        raise UsageError(f"--set {key}={text}: {key} is a yes/no parameter (true/false, 1/0), got {text!r}")
+        raise UsageError(f"{option} {key}={text}: {key} is a yes/no parameter (true/false, 1/0), got {text!r}")
     if isinstance(default, int):
         try:
             return int(text)
@@ -141,14 +150,14 @@ def convert_setting(key, text, default):
             x = math.nan
         if math.isfinite(x) and x == int(x):
             return int(x)
-        raise UsageError(f"--set {key}={text}: {key} needs an integer, got {text!r}")
+        raise UsageError(f"{option} {key}={text}: {key} needs an integer, got {text!r}")
     if isinstance(default, float):
         try:
             x = float(text)
         except ValueError:
-            raise UsageError(f"--set {key}={text}: {key} needs a number, got {text!r}") from None
+            raise UsageError(f"{option} {key}={text}: {key} needs a number, got {text!r}") from None
         if not math.isfinite(x):
-            raise UsageError(f"--set {key}={text}: {key} needs a finite number, got {text!r}")
+            raise UsageError(f"{option} {key}={text}: {key} needs a finite number, got {text!r}")
         return x
     if isinstance(default, str):
         return text
@@ -356,6 +365,10 @@ def _cmd_run(args):
     resume = None
     if args.resume is not None:
         resume = _resume_file(out)
+        reached = float(resume.t[-1])
+        if args.t_end is not None and t_end <= reached:
+            raise UsageError(f"--resume {str(out)!r}: the run already reached t = {reached:g} s; --t-end must be "
+                             f"beyond it, got {t_end:g} s")
     else:
         for f in _RUN_FILES:
             (out / f).unlink(missing_ok=True)
@@ -485,10 +498,26 @@ def _write_run_outputs(scene, result, sinks, out):
     return files
 
 
+def _steps_text(summary):
+    """"N steps of Δt s", in the words the numbers need: the run's last step is shortened to land on
+    t_end, so a run shorter than one step takes a single step of t_end, not of Δt."""
+    steps, dt = int(summary.get("steps", 0)), float(summary["dt"])
+    if steps == 0:
+        return "0 steps"
+    last = float(summary.get("t_reached", summary["t_end"])) - (steps - 1) * dt
+    if not 0.0 < last <= dt * (1 + 1e-9):          # a resumed run whose steps are not all on one grid
+        return f"{steps} steps of up to {dt:.4g} s"
+    if steps == 1:
+        return f"1 step of {last:.4g} s"
+    if abs(last - dt) > 1e-9 * dt:
+        return f"{steps} steps of {dt:.4g} s (the last one {last:.4g} s)"
+    return f"{steps} steps of {dt:.4g} s"
+
+
 def _report(name, summary, files, out):
     e = summary.get("energy", {})
     nw = summary.get("newton", {})
-    print(f"{name}: {summary.get('steps', 0)} steps of {summary['dt']:.4g} s to t = {summary['t_end']:.4g} s "
+    print(f"{name}: {_steps_text(summary)} to t = {summary.get('t_reached', summary['t_end']):.4g} s "
           f"with {summary['integrator']} in {summary['wall_time_s']:.2f} s"
           + (f" (of which {summary['compile_time_s']:.1f} s compiling, once per machine)"
              if summary.get("compile_time_s", 0.0) > 0 else ""))
@@ -669,7 +698,8 @@ def _analysis(name, compute):
         print(f"skfem-flex: error: {_one_line(exc)}", file=sys.stderr)
         return None
     except (ValueError, TypeError) as exc:
-        raise UsageError(f"scene {name!r}: {_one_line(exc)}") from None
+        msg = _one_line(exc)
+        raise UsageError(msg if msg.startswith(f"scene {name!r}") else f"scene {name!r}: {msg}") from None
 
 
 def _cmd_modes(args):
@@ -714,12 +744,12 @@ def _vary_values(key, text, default):
         raise UsageError(f"--vary {key}= needs values: a comma list (0,4,8) or START:STOP:COUNT")
     if text.count(":") == 2:
         a, b, c = text.split(":")
-        lo, hi = convert_setting(key, a, 0.0), convert_setting(key, b, 0.0)
-        count = convert_setting(key, c, 0)
+        lo, hi = convert_setting(key, a, 0.0, "--vary"), convert_setting(key, b, 0.0, "--vary")
+        count = convert_setting(key, c, 0, "--vary")
         if count < 1:
             raise UsageError(f"--vary {key}={text}: COUNT must be a positive integer")
         return [float(x) for x in np.linspace(lo, hi, count)]
-    return [convert_setting(key, item, 0.0 if default is None else default) for item in text.split(",")]
+    return [convert_setting(key, item, 0.0 if default is None else default, "--vary") for item in text.split(",")]
 
 
 def _cmd_campbell(args):
@@ -834,10 +864,7 @@ def _sweep_grid(name, items):
             raise UsageError(f"--vary {key} is given twice")
         # unknown names pass as text: the sweep's plan reports them, in the same words as for the API
         default = params.get(key, run_defaults[key] if key in RUN_SETTINGS else "")
-        try:
-            grid[key] = _vary_values(key, text.strip(), None if default is inspect.Parameter.empty else default)
-        except UsageError as exc:
-            raise UsageError(str(exc).replace(f"--set {key}=", f"--vary {key}=", 1)) from None
+        grid[key] = _vary_values(key, text.strip(), None if default is inspect.Parameter.empty else default)
     return grid
 
 

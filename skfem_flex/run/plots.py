@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 __all__ = ["plot_energy", "plot_probes", "plot_constraints", "plot_snapshots", "save_plots", "pyplot_for",
-           "plot_campbell", "plot_sweep_extremes"]
+           "plot_campbell", "plot_sweep_extremes", "probe_units"]
 
 
 def pyplot_for(directory):
@@ -70,8 +70,33 @@ def plot_energy(result, path=None):
     return _finish(fig, path)
 
 
-def plot_probes(result, path=None):
-    """One panel per probe against time (every component of a vector probe)."""
+def probe_units(scene):
+    """{probe name: unit} of a scene's probes, for axis labels.
+
+    A probe's own ``unit`` attribute when it has one; "m" for the position probes of
+    :mod:`skfem_flex.bodies.probes` (:class:`~skfem_flex.bodies.probes.PointProbe`: a point's
+    global position; :class:`~skfem_flex.bodies.probes.LinearProbe`: positions and
+    displacements linear in the coordinates, as the beams' ``displacement_probe``); "SI" for
+    any other callable, whose value the package cannot know more of than that it is in SI units.
+    """
+    from ..bodies.probes import LinearProbe, PointProbe
+
+    out = {}
+    for name, probe in getattr(scene, "probes", {}).items():
+        unit = getattr(probe, "unit", None)
+        if not isinstance(unit, str) or not unit:
+            unit = "m" if isinstance(probe, (PointProbe, LinearProbe)) else "SI"
+        out[name] = unit
+    return out
+
+
+def plot_probes(result, path=None, units=None):
+    """One panel per probe against time (every component of a vector probe).
+
+    ``units`` ({probe name: unit}, e.g. from :func:`probe_units`) labels the y axes, "name (unit)";
+    probes without an entry are labelled "name (SI)".
+    """
+    units = units or {}
     names = list(result.probes)
     if not names:
         fig, ax = _figure(1, 1, size=(7.0, 2.0))
@@ -83,7 +108,7 @@ def plot_probes(result, path=None):
         val = np.asarray(result.probes[k], dtype=float).reshape(len(result.t), -1)
         for i in range(val.shape[1]):
             a.plot(result.t, val[:, i], label=f"{k}[{i}]" if val.shape[1] > 1 else k)
-        a.set_ylabel(k)
+        a.set_ylabel(f"{k} ({units.get(k, 'SI')})")
         a.grid(alpha=0.3)
         if val.shape[1] > 1:
             a.legend(fontsize="small")
@@ -220,7 +245,7 @@ def save_plots(scene, result, directory, prefix=""):
     out = {}
     jobs = [("energy", lambda p: plot_energy(result, p))]
     if result.probes:
-        jobs.append(("probes", lambda p: plot_probes(result, p)))
+        jobs.append(("probes", lambda p: plot_probes(result, p, probe_units(scene))))
     if scene.n_constraints:
         jobs.append(("constraints", lambda p: plot_constraints(result, p)))
     jobs.append(("snapshots", lambda p: plot_snapshots(scene, result, p)))

@@ -95,12 +95,12 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sps
-import scipy.sparse.linalg as spla
 from skfem import Basis, ElementLineP1, ElementLineP2
 
 from ...fem.beam import ElementQuadrature, TimoshenkoBeam, gauss_line, line_mesh
 from ...elements.forces import ForceElement
 from ...errors import ConvergenceError
+from ...numerics.newton import NewtonSettings, newton_solve
 from ...numerics.rotations import MAX_INCREMENT as _MAX_INCREMENT, cayley_divided_difference, cayley_ratio
 from ...fem.section import Section
 from ..base import Body, BodyGeometry, BodyPoint, check_finite_vector, keeps_methods, to_dense
@@ -647,18 +647,30 @@ class ExactBeam(Body):
     def solve_static(self, load, fixed, load_steps=10, q_start=None, tol=1e-10, max_iterations=40):
         """Static equilibrium ∇V(q) = λ F, λ = 1/load_steps, …, 1, by Newton with load stepping.
 
+        Each load level is solved by the package's Newton core
+        (:func:`~skfem_flex.numerics.newton.newton_solve`: its convergence test and its exits
+        at round-off) with full Newton steps, from the equilibrium of the level before. A level
+        Newton does not reach (no convergence, or an element folding inside out, which counts as
+        a non-finite residual) is approached in halved load increments instead.
+
         Parameters
         ----------
         load : array_like (n_dofs,) or callable q -> (F, ∂F/∂q)
             Generalized load (dead, e.g. from :meth:`point_load_vector`) or a
-            configuration-dependent one (follower loads).
+            configuration-dependent one (follower loads); N and N m.
         fixed : array_like of int
             Coordinates held at their values in ``q_start`` (e.g. ``dofs_at(0)`` for a clamp).
         load_steps : int
+            Load levels; a level Newton does not reach from the last equilibrium is approached in
+            halved increments.
         q_start : array_like, optional
             Start (default ``q0``).
         tol : float
-            ‖residual‖∞ ≤ tol · max(‖λF‖∞, stiffness scale · length · 1e-12) ends the iteration.
+            Converged when ‖r‖∞ ≤ tol · max(‖λF‖∞, 1e-12 · max(EA, kGA, EI/L²) · L), r the residual
+            ∇V(q) − λF on the free coordinates (N), or when the core's round-off exits end the
+            iteration.
+        max_iterations : int
+            Newton iterations per load level.
 
         Returns
         -------
@@ -682,45 +694,48 @@ class ExactBeam(Body):
         if steps < 1:
             raise ValueError(f"load_steps must be >= 1, got {load_steps!r}")
         floor = 1e-12 * max(self.EA, self.kGA, self.EI / self.length ** 2) * self.length
+        # full Newton steps, globalized by the load steps: the linear step of a section rotation
+        # stretches the axis by about θ²/2, so the residual's norm first grows by orders of magnitude
+        # before Newton converges quadratically; a line search on that norm would crawl
+        settings = NewtonSettings(max_iterations=int(max_iterations), line_search=False)
 
-        def residual(q_, lam):
-            f, fq = load_fn(q_)
-            r = self.potential_gradient(q_) - lam * f
-            jac = self.potential_hessian(q_)
-            if fq is not None:
-                jac = jac - lam * fq
-            return r, jac, max(lam * float(np.max(np.abs(f))), floor)
+        def level(lam):
+            def fun(x):
+                q_ = q.copy()
+                q_[free] = x
+                try:
+                    f, fq = load_fn(q_)
+                    r = (self.potential_gradient(q_) - lam * f)[free]
+                    jac = self.potential_hessian(q_)
+                except ElementInversionError:
+                    return np.full(free.size, np.nan), None, np.nan
+                if fq is not None:
+                    jac = jac - lam * fq
+                jac = sps.csr_matrix(jac)[free][:, free] if sps.issparse(jac) else jac[np.ix_(free, free)]
+                scale = max(lam * float(np.max(np.abs(f))), floor)
+                return r, jac, float(np.max(np.abs(r), initial=0.0)) / (tol * scale)
+            return fun
 
+        done = 0.0
         for i in range(1, steps + 1):
-            lam = i / steps
-            r, jac, scale = residual(q, lam)
-            small_update = False
-            for it in range(max_iterations + 1):
-                err = float(np.max(np.abs(r[free])))
-                if err <= tol * scale or small_update:
-                    break
-                if it == max_iterations:
-                    raise ConvergenceError(f"{self.name}: static Newton did not converge at load level {lam:.4g} "
-                                           f"(residual {err:.3g} N after {max_iterations} iterations)")
-                if sps.issparse(jac):
-                    dx = spla.spsolve(jac.tocsr()[free][:, free].tocsc(), -r[free])
-                else:
-                    dx = np.linalg.solve(jac[np.ix_(free, free)], -r[free])
-                step = 1.0
-                for _ in range(12):
-                    q_try = q.copy()
-                    q_try[free] += step * dx
-                    try:
-                        r_try, jac_try, scale = residual(q_try, lam)
-                        ok = float(np.max(np.abs(r_try[free]))) < max(err, tol * scale) * 1.5 or step < 1e-3
-                    except ElementInversionError:
-                        ok = False
-                    if ok:
-                        break
-                    step *= 0.5
-                q, r, jac = q_try, r_try, jac_try
-                # an update at round-off of the coordinates: as converged as floating point allows
-                small_update = step * float(np.max(np.abs(dx))) <= 1e-13 * (float(np.max(np.abs(q))) + self.length)
+            target = i / steps
+            lam = target
+            while done < target:
+                try:
+                    # the coordinates are displacements from the reference placement: the length is
+                    # the size of the positions they change
+                    x, _, _ = newton_solve(level(lam), q[free], settings, f"{self.name}: static equilibrium",
+                                           f"load level {lam:.4g}", x_scale=self.length)
+                except ConvergenceError as exc:
+                    # a load step too large for Newton from the last equilibrium (large rotations):
+                    # halve it, down to 1/1024 of the step asked for
+                    if lam - done <= 1.0 / (1024 * steps):
+                        raise ConvergenceError(f"{exc} (load steps down to {lam - done:.3g} of the load)",
+                                               **exc.info) from None
+                    lam = done + 0.5 * (lam - done)
+                    continue
+                q[free] = x
+                done, lam = lam, target
         return q
 
     # --------------------------------------------------------------- output

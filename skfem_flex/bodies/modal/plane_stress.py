@@ -72,10 +72,22 @@ def load_mesh(path):
     Raises
     ------
     ValueError
-        No triangles or quadrilaterals in the file, or a non-planar mesh.
+        The file does not exist or cannot be read as a mesh (the message names it), it has no
+        triangles or quadrilaterals, or the mesh is not planar.
     """
+    import os
+
     import meshio
-    raw = meshio.read(path)
+    if not os.path.isfile(path):
+        why = "is a directory, not a mesh file" if os.path.isdir(path) else "does not exist"
+        raise ValueError(f"mesh file {str(path)!r} {why}")
+    try:
+        raw = meshio.read(path)
+    except OSError as exc:
+        raise ValueError(f"mesh file {str(path)!r} cannot be read: {exc.strerror or exc}") from None
+    except Exception as exc:   # noqa: BLE001  meshio's readers fail with many types on a file that is no mesh
+        raise ValueError(f"mesh file {str(path)!r} is not a mesh meshio can read "
+                         f"({type(exc).__name__}: {' '.join(str(exc).split())})") from None
     pts = np.asarray(raw.points, dtype=float)
     if pts.shape[1] == 3:
         if np.abs(pts[:, 2]).max() > 1e-12 * max(np.abs(pts).max(), 1.0):
