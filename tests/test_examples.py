@@ -51,6 +51,44 @@ def energy_scale(res):
     return np.max(np.abs(res.kinetic) + np.abs(res.potential))
 
 
+# ------------------------------------------------------------------ benchmark and profiling scripts
+# (first: the longest tests, so that the two xdist workers share the rest)
+def test_benchmark(tmp_path):
+    """All four tables (time loop, start-up, catalogue, exudyn side by side or its absence) on tiny sizes."""
+    run_script("benchmark", "--out", tmp_path)
+    text = (tmp_path / "benchmark.md").read_text()
+    assert "| spin-up, 64 P1 elements" in text and "| pendulum |" in text and "| flexible_pendulum |" in text
+    assert "exudyn" in text
+
+
+def test_benchmark_limits(tmp_path):
+    run_script("benchmark_limits", "--out", tmp_path)
+    text = (tmp_path / "benchmark_limits.md").read_text()
+    assert "| spin_up_beam | 10 |" in text and "failed" not in text
+
+
+def test_peer_exudyn():
+    pytest.importorskip("exudyn")
+    assert run_script("peer_exudyn").count("exudyn") == 3
+
+
+def test_profile_band_solve():
+    """The bordered band solve agrees with dense LU on the Newton matrix."""
+    out = run_script("profile_band_solve")
+    error = float(re.search(r"max \|x − x_dense\| / max \|x_dense\| = (\S+)", out).group(1))
+    assert error < 1e-10
+
+
+def test_profile_compiled_scene():
+    out = run_script("profile_compiled_scene")
+    assert "Newton iterations per step" in out and "compile and start-up" in out
+
+
+def test_sweep_benchmark(tmp_path):
+    run_script("sweep_benchmark", "--out", tmp_path)
+    assert "sweep, 2 workers, cluster already running" in (tmp_path / "sweep_benchmark.md").read_text()
+
+
 # ------------------------------------------------------------------ examples with physical results
 def test_cantilever(monkeypatch, tmp_path):
     """Tip deflection against Timoshenko theory: second order with reduced shear, locking with full shear."""
@@ -190,43 +228,6 @@ def test_very_flexible_pendulum(monkeypatch, tmp_path):
     for res in example["runs"].values():
         assert res.completed and res.relative_energy_error() < 1e-10
     assert (tmp_path / "very_flexible_pendulum.png").exists()
-
-
-# ------------------------------------------------------------------ benchmark and profiling scripts
-def test_benchmark(tmp_path):
-    """All four tables (time loop, start-up, catalogue, exudyn side by side or its absence) on tiny sizes."""
-    run_script("benchmark", "--out", tmp_path)
-    text = (tmp_path / "benchmark.md").read_text()
-    assert "| spin-up, 64 P1 elements" in text and "| pendulum |" in text and "| flexible_pendulum |" in text
-    assert "exudyn" in text
-
-
-def test_benchmark_limits(tmp_path):
-    run_script("benchmark_limits", "--out", tmp_path)
-    text = (tmp_path / "benchmark_limits.md").read_text()
-    assert "| spin_up_beam | 10 |" in text and "failed" not in text
-
-
-def test_peer_exudyn():
-    pytest.importorskip("exudyn")
-    assert run_script("peer_exudyn").count("exudyn") == 3
-
-
-def test_profile_band_solve():
-    """The bordered band solve agrees with dense LU on the Newton matrix."""
-    out = run_script("profile_band_solve")
-    error = float(re.search(r"max \|x − x_dense\| / max \|x_dense\| = (\S+)", out).group(1))
-    assert error < 1e-10
-
-
-def test_profile_compiled_scene():
-    out = run_script("profile_compiled_scene")
-    assert "Newton iterations per step" in out and "compile and start-up" in out
-
-
-def test_sweep_benchmark(tmp_path):
-    run_script("sweep_benchmark", "--out", tmp_path)
-    assert "sweep, 2 workers, cluster already running" in (tmp_path / "sweep_benchmark.md").read_text()
 
 
 def test_every_example_has_a_test():
