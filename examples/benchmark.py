@@ -20,8 +20,10 @@ momenta, probe and prescribed force are evaluated in Python at those steps)
 and writes no files. Before timing, one short run of each kind compiles the
 Numba kernels or loads them from numba's cache; that warm-up is reported but
 not part of the table; the same warm-up in a fresh process with an empty
-numba cache gives the one-off compile time. Each case is run ``--repeat`` times; the table gives
-the median wall time, µs per step and Newton iterations per step, and is
+numba cache gives the one-off compile time. Each case then first runs 3 steps of its own scene on
+its own path (the column "compile and start-up": the kernels it alone uses, compiled or loaded)
+and is run ``--repeat`` times; the table gives the median wall time, µs per step and Newton
+iterations per step, and is
 written as Markdown to ``OUT/benchmark.md`` (``OUT/peer_benchmark.md`` with ``--no-loop``; default ``examples/output``),
 which the README quotes.
 
