@@ -1,11 +1,13 @@
 """Benchmark of the limits: memory against mesh size, and VTK series cost against frame count.
 
-* **memory**: one 1 ms step (after the same step once, which compiles or loads the Numba kernels and
-  is reported apart as "compile and start-up") of the spin-up beam (floating frame, compiled loop), the pinned
-  flexible pendulum (Python path, constraint), the rigid–flexible double pendulum and the
-  slider–crank (joints between bodies) at 1 000, 10 000 and 100 000 elements, each in
-  a fresh subprocess that reports its own peak resident set size (``ru_maxrss``); memory must grow
-  linearly with the mesh (no dense n × n anywhere);
+* **memory**: one step of Δt = min(1 ms, the scene's default step) (after the same step once, which
+  compiles or loads the Numba kernels and is reported apart as "compile and start-up") of the
+  spin-up beam (floating frame, compiled loop), the pinned flexible pendulum (constraint), the
+  rigid–flexible double pendulum and the slider–crank (joints between bodies) at 1 000, 10 000 and
+  100 000 elements, each in a fresh subprocess that reports its own peak resident set size
+  (``ru_maxrss``); memory must grow linearly with the mesh (no dense n × n anywhere). The
+  slider–crank steps 0.1 ms, its default: at 1 ms (0.15 rad of crank per step) Newton fails on the
+  compiled path and the Python path halves the step, which at 10 000 elements took minutes per step;
 * **series**: writing N = 500, 1 000, 2 000 and 4 000 frames of the pendulum with
   :class:`skfem_flex.VTKSeries`; the cost per frame must not grow with N (the collections are
   rewritten only when the unlisted frames reach 1/256 of the listed ones, or after a second).
@@ -36,20 +38,22 @@ import json, resource, sys, time
 import skfem_flex as sf
 name, n = sys.argv[1], int(sys.argv[2])
 start = time.perf_counter()
-scene = sf.scenes.get(name)(n_elements=n)
+factory = sf.scenes.get(name)
+dt = min(1e-3, factory.defaults.get("dt", 1e-3))
+scene = factory(n_elements=n)
 built = time.perf_counter()
-sf.simulate(scene, 1e-3, 1e-3)          # the same step once before: compiles or loads the kernels
+sf.simulate(scene, dt, dt)              # the same step once before: compiles or loads the kernels
 warm = time.perf_counter()
-sf.simulate(scene, 1e-3, 1e-3)
-print(json.dumps({"n_dofs": scene.n, "build_s": built - start, "startup_s": warm - built,
+sf.simulate(scene, dt, dt)
+print(json.dumps({"n_dofs": scene.n, "dt": dt, "build_s": built - start, "startup_s": warm - built,
                   "step_s": time.perf_counter() - warm,
                   "peak_rss_MB": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
 """
 
 
 def memory(sizes, scenes=SCENES):
-    """[(scene, elements, coordinates, build s, compile and start-up s, step s, peak RSS MB)], one subprocess
-    each."""
+    """[(scene, elements, coordinates, Δt s, build s, compile and start-up s, step s, peak RSS MB)], one
+    subprocess each."""
     rows = []
     for name in scenes:
         for n in sizes:
@@ -58,10 +62,11 @@ def memory(sizes, scenes=SCENES):
                                   env={"PYTHONPATH": env_path, "PATH": "/usr/bin:/bin"})
             if proc.returncode != 0:
                 why = proc.stderr.strip().splitlines() or [f"exit status {proc.returncode} (killed?)"]
-                rows.append((name, n, None, None, None, None, why[-1]))
+                rows.append((name, n, None, None, None, None, None, why[-1]))
                 continue
             r = json.loads(proc.stdout.strip().splitlines()[-1])
-            rows.append((name, n, r["n_dofs"], r["build_s"], r["startup_s"], r["step_s"], r["peak_rss_MB"]))
+            rows.append((name, n, r["n_dofs"], r["dt"], r["build_s"], r["startup_s"], r["step_s"],
+                         r["peak_rss_MB"]))
             print(rows[-1], flush=True)
     return rows
 
@@ -96,13 +101,14 @@ def series(frames):
 
 def table(mem, ser, series_warm=None):
     lines = [f"Machine: {platform.processor() or platform.machine()}, Python {platform.python_version()}.", "",
-             "| scene | elements | coordinates | build (s) | compile and start-up (s) | one step (s) | peak RSS (MB) |",
-             "|---|---|---|---|---|---|---|"]
-    for name, n, dofs, build, warm, step, rss in mem:
+             "| scene | elements | coordinates | Δt (s) | build (s) | compile and start-up (s) | one step (s) "
+             "| peak RSS (MB) |",
+             "|---|---|---|---|---|---|---|---|"]
+    for name, n, dofs, dt, build, warm, step, rss in mem:
         if dofs is None:
-            lines.append(f"| {name} | {n} | failed: {rss} | | | | |")
+            lines.append(f"| {name} | {n} | failed: {rss} | | | | | |")
         else:
-            lines.append(f"| {name} | {n} | {dofs} | {build:.2f} | {warm:.2f} | {step:.2f} | {rss:.0f} |")
+            lines.append(f"| {name} | {n} | {dofs} | {dt:g} | {build:.2f} | {warm:.2f} | {step:.2f} | {rss:.0f} |")
     lines += ["", "| frames | write time (s) | ms per frame |", "|---|---|---|"]
     lines += [f"| {n} | {wall:.2f} | {ms:.2f} |" for n, wall, ms in ser]
     if series_warm is not None:
