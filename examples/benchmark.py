@@ -20,8 +20,10 @@ momenta, probe and prescribed force are evaluated in Python at those steps)
 and writes no files. Before timing, one short run of each kind compiles the
 Numba kernels or loads them from numba's cache; that warm-up is reported but
 not part of the table; the same warm-up in a fresh process with an empty
-numba cache gives the one-off compile time. Each case is run ``--repeat`` times; the table gives
-the median wall time, µs per step and Newton iterations per step, and is
+numba cache gives the one-off compile time. Each case then first runs 3 steps of its own scene on
+its own path (the column "compile and start-up": the kernels it alone uses, compiled or loaded)
+and is run ``--repeat`` times; the table gives the median wall time, µs per step and Newton
+iterations per step, and is
 written as Markdown to ``OUT/benchmark.md`` (``OUT/peer_benchmark.md`` with ``--no-loop``; default ``examples/output``),
 which the README quotes.
 
@@ -48,8 +50,17 @@ Run ``python examples/benchmark.py [--repeat 3] [--window 1.0] [--record-every 1
 
 Parameter sweeps on a local Dask cluster (16 spin-up cases on 2 workers against
 16 serial runs, per-case overhead) are timed by ``examples/sweep_benchmark.py``.
+
+Quick mode (``SKFEM_FLEX_EXAMPLE_QUICK=1``, used by the tests) runs every part on tiny sizes, to
+exercise the code, not to measure: spin-up on 4, 8 and 64 elements for 0.05 s, the pendulum for
+0.05 s, the flexible cases for 0.02 s (the plane-stress rod 25 × 2 elements), one repeat, the
+start-up table for the pendulum only and with the numba cache as it is (not emptied), the catalogue
+for two scenes and 3 steps, the exudyn problems for 0.02 s against references of that length (kept
+under their own names in ``peer_references.npz``; exudyn's flexible-pendulum reference on 32
+elements instead of 64); no cold compile (it would take minutes).
 """
 import argparse
+import os
 import platform
 import statistics
 import time
@@ -61,12 +72,27 @@ import skfem_flex as sf
 from skfem_flex.compiled import single_body_loop as compiled_loop
 from skfem_flex.schemes.integrators import EnergyMomentum
 
-SPIN_UP_ELEMENTS = (4, 8, 16, 64, 256, 1024)
+QUICK = os.environ.get("SKFEM_FLEX_EXAMPLE_QUICK", "") not in ("", "0")
+SPIN_UP_ELEMENTS = (4, 8, 64) if QUICK else (4, 8, 16, 64, 256, 1024)
 FULL_RUN_UP_TO = 16          # elements; larger meshes run a shorter window
+SPIN_UP_T = 0.05 if QUICK else 30.0          # s, the spin-up runs up to FULL_RUN_UP_TO elements
+PENDULUM_T = 0.05 if QUICK else 10.0         # s, at Δt = 1e-3
+FLEXIBLE_T = 0.02 if QUICK else 5.0          # s, the flexible-body spin-up cases
+REVOLUTIONS = 0.02 if QUICK else 1.0         # of the slider–crank's crank
+ROD_MESH = (25, 2) if QUICK else (250, 8)    # Q2 elements along and across the plane-stress rod
 
 
-def time_case(make_scene, t_end, dt, repeat, record_every, compiled=True):
-    """Median wall time (s), µs per step and Newton iterations per step over ``repeat`` runs."""
+def time_case(make_scene, t_end, dt, repeat, record_every, compiled=True, warm_steps=3):
+    """(compile and start-up s, median wall time s, µs per step, Newton iterations per step, steps) over
+    ``repeat`` runs.
+
+    A run of ``warm_steps`` steps of the same scene on the same path goes first: its wall time (the
+    one-off compile of the case's kernels, or their load from numba's cache) is the first value, apart
+    from the timed runs.
+    """
+    start = time.perf_counter()
+    sf.simulate(make_scene(), t_end=warm_steps * dt, dt=dt, compiled=compiled)
+    startup = time.perf_counter() - start
     walls, its = [], []
     for _ in range(repeat):
         res = sf.simulate(make_scene(), t_end=t_end, dt=dt, record_every=record_every, compiled=compiled)
@@ -75,7 +101,7 @@ def time_case(make_scene, t_end, dt, repeat, record_every, compiled=True):
         its.append(float(np.mean(res.newton_iterations[1:])))
         steps = res.steps
     wall = statistics.median(walls)
-    return wall, 1e6 * wall / steps, statistics.median(its), steps
+    return startup, wall, 1e6 * wall / steps, statistics.median(its), steps
 
 
 def warm_up():
@@ -97,7 +123,7 @@ def loop_name(scene, integrator="energy-momentum"):
     return "compiled mechanism" if compiled_scene.eligible(scene, scheme) else "Python"
 
 
-STARTUP_SCENES = ("pendulum", "flexible_pendulum", "spin_up_beam")
+STARTUP_SCENES = ("pendulum",) if QUICK else ("pendulum", "flexible_pendulum", "spin_up_beam")
 
 
 STARTUP_PROBE = ("import json, sys, time; t0 = time.perf_counter(); import skfem_flex as sf; "
@@ -109,7 +135,10 @@ def startup():
     """[(scene, s of the first `skfem-flex run` in a fresh process with an empty numba cache, s of the same
     command in the next process, s of start-up in a later process)]. Start-up is what the package adds to
     a run: import, building the scene, loading the compiled kernels from the cache (the time to first
-    step, without the steps themselves); the CLI's wall time also holds the interpreter, plots and files."""
+    step, without the steps themselves); the CLI's wall time also holds the interpreter, plots and files.
+
+    Quick mode: the pendulum only, one CLI run with the numba cache as it is (no compile; the next
+    run's column is NaN)."""
     import json
     import os
     import subprocess
@@ -118,25 +147,27 @@ def startup():
     rows = []
     for name in STARTUP_SCENES:
         with tempfile.TemporaryDirectory() as tmp:
-            env = dict(os.environ, NUMBA_CACHE_DIR=str(Path(tmp) / "cache"))
+            # quick mode keeps the cache as it is: an empty one would compile for minutes
+            env = dict(os.environ) if QUICK else dict(os.environ, NUMBA_CACHE_DIR=str(Path(tmp) / "cache"))
             cmd = [sys.executable, "-m", "skfem_flex.apps.cli", "run", name, "--t-end", "0.05", "--no-vtk", "--quiet",
                    "--out", str(Path(tmp) / "out")]
             times = []
-            for _ in range(2):
+            for _ in range(1 if QUICK else 2):
                 start = time.perf_counter()
                 subprocess.run(cmd, env=env, check=True, capture_output=True)
                 times.append(time.perf_counter() - start)
             out = subprocess.run([sys.executable, "-c", STARTUP_PROBE, name], env=env, check=True,
                                  capture_output=True, text=True)
             total, sim = json.loads(out.stdout.strip().splitlines()[-1])
-            rows.append((name, times[0], times[1], total - sim))
+            rows.append((name, times[0], times[1] if len(times) > 1 else float("nan"), total - sim))
     return rows
 
 
 def startup_table(rows):
     lines = ["`skfem-flex run SCENE --t-end 0.05 --no-vtk --quiet` in fresh processes sharing an empty numba "
              "cache (wall time, s, with the interpreter, plots and files), and the start-up a later process "
-             "adds to a run (import, scene, kernels loaded from the cache; `simulate` of 0.05 s minus its steps):",
+             "adds to a run (import, scene, kernels loaded from the cache; `simulate` of 0.05 s minus its steps)"
+             + (" [quick mode: the cache as it was, so the first run did not compile]:" if QUICK else ":"),
              "", "| scene | first run (compiles) | next run | start-up of a later run |", "|---|---|---|---|"]
     lines += [f"| {n} | {a:.1f} | {b:.2f} | {c:.2f} |" for n, a, b, c in rows]
     return "\n".join(lines) + "\n"
@@ -157,48 +188,57 @@ def cold_compile():
 
 
 def run(repeat=3, window=1.0, record_every=10, elements=SPIN_UP_ELEMENTS):
-    """Rows (case, path, steps, wall s, µs/step, Newton/step)."""
+    """Rows (case, path, steps, compile and start-up s, wall s, µs/step, Newton/step)."""
     rows = []
+    pendulum_steps = round(PENDULUM_T / 1e-3)
     for n in elements:
-        t_end = 30.0 if n <= FULL_RUN_UP_TO else window
-        wall, us, its, steps = time_case(lambda: sf.scenes.spin_up_beam(omega=4.0, n_elements=n), t_end, 1e-3,
-                                         repeat if n <= 64 else 1, record_every)
-        rows.append((f"spin-up, {n} P1 elements, {t_end:g} s", "compiled", steps, wall, us, its))
+        t_end = SPIN_UP_T if n <= FULL_RUN_UP_TO else window
+        warm, wall, us, its, steps = time_case(lambda: sf.scenes.spin_up_beam(omega=4.0, n_elements=n), t_end,
+                                               1e-3, repeat if n <= 64 else 1, record_every)
+        rows.append((f"spin-up, {n} P1 elements, {t_end:g} s", "compiled", steps, warm, wall, us, its))
+
+    def spin_up_8():
+        return sf.scenes.spin_up_beam(omega=4.0, n_elements=8)
     if record_every != 1:                 # what recording costs: the same run with every step recorded
-        wall, us, its, steps = time_case(lambda: sf.scenes.spin_up_beam(omega=4.0, n_elements=8), 30.0, 1e-3, 1, 1)
-        rows.append(("spin-up, 8 P1 elements, 30 s, every step recorded", "compiled", steps, wall, us, its))
-    wall, us, its, steps = time_case(lambda: sf.scenes.spin_up_beam(omega=4.0, n_elements=8), 30.0, 1e-3, 1,
-                                     record_every, compiled=False)
-    rows.append(("spin-up, 8 P1 elements, 30 s", "Python", steps, wall, us, its))
-    wall, us, its, steps = time_case(sf.scenes.pendulum, 10.0, 1e-3, repeat, record_every)
-    rows.append(("pendulum, 10 000 steps", loop_name(sf.scenes.pendulum()), steps, wall, us, its))
-    wall, us, its, steps = time_case(sf.scenes.pendulum, 10.0, 1e-3, 1, record_every, compiled=False)
-    rows.append(("pendulum, 10 000 steps", "Python", steps, wall, us, its))
+        warm, wall, us, its, steps = time_case(spin_up_8, SPIN_UP_T, 1e-3, 1, 1)
+        rows.append((f"spin-up, 8 P1 elements, {SPIN_UP_T:g} s, every step recorded", "compiled", steps,
+                     warm, wall, us, its))
+    warm, wall, us, its, steps = time_case(spin_up_8, SPIN_UP_T, 1e-3, 1, record_every, compiled=False)
+    rows.append((f"spin-up, 8 P1 elements, {SPIN_UP_T:g} s", "Python", steps, warm, wall, us, its))
+    pendulum = "pendulum, " + f"{pendulum_steps:,} steps".replace(",", " ")
+    warm, wall, us, its, steps = time_case(sf.scenes.pendulum, PENDULUM_T, 1e-3, repeat, record_every)
+    rows.append((pendulum, loop_name(sf.scenes.pendulum()), steps, warm, wall, us, its))
+    warm, wall, us, its, steps = time_case(sf.scenes.pendulum, PENDULUM_T, 1e-3, 1, record_every, compiled=False)
+    rows.append((pendulum, "Python", steps, warm, wall, us, its))
     return rows
 
 
 def flexible(repeat=1, record_every=10):
     """Rows of the flexible-body cases (same columns as :func:`run`) and the reduced rod's set-up time, s."""
     rows = []
-    for label, kw, compiled in (("spin-up, 8 P1 elements, 5 s", {}, True),
-                                ("spin-up, 8 P1 elements, 5 s", {}, False),
-                                ("spin-up, Craig–Bampton beam (10 coordinates), 5 s", dict(body="beam-modal"), True),
-                                ("spin-up, Craig–Bampton beam (10 coordinates), 5 s", dict(body="beam-modal"), False)):
-        wall, us, its, steps = time_case(lambda: sf.scenes.spin_up_beam(omega=4.0, n_elements=8, **kw), 5.0, 1e-3,
-                                         repeat, record_every, compiled=compiled)
+    for label, kw, compiled in ((f"spin-up, 8 P1 elements, {FLEXIBLE_T:g} s", {}, True),
+                                (f"spin-up, 8 P1 elements, {FLEXIBLE_T:g} s", {}, False),
+                                (f"spin-up, Craig–Bampton beam (10 coordinates), {FLEXIBLE_T:g} s",
+                                 dict(body="beam-modal"), True),
+                                (f"spin-up, Craig–Bampton beam (10 coordinates), {FLEXIBLE_T:g} s",
+                                 dict(body="beam-modal"), False)):
+        warm, wall, us, its, steps = time_case(lambda: sf.scenes.spin_up_beam(omega=4.0, n_elements=8, **kw),
+                                               FLEXIBLE_T, 1e-3, repeat, record_every, compiled=compiled)
         loop = compiled and compiled_loop.eligible(sf.scenes.spin_up_beam(omega=4.0, n_elements=8, **kw),
                                                    EnergyMomentum())
-        rows.append((label, "compiled" if loop else "Python", steps, wall, us, its))
-    revolution = 2 * np.pi / 150.0
-    wall, us, its, steps = time_case(lambda: sf.scenes.slider_crank(), revolution, 1e-4, repeat, record_every)
-    rows.append(("slider–crank, 8-element beam rod, one revolution, dt = 1e-4 s", loop_name(sf.scenes.slider_crank()),
-                 steps, wall, us, its))
+        rows.append((label, "compiled" if loop else "Python", steps, warm, wall, us, its))
+    run_time = REVOLUTIONS * 2 * np.pi / 150.0
+    span = "one revolution" if REVOLUTIONS == 1 else f"{REVOLUTIONS:g} revolution"
+    warm, wall, us, its, steps = time_case(lambda: sf.scenes.slider_crank(), run_time, 1e-4, repeat, record_every)
+    rows.append((f"slider–crank, 8-element beam rod, {span}, dt = 1e-4 s", loop_name(sf.scenes.slider_crank()),
+                 steps, warm, wall, us, its))
     start = time.perf_counter()
-    rod_scene = sf.scenes.slider_crank(body="plane-stress-modal", n_elements=250, n_across=8)
+    rod_scene = sf.scenes.slider_crank(body="plane-stress-modal", n_elements=ROD_MESH[0], n_across=ROD_MESH[1])
     setup = time.perf_counter() - start
-    wall, us, its, steps = time_case(lambda: rod_scene, revolution, 1e-4, repeat, record_every)
-    rows.append((f"slider–crank, plane-stress rod 2 000 Q2 elements → {rod_scene.bodies[1].n_elastic} coordinates, "
-                 f"one revolution, dt = 1e-4 s", loop_name(rod_scene), steps, wall, us, its))
+    warm, wall, us, its, steps = time_case(lambda: rod_scene, run_time, 1e-4, repeat, record_every)
+    elements = f"{ROD_MESH[0] * ROD_MESH[1]:,}".replace(",", " ")
+    rows.append((f"slider–crank, plane-stress rod {elements} Q2 elements → {rod_scene.bodies[1].n_elastic} "
+                 f"coordinates, {span}, dt = 1e-4 s", loop_name(rod_scene), steps, warm, wall, us, its))
     return rows, setup
 
 
@@ -207,12 +247,15 @@ def table(rows, record_every, warm, cold=None):
              f"numpy {np.__version__}, numba {_numba_version()}; energy-momentum scheme, dt = 1e-3 s unless stated; "
              f"every {record_every}th step recorded (energies, momenta, probes), no file output; "
              f"median of the repeats, after a warm-up run that compiled or loaded the kernels "
-             f"({warm:.1f} s, not counted).", "",
-             "| case | time loop | steps | wall time (s) | µs per step | Newton iterations per step (recorded steps) |",
-             "|---|---|---|---|---|---|"]
-    lines += [f"| {c} | {p} | {s} | {w:.3g} | {u:.1f} | {i:.2f} |" if u < 100 else
-              f"| {c} | {p} | {s} | {w:.3g} | {u:.0f} | {i:.2f} |" for c, p, s, w, u, i in rows]
-    us = {r[0].split(",")[1].strip(): r[4] for r in rows if r[1] == "compiled" and "every step" not in r[0]}
+             f"({warm:.1f} s, not counted); each case first runs 3 steps of its own scene, whose wall time "
+             f"(compile or cache load of the case's kernels, start-up) is the column \"compile and start-up\", "
+             f"apart from the timed runs.", "",
+             "| case | time loop | steps | compile and start-up (s) | wall time (s) | µs per step "
+             "| Newton iterations per step (recorded steps) |",
+             "|---|---|---|---|---|---|---|"]
+    lines += [f"| {c} | {p} | {s} | {a:.2f} | {w:.3g} | {u:.1f} | {i:.2f} |" if u < 100 else
+              f"| {c} | {p} | {s} | {a:.2f} | {w:.3g} | {u:.0f} | {i:.2f} |" for c, p, s, a, w, u, i in rows]
+    us = {r[0].split(",")[1].strip(): r[5] for r in rows if r[1] == "compiled" and "every step" not in r[0]}
     if "8 P1 elements" in us and "1024 P1 elements" in us:
         lines += ["", f"Cost per step at 1024 elements / at 8 elements: "
                       f"{us['1024 P1 elements'] / us['8 P1 elements']:.0f}."]
@@ -224,12 +267,14 @@ def table(rows, record_every, warm, cold=None):
 
 # ------------------------------------------------------------------ every catalogue scene
 SCHEMES = ("energy-momentum", "trapezoidal", "generalized-alpha")
+#: the catalogue scenes of quick mode (all of them otherwise)
+QUICK_CATALOGUE = ("pendulum", "flexible_pendulum")
 
 
 def catalogue_rows(steps=200):
     """Rows (scene, coordinates, scheme, dt, µs per step) for every catalogue scene, default settings."""
     rows = []
-    for name in sorted(sf.scenes.CATALOGUE):
+    for name in (QUICK_CATALOGUE if QUICK else sorted(sf.scenes.CATALOGUE)):
         factory = sf.scenes.CATALOGUE[name]
         dt = factory.defaults.get("dt", 1e-3)
         t_end = min(factory.defaults.get("t_end", steps * dt), steps * dt)
@@ -283,48 +328,65 @@ def _reference(out, key, compute):
     return _spline(data[key + "_t"], data[key + "_p"])
 
 
+#: simulated seconds of the side-by-side problems: spin-up, flexible pendulum, rigid pendulum
+PEER_T = (0.02, 0.02, 0.02) if QUICK else (30.0, 2.0, 10.0)
+#: elements of exudyn's flexible-pendulum reference (at 64 its first steps from rest take it thousands of
+#: step reductions: a minute even for 0.02 s, too long for quick mode)
+PEER_REF_ELEMENTS = 32 if QUICK else 64
+
+
 def peer_problems(out):
     """[(label, our scene factory, our scheme, dt, t_end, probe, peer run, peer scheme, reference factory)]."""
     from skfem_flex.apps import peer
 
+    spin_t, flex_t, rigid_t = PEER_T
+    # quick mode's short references are kept apart from the full ones in the same file
+    suffix = "_quick" if QUICK else ""
+
     def spin_ref():
-        r = sf.simulate(sf.scenes.spin_up_beam(omega=4.0, n_elements=32), t_end=30.0, dt=2.5e-4)
+        r = sf.simulate(sf.scenes.spin_up_beam(omega=4.0, n_elements=32), t_end=spin_t, dt=2.5e-4)
         return r.t, r.probes["tip"]
 
     def flex_ref():
-        t, p, _ = peer.flexible_pendulum(n_elements=64, dt=2.5e-5)()
+        t, p, _ = peer.flexible_pendulum(n_elements=PEER_REF_ELEMENTS, dt=2.5e-5, t_end=flex_t)()
         return t, p
+
     def spin():
-        return _reference(out, "spin_up", spin_ref)
+        return _reference(out, "spin_up" + suffix, spin_ref)
 
     def flex():
-        return _reference(out, "flexible_pendulum", flex_ref)
+        return _reference(out, "flexible_pendulum" + suffix, flex_ref)
 
     def exact():
         from skfem_flex.apps.studies import pendulum_position
         return pendulum_position
     rows = [("spin-up ω = 4, 8 elements", lambda: sf.scenes.spin_up_beam(omega=4.0, n_elements=8),
-             "energy-momentum", 1e-3, 30.0, "tip", peer.spin_up(8, 1e-3, 30.0), "generalized-alpha 0.9", spin)]
+             "energy-momentum", 1e-3, spin_t, "tip", peer.spin_up(8, 1e-3, spin_t), "generalized-alpha 0.9", spin)]
     for dt in (1e-4, 1e-3):
         rows.append((f"flexible pendulum, 16 elements", lambda: sf.scenes.flexible_pendulum(n_elements=16),
-                     "energy-momentum", dt, 2.0, "tip", peer.flexible_pendulum(16, dt, 2.0),
+                     "energy-momentum", dt, flex_t, "tip", peer.flexible_pendulum(16, dt, flex_t),
                      "generalized-alpha 0.9", flex))
     for scheme in ("trapezoidal", "energy-momentum"):
-        rows.append(("rigid pendulum", sf.scenes.pendulum, scheme, 1e-2, 10.0, "position",
-                     peer.pendulum(1e-2, 10.0), "trapezoidal, index 2", exact))
+        rows.append(("rigid pendulum", sf.scenes.pendulum, scheme, 1e-2, rigid_t, "position",
+                     peer.pendulum(1e-2, rigid_t), "trapezoidal, index 2", exact))
     return rows
 
 
 def peer_rows(out, repeat=3, only=None):
-    """Rows (problem, dt, our scheme, ours s, peer scheme, peer s, ratio, our error, peer error).
+    """Rows (problem, dt, our scheme, our compile and start-up s, ours s, peer scheme, peer s, ratio, our error,
+    peer error).
 
-    ``only``: a substring of the problem labels to run (all by default).
+    ``only``: a substring of the problem labels to run (all by default). Our side first runs 3 steps of the
+    same scene and scheme (compile or cache load of its kernels), timed apart.
     """
     rows = []
     for label, scene, scheme, dt, t_end, probe, peer_run, peer_scheme, ref in peer_problems(out):
         if only is not None and only not in label:
             continue
         ref = ref()
+        start = time.perf_counter()
+        sf.simulate(scene(), t_end=3 * dt, dt=dt, integrator=scheme)
+        startup = time.perf_counter() - start
         ours, theirs = [], []
         for _ in range(repeat):             # alternate, so that both see the same machine load
             res = sf.simulate(scene(), t_end=t_end, dt=dt, integrator=scheme, record_every=1)
@@ -332,7 +394,7 @@ def peer_rows(out, repeat=3, only=None):
             t, p, seconds = peer_run()
             theirs.append(seconds)
         mine, peer_s = statistics.median(ours), statistics.median(theirs)
-        rows.append((label, dt, scheme, mine, peer_scheme, peer_s, mine / peer_s,
+        rows.append((label, dt, scheme, startup, mine, peer_scheme, peer_s, mine / peer_s,
                      _max_distance(res.t, res.probes[probe], ref), _max_distance(t, p, ref)))
     return rows
 
@@ -342,11 +404,11 @@ def peer_table(rows, repeat):
     lines = [f"Side by side with exudyn {peer.version()} in this process, alternating, median of {repeat}, "
              f"every step recorded on both sides; error = largest distance (m) over the run from the converged "
              f"reference.", "",
-             "| problem | Δt (s) | our scheme | ours (s) | exudyn scheme | exudyn (s) | ratio ours/exudyn "
-             "| our error (m) | exudyn error (m) |",
-             "|---|---|---|---|---|---|---|---|---|"]
-    lines += [f"| {a} | {dt:g} | {s} | {w:.3g} | {ps} | {pw:.3g} | {r:.2f} | {e:.2e} | {pe:.2e} |"
-              for a, dt, s, w, ps, pw, r, e, pe in rows]
+             "| problem | Δt (s) | our scheme | our compile and start-up (s) | ours (s) | exudyn scheme | exudyn (s) "
+             "| ratio ours/exudyn | our error (m) | exudyn error (m) |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    lines += [f"| {a} | {dt:g} | {s} | {c:.2f} | {w:.3g} | {ps} | {pw:.3g} | {r:.2f} | {e:.2e} | {pe:.2e} |"
+              for a, dt, s, c, w, ps, pw, r, e, pe in rows]
     return "\n".join(lines) + "\n"
 
 
@@ -357,10 +419,12 @@ def _numba_version():
 
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--window", type=float, default=1.0, help="simulated seconds for meshes above 16 elements")
+    ap.add_argument("--repeat", type=int, default=1 if QUICK else 3)
+    ap.add_argument("--window", type=float, default=0.05 if QUICK else 1.0,
+                    help="simulated seconds for meshes above 16 elements")
     ap.add_argument("--record-every", type=int, default=10, help="record every n-th step")
-    ap.add_argument("--catalogue-steps", type=int, default=200, help="steps per catalogue scene and scheme")
+    ap.add_argument("--catalogue-steps", type=int, default=3 if QUICK else 200,
+                    help="steps per catalogue scene and scheme")
     ap.add_argument("--no-loop", action="store_true", help="skip the spin-up/pendulum time-loop table")
     ap.add_argument("--no-catalogue", action="store_true", help="skip the table of every catalogue scene")
     ap.add_argument("--no-peer", action="store_true", help="skip the side-by-side runs with exudyn")
@@ -378,8 +442,10 @@ if __name__ == "__main__":
     if args.flexible:
         warm = warm_up()
         rows, setup = flexible(args.repeat, args.record_every)
-        text = table(rows, args.record_every, warm) + (f"\nOne-off set-up of the reduced 2 000-element rod (assembly, "
-                                                        f"Craig–Bampton, modal derivatives, tensors): {setup:.1f} s.\n")
+        elements = f"{ROD_MESH[0] * ROD_MESH[1]:,}".replace(",", " ")
+        text = table(rows, args.record_every, warm) + (f"\nOne-off set-up of the reduced {elements}-element rod "
+                                                        f"(assembly, Craig–Bampton, modal derivatives, tensors): "
+                                                        f"{setup:.1f} s.\n")
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
         (out / "flexible.md").write_text(text)
@@ -387,7 +453,7 @@ if __name__ == "__main__":
         raise SystemExit
     parts = []
     if not args.no_loop:
-        cold = cold_compile()
+        cold = None if QUICK else cold_compile()          # minutes in a fresh cache: not in quick mode
         warm = warm_up()
         rows = run(args.repeat, args.window, args.record_every) + flexible(args.repeat, args.record_every)[0]
         parts.append(table(rows, args.record_every, warm, cold))

@@ -7,8 +7,11 @@ Energy-momentum and generalized-α, Δt = 5e-3 s, 4 s.
 
 Run ``python examples/free_beam.py [OUT_DIR]`` (default ``examples/output/``).
 Importing the module computes the results without plotting.
+
+Quick mode (``SKFEM_FLEX_EXAMPLE_QUICK=1``, used by the tests): 0.5 s instead of 4 s.
 """
 import math
+import os
 import sys
 from pathlib import Path
 
@@ -17,8 +20,9 @@ import numpy as np
 import skfem_flex as sf
 from skfem_flex.run.plots import pyplot_for
 
+QUICK = os.environ.get("SKFEM_FLEX_EXAMPLE_QUICK", "") not in ("", "0")
 FORCE, DURATION = 100.0, 0.05
-T_END, DT = 4.0, 5e-3
+T_END, DT = (0.5 if QUICK else 4.0), 5e-3
 scene = sf.scenes.free_beam(force=FORCE, duration=DURATION)
 runs = {s: sf.simulate(scene, T_END, DT, integrator=s) for s in ("energy-momentum", "generalized-alpha")}
 

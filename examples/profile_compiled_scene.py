@@ -11,9 +11,15 @@ path (``compiled=False``). Usage::
 
 ``--chain N`` profiles a hanging chain of N rigid bars joined by revolute joints instead of a catalogue
 scene (3N coordinates, 2N multipliers: a Newton matrix that is a band only after reordering).
+
+Every timing runs once before it is timed (the evaluation and solve loops here are compiled on their
+first call; the runs compile or load the package's kernels); those first calls are timed apart and
+printed as "compile and start-up". Quick mode (``SKFEM_FLEX_EXAMPLE_QUICK=1``, used by the tests):
+8 elements, 20 evaluations and solves, runs of 20 steps (5 on the Python path).
 """
 import argparse
 import inspect
+import os
 import time
 
 import numba
@@ -21,6 +27,8 @@ import numpy as np
 
 import skfem_flex as sf
 from skfem_flex.compiled import scene_loop as cs
+
+QUICK = os.environ.get("SKFEM_FLEX_EXAMPLE_QUICK", "") not in ("", "0")
 
 
 @numba.njit
@@ -52,9 +60,9 @@ def rigid_chain(n_links, length=0.1):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("scene", nargs="?", default="flexible_pendulum")
-    ap.add_argument("--n-elements", type=int, default=16, help="for scenes with a beam")
+    ap.add_argument("--n-elements", type=int, default=8 if QUICK else 16, help="for scenes with a beam")
     ap.add_argument("--dt", type=float, default=1e-3)
-    ap.add_argument("--repeat", type=int, default=5000)
+    ap.add_argument("--repeat", type=int, default=20 if QUICK else 5000)
     ap.add_argument("--chain", type=int, default=0, help="profile a chain of this many rigid bars instead")
     ap.add_argument("--dense-storage-limit", type=int, default=cs.DENSE_STORAGE_LIMIT,
                     help="store the Newton matrix dense up to this many rows (to compare the two storages)")
@@ -75,8 +83,10 @@ def main(argv=None):
     v0 = np.concatenate([np.asarray(b.v0, dtype=float) for b in scene.bodies]) + 0.01
     h = args.dt
     system, x = cs.newton_system(scene, q0, v0, h)
+    start = time.perf_counter()
     _evaluations(system, x, 1)
     _solves(system, 1)
+    warm_loops = time.perf_counter() - start
     start = time.perf_counter()
     _evaluations(system, x, args.repeat)
     t_eval = (time.perf_counter() - start) / args.repeat
@@ -84,11 +94,16 @@ def main(argv=None):
     start = time.perf_counter()
     _solves(system, args.repeat)
     t_solve = (time.perf_counter() - start) / args.repeat
+    steps, py_steps = (20, 5) if QUICK else (200, 20)
+    start = time.perf_counter()
     sf.simulate(scene, 5 * h, h)
-    res = sf.simulate(scene, 200 * h, h, record_every=10 ** 6)
-    res_all = sf.simulate(scene, 200 * h, h)
+    warm_run = time.perf_counter() - start
+    res = sf.simulate(scene, steps * h, h, record_every=10 ** 6)
+    res_all = sf.simulate(scene, steps * h, h)
+    start = time.perf_counter()
     sf.simulate(scene, 2 * h, h, record_every=10 ** 6, compiled=False)       # warm-up of the Python path
-    res_py = sf.simulate(scene, 20 * h, h, record_every=10 ** 6, compiled=False)
+    warm_py = time.perf_counter() - start
+    res_py = sf.simulate(scene, py_steps * h, h, record_every=10 ** 6, compiled=False)
     storage = "CSR" if cs._planned(scene)[9][4][-1] == cs.CSR else "dense"
     print(f"{args.scene}: {n} coordinates, {m} multipliers, Newton matrix {free.size + m} × {free.size + m} "
           f"stored {storage}")
@@ -98,6 +113,8 @@ def main(argv=None):
     print(f"per step, nothing recorded:                     {1e6 * res.wall_time / res.steps:.1f} µs")
     print(f"per step, every step recorded:                  {1e6 * res_all.wall_time / res_all.steps:.1f} µs")
     print(f"per step on the Python path, nothing recorded:  {1e6 * res_py.wall_time / res_py.steps:.1f} µs")
+    print(f"compile and start-up (first calls, not counted): evaluation and solve loops {warm_loops:.1f} s, "
+          f"compiled run {warm_run:.1f} s, Python path {warm_py:.1f} s")
 
 
 if __name__ == "__main__":

@@ -1,9 +1,7 @@
 """Issue 7: the skfem-flex command (run, list, bad input, failed runs)."""
 import json
 import os
-import shutil
 import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -13,13 +11,9 @@ from skfem_flex.apps import cli
 from skfem_flex.run.output import read_pvd
 from skfem_flex.scenes import CATALOGUE, register
 
+from helpers import command
+
 PNG = b"\x89PNG\r\n\x1a\n"
-
-
-def command():
-    """The installed console script if there is one, else the module."""
-    exe = shutil.which("skfem-flex")
-    return [exe] if exe else [sys.executable, "-m", "skfem_flex.apps.cli"]
 
 
 def run_process(args, cwd, timeout=120):

@@ -26,7 +26,7 @@ import skfem_flex as sf
 from skfem_flex.compiled import scene_loop as cs
 from skfem_flex.numerics import linear_solver as ls
 
-from test_linear_solve import bordered_matrix
+from helpers import bordered_matrix
 
 
 def random_bordered(n_interior, lo, up, n_frame, n_mult, frame_first, seed, pivoting=True):

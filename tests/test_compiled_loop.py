@@ -14,7 +14,7 @@ from skfem_flex.compiled import single_body_loop as compiled_loop
 from skfem_flex.bodies.floating.body import FloatingBeam
 from skfem_flex.schemes.integrators import ConvergenceError, EnergyMomentum, NewtonSettings
 
-SEC = dict(EA=2.8e7, EI=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4)
+from helpers import SPIN_UP_SECTION as SEC, assert_loop_measures_are_the_scenes, assert_same_run
 
 
 def free_flying_beam(reference="pinned", n_elements=6):
@@ -23,34 +23,6 @@ def free_flying_beam(reference="pinned", n_elements=6):
     body = FloatingBeam(beam, reference=reference, velocity=(1.0, -0.5), angular_velocity=0.8)
     body.v0[3:] = body.elastic_vector(w=lambda x: 0.02 * np.sin(np.pi * x / 10.0))
     return sf.Scene([body], name="free flight")
-
-
-def assert_same_run(a, b, q_tol=1e-9, v_tol=1e-7, e_tol=None):
-    """Compiled run a against Python run b: states to ``q_tol`` and ``v_tol`` (v1 = 2Δq/Δt − v0 amplifies
-    round-off), energies, work, momenta and reactions to ``e_tol`` (default ``v_tol``), relative."""
-    e_tol = v_tol if e_tol is None else e_tol
-    np.testing.assert_array_equal(a.t, b.t)
-    assert a.steps == b.steps and a.halvings == b.halvings
-    assert np.abs(a.q - b.q).max() <= q_tol * np.abs(b.q).max()
-    assert np.abs(a.v - b.v).max() <= v_tol * np.abs(b.v).max()
-    e_scale = np.abs(b.total_energy).max() + np.abs(b.external_work).max()
-    for name in ("total_energy", "potential", "kinetic", "external_work"):
-        assert np.abs(getattr(a, name) - getattr(b, name)).max() <= e_tol * e_scale, name
-    p_scale = np.abs(b.linear_momentum).max() + 1e-300
-    assert np.abs(a.linear_momentum - b.linear_momentum).max() <= e_tol * p_scale
-    assert np.abs(a.angular_momentum - b.angular_momentum).max() <= v_tol * (np.abs(b.angular_momentum).max()
-                                                                            + p_scale * np.abs(b.q[:, :2]).max())
-    if b.prescribed_force.size:
-        assert np.abs(a.prescribed_force - b.prescribed_force).max() <= e_tol * np.abs(b.prescribed_force).max()
-    for k in b.probes:
-        np.testing.assert_allclose(a.probes[k], b.probes[k], rtol=0, atol=q_tol * np.abs(b.q).max())
-    total_a, total_b = a.newton_iterations.sum(), b.newton_iterations.sum()
-    # a step decided at the round-off floor may take one iteration more or less on either path (the
-    # start from rest); a minority of the recorded steps may do so
-    assert abs(total_a - total_b) <= 0.05 * total_b + 0.3 * a.t.size
-    # the compiled run conserves energy as exactly as the Python one
-    bal = np.abs(a.total_energy - a.total_energy[0] - a.external_work).max()
-    assert bal <= 1e-12 * e_scale + 10 * np.abs(b.total_energy - b.total_energy[0] - b.external_work).max()
 
 
 def test_eligibility():
@@ -153,15 +125,3 @@ def test_energies_and_momenta_computed_in_the_loop_equal_the_scene_methods():
     """The compiled loop evaluates T, V and the momenta of the recorded states itself; they must be the
     scene's values at the recorded (q, v)."""
     assert_loop_measures_are_the_scenes(free_flying_beam("clamped"), rel=1e-13)
-
-
-def assert_loop_measures_are_the_scenes(scene, rel):
-    """T, V and the momenta the compiled loop computed for the recorded states equal the scene's at (q, v)."""
-    res = sf.simulate(scene, t_end=0.2, dt=1e-2, record_every=3)
-    assert compiled_loop.eligible(scene, EnergyMomentum())
-    for k in range(res.t.size):
-        q, v = res.q[k], res.v[k]
-        assert res.kinetic[k] == pytest.approx(scene.kinetic_energy(q, v), rel=rel)
-        assert res.potential[k] == pytest.approx(scene.potential_energy(q), rel=1e-12, abs=1e-15)
-        np.testing.assert_allclose(res.linear_momentum[k], scene.linear_momentum(q, v), rtol=rel, atol=1e-13)
-        assert res.angular_momentum[k] == pytest.approx(scene.angular_momentum(q, v), rel=rel)

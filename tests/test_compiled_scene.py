@@ -11,7 +11,6 @@
 """
 import numpy as np
 import pytest
-import scipy.sparse as sps
 
 import skfem_flex as sf
 from skfem_flex.compiled import scene_loop as compiled_scene
@@ -20,16 +19,14 @@ from skfem_flex.schemes.integrators import ConvergenceError, EnergyMomentum, New
 from skfem_flex.bodies.probes import PointProbe
 from skfem_flex.scenes.links import link
 
+from helpers import dense
+
 EPS = np.finfo(float).eps
 SEC = dict(EA=1e6, EI=1e2, kGA=3.205e5, rhoA=1.0, rhoI=1e-4)
 #: rotation increments of the random states: large ones and tiny ones (series branch of sinc(Δθ/2), |Δθ| < 2e-3)
 DTHETAS = [2.0, -1.9, 0.6, 2.1e-3, -3e-5, 1e-9, 0.0]
 #: relative tolerance of the kernels against the numpy points
 KERNEL_TOL = 1e-12
-
-
-def dense(a):
-    return a.toarray() if sps.issparse(a) else np.asarray(a, dtype=float)
 
 
 def rel(a, ref, floor=0.0):

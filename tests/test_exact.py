@@ -3,7 +3,6 @@ import math
 
 import numpy as np
 import pytest
-import scipy.sparse as sps
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
@@ -11,11 +10,7 @@ import skfem_flex as sf
 from skfem_flex.bodies.exact.body import ElementInversionError, ExactBeam, ExactDistributedLoad, NodalLoad
 from skfem_flex.scenes.exact_beams import exact_spin_up_beam, flying_beam, very_flexible_pendulum
 
-SECTION = sf.Section(EA=1e4, EI=100.0, kGA=3e3, rhoA=1.0, rhoI=10.0)
-
-
-def dense(a):
-    return a.toarray() if sps.issparse(a) else np.asarray(a)
+from helpers import FLYING_BEAM_SECTION as SECTION, dense
 
 
 def random_state(body, rng, size):

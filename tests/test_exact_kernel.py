@@ -13,12 +13,9 @@ from skfem_flex.bodies.exact.body import ElementInversionError, ExactBeam
 from skfem_flex.errors import ConvergenceError
 from skfem_flex.numerics.rotations import MAX_INCREMENT
 
-SECTION = sf.Section(EA=1e4, EI=100.0, kGA=3e3, rhoA=1.0, rhoI=10.0)
+from helpers import FLYING_BEAM_SECTION as SECTION, dense
+
 TOL = 1e-12
-
-
-def dense(a):
-    return a.toarray() if sps.issparse(a) else np.asarray(a)
 
 
 def _sinc_accurate(z):

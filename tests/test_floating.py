@@ -14,7 +14,8 @@ import skfem
 import skfem_flex as sf
 from skfem_flex.bodies.floating.body import FloatingBeam, DistributedLoad
 
-SEC = dict(EA=2.8e7, EI=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4)
+from helpers import SPIN_UP_SECTION as SEC, dense, relerr
+
 L = 10.0
 # λ = ω √(ρA L⁴/EI) for the default section
 LAMBDA_SCALE = math.sqrt(SEC["rhoA"] * L ** 4 / SEC["EI"])
@@ -25,10 +26,6 @@ def make_beam(n=4, order=1, section=None, length=L):
     return sf.TimoshenkoBeam(skfem.MeshLine(np.linspace(0.0, length, n + 1)), sec, order=order)
 
 
-def dense(a):
-    return a.toarray() if hasattr(a, "toarray") else np.asarray(a)
-
-
 def fd_jacobian(fun, x, h=1e-6):
     cols = []
     for i in range(x.size):
@@ -36,11 +33,6 @@ def fd_jacobian(fun, x, h=1e-6):
         e[i] = h
         cols.append((np.atleast_1d(fun(x + e)) - np.atleast_1d(fun(x - e))) / (2 * h))
     return np.array(cols).T
-
-
-def relerr(a, b):
-    a, b = dense(a), dense(b)
-    return np.abs(a - b).max() / max(np.abs(b).max(), 1e-300)
 
 
 # --------------------------------------------------------------------------- inertia

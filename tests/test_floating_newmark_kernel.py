@@ -8,15 +8,14 @@ the body's CSR pattern cannot hold.
 """
 import numpy as np
 import pytest
-import scipy.sparse as sps
 import skfem
 
 import skfem_flex as sf
 from skfem_flex.bodies import PlaneStress
 from skfem_flex.bodies.floating import kernel as fk
-from skfem_flex.bodies.floating.body import FloatingBeam
 
-SEC = dict(EA=2.8e7, EI=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4)
+from helpers import SPIN_UP_SECTION as SEC, dense, floating_beam, relerr
+
 # a section whose stiffness is of the size of the kinetic terms at ω, α ~ 1: the tangent's comparison
 # then also tests B and ∂Q_v/∂q to round-off instead of below K's
 SOFT = dict(EA=20.0, EI=2.0, kGA=8.0, rhoA=1.2, rhoI=6e-4)
@@ -31,9 +30,7 @@ _BODIES = {}
 
 
 def beam_body(n_elements, reference, strain, order, sparse, section):
-    beam = sf.TimoshenkoBeam(skfem.MeshLine(np.linspace(0.0, 10.0, n_elements + 1)),
-                             sf.Section(**(SEC if section == "stiff" else SOFT)), order=order)
-    return FloatingBeam(beam, reference=reference, strain=strain, sparse=sparse)
+    return floating_beam(n_elements, reference, strain, order, sparse, SEC if section == "stiff" else SOFT)
 
 
 def modal_body(kind):
@@ -48,15 +45,6 @@ def modal_body(kind):
                                        strain="linear" if kind == "beam-linear" else "green-lagrange").bodies[0]
         _BODIES[kind] = b
     return _BODIES[kind]
-
-
-def dense(a):
-    return a.toarray() if sps.issparse(a) else np.asarray(a)
-
-
-def relerr(a, b):
-    a, b = dense(a), dense(b)
-    return np.abs(a - b).max() / max(np.abs(b).max(), 1e-300)
 
 
 def random_state(body, rng, scale):

@@ -7,6 +7,8 @@ from scipy.special import ellipj, ellipk, gamma
 
 import skfem_flex as sf
 
+from helpers import crossing_times
+
 
 def quartic_period(m=1.0, k=1.0, u0=1.0):
     """Exact period of m ü + 2 k u³ = 0 from rest at u0: T = 4 ∫ du / sqrt(2(E − V)/m), V = ½ k u⁴.
@@ -21,27 +23,6 @@ def pendulum_period(length, v0, g):
     cos0 = 1.0 - v0 ** 2 / (2.0 * g * length)
     k2 = (1.0 - cos0) / 2.0          # sin²(θ0/2)
     return 4.0 * math.sqrt(length / g) * ellipk(k2)
-
-
-def crossing_times(t, x, xdot):
-    """Times where x crosses 0 upwards, located by cubic Hermite interpolation on each step (O(dt⁴))."""
-    out = []
-    for i in np.nonzero((x[:-1] < 0) & (x[1:] >= 0))[0]:
-        h = t[i + 1] - t[i]
-        p0, p1, m0, m1 = x[i], x[i + 1], xdot[i] * h, xdot[i + 1] * h
-
-        def herm(s):
-            return ((2 * s ** 3 - 3 * s ** 2 + 1) * p0 + (s ** 3 - 2 * s ** 2 + s) * m0
-                    + (-2 * s ** 3 + 3 * s ** 2) * p1 + (s ** 3 - s ** 2) * m1)
-        lo, hi = 0.0, 1.0
-        for _ in range(60):
-            mid = 0.5 * (lo + hi)
-            if herm(mid) < 0:
-                lo = mid
-            else:
-                hi = mid
-        out.append(t[i] + 0.5 * (lo + hi) * h)
-    return np.array(out)
 
 
 def measured_period(res, coordinate=0):

@@ -13,7 +13,6 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 from unittest import mock
 
 import numpy as np
@@ -23,7 +22,8 @@ import skfem_flex as sf
 from skfem_flex.apps.cli import main
 from skfem_flex.run.output import read_pvd
 
-ROOT = Path(__file__).resolve().parents[1]
+from helpers import ROOT
+
 SCENE, T_END, DT = "pendulum", 10.0, 0.01
 
 

@@ -18,7 +18,6 @@ import subprocess
 import sys
 import time
 import warnings
-from pathlib import Path
 
 import pytest
 
@@ -30,7 +29,8 @@ from skfem_flex.apps import studies
 from skfem_flex.numerics.resources import InsufficientMemoryError
 from skfem_flex.run.result import Result
 
-ROOT = Path(__file__).resolve().parents[1]
+from helpers import ROOT
+
 simulate_module = importlib.import_module("skfem_flex.run.simulate")
 sweep_module = importlib.import_module("skfem_flex.apps.sweep")
 

@@ -7,26 +7,11 @@ mesh; the reference is SciPy's general sparse LU.
 """
 import numpy as np
 import pytest
-import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 
 from skfem_flex.numerics import linear_solver
 
-
-def bordered_matrix(n, n_frame=3, n_mult=2, half_band=3, seed=0):
-    """Band (SPD-like) elastic block, dense frame rows and columns, multipliers touching far coordinates."""
-    rng = np.random.default_rng(seed)
-    nb = n_frame + n
-    offsets = range(-half_band, half_band + 1)
-    band = sps.diags([rng.normal(size=n - abs(k)) for k in offsets], list(offsets), shape=(n, n)).tocsr()
-    band = band + band.T + sps.identity(n) * (4.0 * half_band + 2.0)
-    frame = rng.normal(size=(n_frame, n))
-    top = np.hstack([rng.normal(size=(n_frame, n_frame)) + 10 * np.eye(n_frame), frame])
-    body = sps.vstack([sps.csr_matrix(top), sps.hstack([sps.csr_matrix(frame.T), band])]).tocsr()
-    cols = np.concatenate([np.arange(n_frame), [n_frame + n // 2, nb - 1]])    # far-apart coordinates
-    c = np.zeros((n_mult, nb))
-    c[:, cols[:n_frame + 2]] = rng.normal(size=(n_mult, cols[:n_frame + 2].size))
-    return sps.bmat([[body, sps.csr_matrix(c).T], [sps.csr_matrix(c), None]], format="csc")
+from helpers import bordered_matrix
 
 
 @pytest.mark.parametrize("n", [200, 2000])

@@ -7,7 +7,6 @@ must agree with them to round-off; the compiled run must then be the Python run.
 """
 import numpy as np
 import pytest
-import scipy.sparse as sps
 import skfem
 
 import skfem_flex as sf
@@ -19,18 +18,9 @@ from skfem_flex.bodies.modal.body import ModalBody
 from skfem_flex.bodies.modal.kernel import pack_quartic, quartic_discrete_gradient, quartic_energy
 from skfem_flex.bodies.modal.stiffening import QuarticEnergy
 from skfem_flex.schemes.integrators import EnergyMomentum, Trapezoidal
-from test_compiled_loop import assert_loop_measures_are_the_scenes, assert_same_run as same_run
 
-SEC = dict(EA=2.8e7, EI=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4)
-
-
-def dense(a):
-    return a.toarray() if sps.issparse(a) else np.asarray(a)
-
-
-def relerr(a, b):
-    a, b = dense(a), dense(b)
-    return np.abs(a - b).max() / max(np.abs(b).max(), 1e-300)
+from helpers import (SPIN_UP_SECTION as SEC, assert_loop_measures_are_the_scenes, assert_same_run, contract_terms,
+                     dense, random_floating_states, relerr)
 
 
 def spin_up_modal(**kw):
@@ -70,30 +60,9 @@ def body_of(kind):
 KINDS = ["beam-gl", "beam-linear", "plane-stress-gl", "plate-gl", "plate-full-linear"]
 
 
-def random_states(body, rng, scale):
-    n = body.n_dofs
-    q0 = rng.normal(size=n) * scale
-    q0[:3] = rng.normal(size=3) * [1.0, 1.0, 3.0]
-    q1 = q0 + rng.normal(size=n) * 0.1 * scale
-    q1[2] = q0[2] + rng.choice([1e-5, 0.3])           # both branches of sinc(Δθ/2)
-    v0, v1 = rng.normal(size=n), rng.normal(size=n)
-    return q0, q1, v0, v1
-
-
 def elastic_scale(body, frac):
     """Size of η whose displacements Φη are about ``frac`` × the body's size."""
     return frac * np.abs(body.model.position).max() / np.abs(body.Phi).max()
-
-
-def contract_terms(body, q0, q1, v0, v1, dt):
-    """The fused terms assembled from the separate numpy contract methods."""
-    gk, gk_q, gk_v = body.kinetic_discrete_gradient(q0, q1, v0, v1)
-    gp, gp_q = body.potential_discrete_gradient(q0, q1)
-    M1 = dense(body.mass_matrix(q1))
-    jac = ((2.0 / dt) * M1 + dense(body.momentum_jacobian(q1, v1)) - dt * dense(gk_q) - 2.0 * dense(gk_v)
-           + dt * dense(gp_q))
-    floor = dt * (np.abs(dense(gp_q)) @ (np.abs(q0) + np.abs(q1)))
-    return M1 @ v1, gk, gp, jac, floor
 
 
 @pytest.mark.parametrize("kind", KINDS)
@@ -105,8 +74,9 @@ def test_energy_momentum_kernel_equals_the_contract_methods(kind):
     n = body.n_dofs
     rng = np.random.default_rng(3)
     for frac in (1e-3, 0.1):                                         # the quartic terms small and large
+        scale = elastic_scale(body, frac)
         for dt in (1e-3, 2e-2):
-            q0, q1, v0, v1 = random_states(body, rng, elastic_scale(body, frac))
+            q0, q1, v0, v1 = random_floating_states(body, rng, scale, 0.1 * scale)
             p, gk, gp, data, floor = fk.energy_momentum_terms(kd, q0, q1, v0, v1, dt)
             got = (p, gk, gp, data.reshape(n, n), floor)
             fused = body.energy_momentum_terms(q0, q1, v0, v1, dt)       # the Python path's call (numpy)
@@ -122,7 +92,8 @@ def test_momentum_and_strain_energy_kernels_equal_the_contract_methods(kind):
     kd = body.compiled_kernel_data()
     rng = np.random.default_rng(5)
     for frac in (1e-3, 0.1):
-        q, _, v, _ = random_states(body, rng, elastic_scale(body, frac))
+        scale = elastic_scale(body, frac)
+        q, _, v, _ = random_floating_states(body, rng, scale, 0.1 * scale)
         assert relerr(fk.momentum(kd, q, v), dense(body.mass_matrix(q)) @ v) < 1e-12
         assert fk.potential_energy(kd, q) == pytest.approx(body.potential_energy(q), rel=1e-12)
 
@@ -169,9 +140,8 @@ def test_bodies_without_kernel_data_and_eligibility():
     assert beam.compiled_kernel_data() is beam.compiled_kernel_data()
 
 
-def assert_same_run(a, b, tol=1e-10):
-    """Compiled run a against Python run b (free flight: q agrees to 2e-13, v to 1e-10 after 200 steps)."""
-    same_run(a, b, q_tol=tol, v_tol=100 * tol, e_tol=tol)
+#: compiled run against Python run (free flight: q agrees to 2e-13, v to 1e-10 after 200 steps)
+SAME_RUN_TOL = dict(q_tol=1e-10, v_tol=1e-8, e_tol=1e-10)
 
 
 def energy_balance(res):
@@ -183,7 +153,7 @@ def energy_balance(res):
 @pytest.mark.parametrize("dt", [1e-3, 2e-2])
 def test_reduced_spin_up_compiled_equals_python(dt):
     runs = [sf.simulate(spin_up_modal(), t_end=300 * dt, dt=dt, compiled=c) for c in (True, False)]
-    assert_same_run(*runs)
+    assert_same_run(*runs, **SAME_RUN_TOL)
     assert energy_balance(runs[0]) <= 1e-9
     assert runs[0].potential.max() > 0 and np.abs(runs[0].probes["tip"]).max() > 1e-4   # it deforms
 
@@ -191,7 +161,7 @@ def test_reduced_spin_up_compiled_equals_python(dt):
 def test_reduced_linear_spin_up_compiled_equals_python():
     runs = [sf.simulate(spin_up_modal(strain="linear"), t_end=2.0, dt=1e-2, record_every=7, compiled=c)
             for c in (True, False)]
-    assert_same_run(*runs)
+    assert_same_run(*runs, **SAME_RUN_TOL)
     assert runs[0].t[-1] == pytest.approx(2.0) and runs[0].t.size == 1 + 200 // 7 + 1
 
 
@@ -208,7 +178,7 @@ def free_spinning_plate():
 def test_reduced_free_flight_compiled_equals_python_and_conserves(make, t_end, dt):
     assert compiled_loop.eligible(make(), EnergyMomentum())
     runs = [sf.simulate(make(), t_end=t_end, dt=dt, compiled=c) for c in (True, False)]
-    assert_same_run(*runs)
+    assert_same_run(*runs, **SAME_RUN_TOL)
     a = runs[0]
     assert energy_balance(a) <= 1e-9
     assert np.abs(a.total_energy - a.total_energy[0]).max() <= 1e-9 * a.total_energy[0]

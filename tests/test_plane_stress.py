@@ -1,9 +1,5 @@
 """Plane-stress floating-frame bodies: the strip against Timoshenko theory, stresses, meshes from files, bad input."""
-import importlib.util
-from pathlib import Path
-
 import meshio
-
 import numpy as np
 import pytest
 import skfem
@@ -13,7 +9,8 @@ import skfem_flex as sf
 from skfem_flex.bodies import PlaneStress, craig_bampton, load_mesh
 from skfem_flex.bodies.modal.plane_stress import von_mises
 
-ROOT = Path(__file__).resolve().parents[1]
+from helpers import ROOT, load_example
+
 CONROD = ROOT / "examples" / "meshes" / "conrod.msh"
 
 # the catalogue flexible-pendulum section as a unit-thickness strip
@@ -106,9 +103,7 @@ def test_meshed_rod_from_gmsh_file_has_named_interfaces():
 def test_meshed_rod_example_writes_a_stress_series(tmp_path):
     """examples/meshed_rod.py, briefly: VTK series with finite stress arrays that change in time;
     joints hold to 1e-10 and the energy balance to 1e-9."""
-    spec = importlib.util.spec_from_file_location("meshed_rod_example", ROOT / "examples" / "meshed_rod.py")
-    example = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(example)
+    example = load_example("meshed_rod")
     res, scene = example.run(tmp_path, 2e-3, record_every=10, n_modes=2)
     assert res.completed and np.max(res.constraint_residual) <= 1e-10
     assert res.relative_energy_error() <= 1e-9

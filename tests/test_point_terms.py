@@ -1,7 +1,6 @@
 """Public building blocks shared across layers: point terms and the scene's constraint layout."""
 import numpy as np
 import pytest
-import scipy.sparse as sps
 
 import skfem_flex as sf
 from skfem_flex.elements import constraints
@@ -11,9 +10,7 @@ from skfem_flex.elements.constraints import Pin, Revolute, Weld
 from skfem_flex.elements.point_terms import (Constant, Difference, Dot, PointLayout, Position, Rotated, angle_term,
                                     coordinate_term, linear_combination)
 
-
-def dense(m):
-    return m.toarray() if sps.issparse(m) else np.asarray(m)
+from helpers import dense
 
 
 def two_bodies():

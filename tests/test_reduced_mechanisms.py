@@ -2,15 +2,15 @@
 Craig–Bampton beam rod follows the full Green–Lagrange beam rod, and the command line runs the reduced strip rod."""
 import json
 import os
-import shutil
 import subprocess
-import sys
 
 import numpy as np
 import pytest
 
 import skfem_flex as sf
 from skfem_flex.scenes.links import LINK_KINDS
+
+from helpers import command
 
 
 @pytest.mark.parametrize("body", LINK_KINDS)
@@ -46,12 +46,6 @@ def test_reduced_beam_rod_follows_the_full_green_lagrange_beam_rod():
     assert peak == pytest.approx(1.63e-3, rel=2e-2)
     assert np.abs(w - w_full).max() <= 1e-2 * peak
     assert np.max(red.constraint_residual) <= 1e-10 and red.relative_energy_error() <= 1e-8
-
-
-def command():
-    """The installed console script if there is one, else the module (as tests/test_cli.py)."""
-    exe = shutil.which("skfem-flex")
-    return [exe] if exe else [sys.executable, "-m", "skfem_flex.apps.cli"]
 
 
 def test_cli_runs_the_slider_crank_with_the_reduced_strip_rod(tmp_path):

@@ -23,7 +23,8 @@ from skfem_flex.apps import cli
 from skfem_flex.compiled import single_body_loop as compiled_loop
 from skfem_flex.run.output import VTKSeries, read_pvd
 
-ROOT = Path(__file__).resolve().parents[1]
+from helpers import ROOT
+
 
 #: --set values of the wrong type, sign and size (sizes kept where a run is rejected or short)
 BAD_VALUES = ["", "abc", "nan", "inf", "-inf", "-1", "0", "-0.0", "1.5", "-2.5", "1e308", "-1e308", "1e-308",

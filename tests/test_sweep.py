@@ -9,7 +9,6 @@ import subprocess
 import sys
 import threading
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,7 +19,8 @@ import skfem_flex as sf
 from skfem_flex.schemes.integrators import NewtonSettings
 from skfem_flex.apps.sweep import local_cluster, open_sweep, plan, probe_extremes
 
-ROOT = Path(__file__).resolve().parents[1]
+from helpers import ROOT
+
 GRID = {"omega": [4.0, 6.0, 8.0, 10.0], "n_elements": [2, 3, 4, 6]}
 
 

@@ -26,6 +26,8 @@ from skfem_flex.bodies.base import Body, BodyGeometry, BodyPoint
 from skfem_flex.bodies.rigid import RigidBody
 from skfem_flex.elements.constraints import Pin, Revolute, UserConstraint
 
+from helpers import crossing_times
+
 SCHEMES = ["energy-momentum", "trapezoidal", "generalized-alpha"]
 G = 9.81
 
@@ -241,22 +243,6 @@ def balance_error(res):
     e = res.total_energy - res.total_energy[0] - res.external_work
     scale = max(np.max(np.abs(res.kinetic)), np.max(np.abs(res.potential)))
     return np.max(np.abs(e)) / scale
-
-
-def crossing_times(t, x, xdot):
-    """Times where x crosses 0 upwards, by cubic Hermite interpolation on the step."""
-    out = []
-    for i in np.nonzero((x[:-1] < 0) & (x[1:] >= 0))[0]:
-        h = t[i + 1] - t[i]
-        p0, p1, m0, m1 = x[i], x[i + 1], xdot[i] * h, xdot[i + 1] * h
-        lo, hi = 0.0, 1.0
-        for _ in range(60):
-            s = 0.5 * (lo + hi)
-            val = ((2 * s ** 3 - 3 * s ** 2 + 1) * p0 + (s ** 3 - 2 * s ** 2 + s) * m0
-                   + (-2 * s ** 3 + 3 * s ** 2) * p1 + (s ** 3 - s ** 2) * m1)
-            lo, hi = (s, hi) if val < 0 else (lo, s)
-        out.append(t[i] + 0.5 * (lo + hi) * h)
-    return np.array(out)
 
 
 MORSE = dict(depth=1.0, width=4.0, rest=1.0)

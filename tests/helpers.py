@@ -1,0 +1,169 @@
+"""Helpers shared by the test modules: one copy of each, imported as ``from helpers import ...``.
+
+The tests are not a package; pytest puts this folder on ``sys.path`` (rootdir-relative "prepend"
+import mode), so every test module can import this one by name.
+"""
+import importlib.util
+import shutil
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse as sps
+import skfem
+
+import skfem_flex as sf
+
+#: the repository's root folder
+ROOT = Path(__file__).resolve().parents[1]
+
+#: the spin-up beam's section (Simo & Vu-Quoc 1986): EA (N), EI (N m²), kGA (N), ρA (kg/m), ρI (kg m)
+SPIN_UP_SECTION = dict(EA=2.8e7, EI=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4)
+
+#: the flying beam's section (Simo & Vu-Quoc 1986, part II), for the geometrically exact beam
+FLYING_BEAM_SECTION = sf.Section(EA=1e4, EI=100.0, kGA=3e3, rhoA=1.0, rhoI=10.0)
+
+
+# ------------------------------------------------------------------ arrays
+def dense(a):
+    """``a`` as a dense float array (sparse matrices converted)."""
+    return a.toarray() if sps.issparse(a) else np.asarray(a, dtype=float)
+
+
+def relerr(a, b):
+    """max |a − b| / max |b| (dense or sparse; a zero ``b`` divides by 1e-300)."""
+    a, b = dense(a), dense(b)
+    return np.abs(a - b).max() / max(np.abs(b).max(), 1e-300)
+
+
+def crossing_times(t, x, xdot):
+    """Times where x crosses 0 upwards, located by cubic Hermite interpolation on each step (O(dt⁴))."""
+    out = []
+    for i in np.nonzero((x[:-1] < 0) & (x[1:] >= 0))[0]:
+        h = t[i + 1] - t[i]
+        p0, p1, m0, m1 = x[i], x[i + 1], xdot[i] * h, xdot[i + 1] * h
+
+        def herm(s):
+            return ((2 * s ** 3 - 3 * s ** 2 + 1) * p0 + (s ** 3 - 2 * s ** 2 + s) * m0
+                    + (-2 * s ** 3 + 3 * s ** 2) * p1 + (s ** 3 - s ** 2) * m1)
+        lo, hi = 0.0, 1.0
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            if herm(mid) < 0:
+                lo = mid
+            else:
+                hi = mid
+        out.append(t[i] + 0.5 * (lo + hi) * h)
+    return np.array(out)
+
+
+def bordered_matrix(n, n_frame=3, n_mult=2, half_band=3, seed=0):
+    """Band (SPD-like) elastic block, dense frame rows and columns, multipliers touching far coordinates."""
+    rng = np.random.default_rng(seed)
+    nb = n_frame + n
+    offsets = range(-half_band, half_band + 1)
+    band = sps.diags([rng.normal(size=n - abs(k)) for k in offsets], list(offsets), shape=(n, n)).tocsr()
+    band = band + band.T + sps.identity(n) * (4.0 * half_band + 2.0)
+    frame = rng.normal(size=(n_frame, n))
+    top = np.hstack([rng.normal(size=(n_frame, n_frame)) + 10 * np.eye(n_frame), frame])
+    body = sps.vstack([sps.csr_matrix(top), sps.hstack([sps.csr_matrix(frame.T), band])]).tocsr()
+    cols = np.concatenate([np.arange(n_frame), [n_frame + n // 2, nb - 1]])    # far-apart coordinates
+    c = np.zeros((n_mult, nb))
+    c[:, cols[:n_frame + 2]] = rng.normal(size=(n_mult, cols[:n_frame + 2].size))
+    return sps.bmat([[body, sps.csr_matrix(c).T], [sps.csr_matrix(c), None]], format="csc")
+
+
+# ------------------------------------------------------------------ floating-frame bodies
+def floating_beam(n_elements, reference, strain, order, sparse, section=SPIN_UP_SECTION):
+    """A FloatingBeam on a uniform mesh of [0, 10 m] with ``section`` (a dict of Section's arguments)."""
+    from skfem_flex.bodies.floating.body import FloatingBeam
+
+    beam = sf.TimoshenkoBeam(skfem.MeshLine(np.linspace(0.0, 10.0, n_elements + 1)), sf.Section(**section),
+                             order=order)
+    return FloatingBeam(beam, reference=reference, strain=strain, sparse=sparse)
+
+
+def random_floating_states(body, rng, scale, step):
+    """(q0, q1, v0, v1) of a floating-frame body: frame coordinates of order 1, elastic ones of size
+    ``scale``, q1 − q0 of size ``step``, the angle increment tiny or large (both branches of sinc(Δθ/2))."""
+    n = body.n_dofs
+    q0 = rng.normal(size=n) * scale
+    q0[:3] = rng.normal(size=3) * [1.0, 1.0, 3.0]
+    q1 = q0 + rng.normal(size=n) * step
+    q1[2] = q0[2] + rng.choice([1e-5, 0.3])
+    v0, v1 = rng.normal(size=n), rng.normal(size=n)
+    return q0, q1, v0, v1
+
+
+def contract_terms(body, q0, q1, v0, v1, dt):
+    """The energy-momentum step's fused terms (p1, kinetic and potential discrete gradients, Newton matrix,
+    round-off floor) assembled from the body's separate numpy contract methods (the scene's general path)."""
+    gk, gk_q, gk_v = body.kinetic_discrete_gradient(q0, q1, v0, v1)
+    gp, gp_q = body.potential_discrete_gradient(q0, q1)
+    M1 = dense(body.mass_matrix(q1))
+    jac = ((2.0 / dt) * M1 + dense(body.momentum_jacobian(q1, v1)) - dt * dense(gk_q) - 2.0 * dense(gk_v)
+           + dt * dense(gp_q))
+    floor = dt * (np.abs(dense(gp_q)) @ (np.abs(q0) + np.abs(q1)))
+    return M1 @ v1, gk, gp, jac, floor
+
+
+# ------------------------------------------------------------------ runs
+def assert_same_run(a, b, q_tol=1e-9, v_tol=1e-7, e_tol=None):
+    """Compiled run a against Python run b: states to ``q_tol`` and ``v_tol`` (v1 = 2Δq/Δt − v0 amplifies
+    round-off), energies, work, momenta and reactions to ``e_tol`` (default ``v_tol``), relative."""
+    e_tol = v_tol if e_tol is None else e_tol
+    np.testing.assert_array_equal(a.t, b.t)
+    assert a.steps == b.steps and a.halvings == b.halvings
+    assert np.abs(a.q - b.q).max() <= q_tol * np.abs(b.q).max()
+    assert np.abs(a.v - b.v).max() <= v_tol * np.abs(b.v).max()
+    e_scale = np.abs(b.total_energy).max() + np.abs(b.external_work).max()
+    for name in ("total_energy", "potential", "kinetic", "external_work"):
+        assert np.abs(getattr(a, name) - getattr(b, name)).max() <= e_tol * e_scale, name
+    p_scale = np.abs(b.linear_momentum).max() + 1e-300
+    assert np.abs(a.linear_momentum - b.linear_momentum).max() <= e_tol * p_scale
+    assert np.abs(a.angular_momentum - b.angular_momentum).max() <= v_tol * (np.abs(b.angular_momentum).max()
+                                                                            + p_scale * np.abs(b.q[:, :2]).max())
+    if b.prescribed_force.size:
+        assert np.abs(a.prescribed_force - b.prescribed_force).max() <= e_tol * np.abs(b.prescribed_force).max()
+    for k in b.probes:
+        np.testing.assert_allclose(a.probes[k], b.probes[k], rtol=0, atol=q_tol * np.abs(b.q).max())
+    total_a, total_b = a.newton_iterations.sum(), b.newton_iterations.sum()
+    # a step decided at the round-off floor may take one iteration more or less on either path (the
+    # start from rest); a minority of the recorded steps may do so
+    assert abs(total_a - total_b) <= 0.05 * total_b + 0.3 * a.t.size
+    # the compiled run conserves energy as exactly as the Python one
+    bal = np.abs(a.total_energy - a.total_energy[0] - a.external_work).max()
+    assert bal <= 1e-12 * e_scale + 10 * np.abs(b.total_energy - b.total_energy[0] - b.external_work).max()
+
+
+def assert_loop_measures_are_the_scenes(scene, rel):
+    """T, V and the momenta the compiled loop computed for the recorded states equal the scene's at (q, v)."""
+    # imported here: a module that moves breaks the tests that use it, not every importer of helpers
+    from skfem_flex.compiled import single_body_loop as compiled_loop
+    from skfem_flex.schemes.integrators import EnergyMomentum
+
+    res = sf.simulate(scene, t_end=0.2, dt=1e-2, record_every=3)
+    assert compiled_loop.eligible(scene, EnergyMomentum())
+    for k in range(res.t.size):
+        q, v = res.q[k], res.v[k]
+        assert res.kinetic[k] == pytest.approx(scene.kinetic_energy(q, v), rel=rel)
+        assert res.potential[k] == pytest.approx(scene.potential_energy(q), rel=1e-12, abs=1e-15)
+        np.testing.assert_allclose(res.linear_momentum[k], scene.linear_momentum(q, v), rtol=rel, atol=1e-13)
+        assert res.angular_momentum[k] == pytest.approx(scene.angular_momentum(q, v), rel=rel)
+
+
+# ------------------------------------------------------------------ command line and examples
+def command():
+    """The installed console script if there is one, else the module."""
+    exe = shutil.which("skfem-flex")
+    return [exe] if exe else [sys.executable, "-m", "skfem_flex.apps.cli"]
+
+
+def load_example(name):
+    """Import ``examples/NAME.py`` as a module (its module-level computations run; its ``__main__`` part
+    does not)."""
+    spec = importlib.util.spec_from_file_location(f"{name}_example", ROOT / "examples" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
