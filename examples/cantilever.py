@@ -24,7 +24,7 @@ import numpy as np
 import skfem
 
 from skfem_flex.fem.beam import TimoshenkoBeam
-from skfem_flex.run.plots import pyplot_for
+from skfem_flex.io.plots import pyplot_for
 from skfem_flex.fem.section import Section
 
 E, NU, WIDTH, HEIGHT, RHO = 210e9, 0.3, 0.1, 0.1, 7850.0

@@ -24,7 +24,7 @@ from pathlib import Path
 import numpy as np
 
 import skfem_flex as sf
-from skfem_flex.run.plots import pyplot_for
+from skfem_flex.io.plots import pyplot_for
 
 QUICK = os.environ.get("SKFEM_FLEX_EXAMPLE_QUICK", "") not in ("", "0")
 T_END, DT = (0.2 if QUICK else 2.0), 1e-3
@@ -58,7 +58,7 @@ def summary():
 
 
 if __name__ == "__main__":
-    from skfem_flex.run.plots import plot_snapshots
+    from skfem_flex.io.plots import plot_snapshots
 
     print(f"Rigid–flexible double pendulum, Δt = {DT:g} s, {T_END:g} s")
     print(summary())

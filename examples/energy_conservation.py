@@ -35,7 +35,7 @@ import numpy as np
 from scipy.integrate import quad
 
 import skfem_flex as sf
-from skfem_flex.run.plots import pyplot_for
+from skfem_flex.io.plots import pyplot_for
 
 QUICK = os.environ.get("SKFEM_FLEX_EXAMPLE_QUICK", "") not in ("", "0")
 DT = 0.1                                # s, the spring–mass step

@@ -25,7 +25,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 import skfem_flex as sf
-from skfem_flex.run.plots import pyplot_for
+from skfem_flex.io.plots import pyplot_for
 
 QUICK = os.environ.get("SKFEM_FLEX_EXAMPLE_QUICK", "") not in ("", "0")
 G, LENGTH, RHOA, RHOI = 9.81, 1.0, 1.0, 1e-4
@@ -68,7 +68,7 @@ def summary():
 
 
 if __name__ == "__main__":
-    from skfem_flex.run.plots import plot_snapshots
+    from skfem_flex.io.plots import plot_snapshots
 
     print(f"Flexible pendulum, 8 elements, Δt = {DT:g} s, {T_END:g} s")
     print(summary())

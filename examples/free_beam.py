@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 import skfem_flex as sf
-from skfem_flex.run.plots import pyplot_for
+from skfem_flex.io.plots import pyplot_for
 
 QUICK = os.environ.get("SKFEM_FLEX_EXAMPLE_QUICK", "") not in ("", "0")
 FORCE, DURATION = 100.0, 0.05
@@ -40,7 +40,7 @@ def summary():
 
 
 if __name__ == "__main__":
-    from skfem_flex.run.plots import plot_snapshots
+    from skfem_flex.io.plots import plot_snapshots
 
     print(f"Free beam after a {FORCE:g} N, {DURATION:g} s half-sine pulse at the tip, Δt = {DT:g} s, {T_END:g} s")
     print(summary())

@@ -27,8 +27,8 @@ from pathlib import Path
 import numpy as np
 
 import skfem_flex as sf
-from skfem_flex.run.output import VTKSeries
-from skfem_flex.run.plots import pyplot_for
+from skfem_flex.io.output import VTKSeries
+from skfem_flex.io.plots import pyplot_for
 
 QUICK = os.environ.get("SKFEM_FLEX_EXAMPLE_QUICK", "") not in ("", "0")
 HERE = Path(__file__).resolve().parent

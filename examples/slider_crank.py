@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 
 import skfem_flex as sf
-from skfem_flex.run.plots import pyplot_for
+from skfem_flex.io.plots import pyplot_for
 from skfem_flex.scenes.mechanisms import SIMEON_REFERENCE
 
 QUICK = os.environ.get("SKFEM_FLEX_EXAMPLE_QUICK", "") not in ("", "0")

@@ -113,7 +113,7 @@ def summary():
 
 
 if __name__ == "__main__":
-    from skfem_flex.run.plots import plot_snapshots, pyplot_for
+    from skfem_flex.io.plots import plot_snapshots, pyplot_for
 
     print(summary())
     plt, output = pyplot_for(sys.argv[1] if len(sys.argv) > 1 else Path(__file__).parent / "output")

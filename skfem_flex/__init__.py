@@ -22,10 +22,10 @@ from .scene import Scene
 from .schemes import EnergyMomentum, GeneralizedAlpha, Newmark, NewtonSettings, Trapezoidal
 from .errors import ConvergenceError, DivergenceError, Interrupted, OutputError, SimulationError
 from .numerics.resources import InsufficientMemoryError
-from .run.result import Result
+from .io.result import Result
 from .run.simulate import Checkpointing, Control, Recording, simulate
 from .apps.sweep import open_sweep, sweep
-from .run.output import VTKSeries
+from .io.output import VTKSeries
 from .analysis import (CampbellDiagram, EquilibriumState, LinearSystem, Modes, campbell, linearize, modes,
                        static_equilibrium)
 from . import scenes

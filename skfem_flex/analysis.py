@@ -1127,7 +1127,7 @@ def write_mode_series(scene, result, directory, frames=24, amplitude=0.1, prefix
     list of Path
         The ``.pvd`` file of each mode.
     """
-    from .run.output import VTKSeries
+    from .io.output import VTKSeries
 
     if isinstance(frames, bool) or int(frames) != frames or frames < 2:
         raise ValueError(f"frames must be an integer >= 2, got {frames!r}")
@@ -1235,8 +1235,8 @@ class CampbellDiagram:
         return csv_path, md_path
 
     def plot(self, path=None, orders=None):
-        """Frequencies against the parameter (:func:`skfem_flex.run.plots.plot_campbell`)."""
-        from .run.plots import plot_campbell
+        """Frequencies against the parameter (:func:`skfem_flex.io.plots.plot_campbell`)."""
+        from .io.plots import plot_campbell
 
         return plot_campbell(self, path, orders)
 
@@ -1306,6 +1306,6 @@ class _Start:
 
 def _consistent(scene, t, q, v):
     """(q̈, λ, prescribed forces) consistent with (q, v) at time t, from the compiled step's start."""
-    from .run.stepper import Stepper
+    from .schemes.stepper import Stepper
     from .schemes import EnergyMomentum
     return Stepper(scene, EnergyMomentum()).start(t, np.asarray(q, dtype=float), np.asarray(v, dtype=float))

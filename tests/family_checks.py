@@ -4,7 +4,7 @@ import numpy as np
 import scipy.sparse as sps
 
 import skfem_flex as sf
-from skfem_flex.run.stepper import Stepper
+from skfem_flex.schemes.stepper import Stepper
 from skfem_flex.schemes.energy_momentum import EnergyMomentum
 from skfem_flex.schemes.newmark import GeneralizedAlpha, Trapezoidal
 

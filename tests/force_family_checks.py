@@ -1,12 +1,12 @@
 """Shared checks of the force-element families of the compiled core (tests/test_family_*.py of springs,
-two-point springs, point loads and dampers): a scene run by :class:`~skfem_flex.run.stepper.Stepper`, its
+two-point springs, point loads and dampers): a scene run by :class:`~skfem_flex.schemes.stepper.Stepper`, its
 Newton matrix against differences of its residual, its residual parts against the elements' numpy
 contracts, and its trajectories against the Python path (``sf.simulate(..., compiled=False)``: every element
 through its own numpy methods)."""
 import numpy as np
 
 import skfem_flex as sf
-from skfem_flex.run.stepper import Stepper
+from skfem_flex.schemes.stepper import Stepper
 from skfem_flex.schemes.energy_momentum import EnergyMomentum
 from skfem_flex.schemes.newmark import GeneralizedAlpha, Trapezoidal
 

@@ -9,7 +9,7 @@ import pytest
 
 import skfem_flex as sf
 from skfem_flex import analysis, scenes
-from skfem_flex.run.output import read_pvd
+from skfem_flex.io.output import read_pvd
 
 G = 9.81
 

@@ -7,8 +7,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1] / "skfem_flex"
 #: the layers from the bottom; a module may import its own layer and the ones below
-LAYERS = ["errors", "numerics", "fem", "bodies", "elements", "scene", "scene_initial", "compiled", "schemes", "run",
-          "analysis", "scenes", "apps"]
+LAYERS = ["errors", "numerics", "fem", "bodies", "elements", "scene", "scene_initial", "compiled", "schemes", "io",
+          "analysis", "run", "scenes", "apps"]
 MAX_LINES = 600
 
 

@@ -8,7 +8,7 @@ import pytest
 
 import skfem_flex as sf
 from skfem_flex.apps import cli
-from skfem_flex.run.output import read_pvd
+from skfem_flex.io.output import read_pvd
 from skfem_flex.scenes import CATALOGUE, register
 
 from helpers import command
@@ -223,7 +223,7 @@ def test_the_report_says_the_step_the_run_took(capsys, tmp_path):
 
 
 def test_probe_plots_label_their_units():
-    from skfem_flex.run.plots import plot_probes, probe_units
+    from skfem_flex.io.plots import plot_probes, probe_units
 
     scene = sf.scenes.pendulum()
     assert probe_units(scene) == {"position": "m"}            # a PointProbe: a position

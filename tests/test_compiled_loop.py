@@ -1,6 +1,7 @@
-"""The compiled energy-momentum loop (skfem_flex/compiled_loop.py) against the Python path.
+"""The compiled kernels of a floating beam against the same beam through its Python methods.
 
-Both run the same scheme with the same Newton rules; the trajectories must agree to round-off
+Both run in the one compiled loop (:mod:`skfem_flex.compiled.loop`): ``compiled=False`` sends every element
+through its numpy methods (the ``python_elements`` family), the default through its compiled family. Both run the same scheme with the same Newton rules; the trajectories must agree to round-off
 amplified by the Newton tolerance. Per-step Newton counts may differ by one where a scaled
 residual lands within round-off of a convergence threshold (steps decided at the round-off
 floor, e.g. the start from rest), so the totals are compared.
@@ -10,9 +11,9 @@ import pytest
 import skfem
 
 import skfem_flex as sf
-from skfem_flex.compiled import single_body_loop as compiled_loop
 from skfem_flex.bodies.floating.body import FloatingBeam
-from skfem_flex.schemes.integrators import ConvergenceError, EnergyMomentum, NewtonSettings
+from skfem_flex.errors import ConvergenceError
+from skfem_flex.schemes import NewtonSettings
 
 from helpers import SPIN_UP_SECTION as SEC, assert_loop_measures_are_the_scenes, assert_same_run
 
@@ -25,20 +26,15 @@ def free_flying_beam(reference="pinned", n_elements=6):
     return sf.Scene([body], name="free flight")
 
 
-def test_eligibility():
-    em = EnergyMomentum()
-    assert compiled_loop.eligible(sf.scenes.spin_up_beam(n_elements=4), em)
-    assert compiled_loop.eligible(free_flying_beam(), em)
-    assert not compiled_loop.eligible(sf.scenes.spin_up_beam(n_elements=4), sf.schemes.integrators.Trapezoidal())
-    assert not compiled_loop.eligible(sf.scenes.spin_up_pinned(n_elements=4), em)   # constraints
-    assert not compiled_loop.eligible(sf.scenes.free_beam(n_elements=4), em)        # a load
-    assert not compiled_loop.eligible(sf.scenes.pendulum(), em)                      # not a floating beam
-    assert compiled_loop.eligible(sf.scenes.spin_up_beam(n_elements=64), em)        # banded free block
-    assert not compiled_loop.eligible(free_flying_beam(n_elements=64), em)          # sparse, not banded
-
-    class Custom(EnergyMomentum):
-        pass
-    assert not compiled_loop.eligible(sf.scenes.spin_up_beam(n_elements=4), Custom())
+def test_run_path_names_the_code_that_ran():
+    """``result.run_path`` says which loop, storage and solver ran and which elements went through Python."""
+    fast = sf.simulate(sf.scenes.spin_up_beam(n_elements=4), t_end=0.02, dt=1e-2)
+    assert fast.run_path["loop"] == "compiled" and fast.run_path["python_elements"] == []
+    assert fast.run_path["storage"] == "dense" and fast.run_path["solver"] == "dense"
+    slow = sf.simulate(sf.scenes.spin_up_beam(n_elements=4), t_end=0.02, dt=1e-2, compiled=False)
+    assert len(slow.run_path["python_elements"]) == 1 and "FloatingBeam" in slow.run_path["python_elements"][0]
+    big = sf.simulate(sf.scenes.spin_up_beam(n_elements=64), t_end=0.004, dt=2e-3)
+    assert big.run_path["solver"].startswith("bordered band")
 
 
 @pytest.mark.parametrize("dt", [1e-3, 2e-2])
@@ -76,7 +72,7 @@ def test_last_step_is_shortened_and_environment_switch(monkeypatch):
 
 
 def test_failing_steps_are_halved_as_on_the_python_path():
-    """Steps too large for Newton leave the compiled loop and are halved by the Python path."""
+    """Steps too large for Newton are halved alike on both paths."""
     runs = [sf.simulate(sf.scenes.spin_up_beam(n_elements=4, omega=10.0), t_end=20.0, dt=1.0, max_halvings=3,
                         compiled=c) for c in (True, False)]
     assert runs[0].halvings == runs[1].halvings > 0
@@ -111,7 +107,7 @@ def test_newton_settings_reach_the_compiled_loop():
 def test_large_banded_spin_up_compiled_equals_python():
     """Above the dense size the compiled loop solves the banded free-free block (kl = ku = 4 here)."""
     scene = sf.scenes.spin_up_beam(n_elements=64)
-    assert not scene.dense and compiled_loop._plan(scene)[2:] == (4, 4)
+    assert not scene.dense
     runs = [sf.simulate(sf.scenes.spin_up_beam(n_elements=64), t_end=0.3, dt=2e-3, compiled=c) for c in (True, False)]
     assert_same_run(*runs)
 

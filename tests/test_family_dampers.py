@@ -20,7 +20,7 @@ import skfem_flex as sf
 from skfem_flex.compiled.families import dampers
 from skfem_flex.compiled.loop import REFUSED
 from skfem_flex.compiled.tasks import STATUS_OK, STATUS_REFUSED
-from skfem_flex.run.stepper import Stepper
+from skfem_flex.schemes.stepper import Stepper
 from force_family_checks import (SCHEMES, compare_runs, derivative_check, evaluation_points, initial_energy, local,
                                  random_stepper, run_new, scatter)
 

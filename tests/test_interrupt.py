@@ -20,7 +20,7 @@ import pytest
 
 import skfem_flex as sf
 from skfem_flex.apps.cli import main
-from skfem_flex.run.output import read_pvd
+from skfem_flex.io.output import read_pvd
 
 from helpers import ROOT
 

@@ -1,23 +1,21 @@
 """The compiled floating-frame kernels on a ModalBody, and the compiled loop on a reduced body.
 
 A ModalBody's own methods stay in numpy (FloatingFrame's kinetic algebra, QuarticEnergy's discrete
-gradient): they are the reference. The compiled kernels (bodies/floating_kernel.py with the quartic
-energy of bodies/modal_kernel.py), which only the compiled energy-momentum loop uses for this body,
-must agree with them to round-off; the compiled run must then be the Python run.
+gradient): they are the reference. The compiled kernels (bodies/floating/kernel.py with the quartic
+energy of bodies/modal/kernel.py), which the floating-frame family runs for this body, must agree with
+them to round-off; the compiled run must then be the run through the body's Python methods.
 """
 import numpy as np
 import pytest
 import skfem
 
 import skfem_flex as sf
-from skfem_flex.compiled import single_body_loop as compiled_loop
 from skfem_flex.bodies import PlaneStress
 from skfem_flex.bodies.floating import kernel as fk
 from skfem_flex.bodies.floating.body import FloatingBeam
 from skfem_flex.bodies.modal.body import ModalBody
 from skfem_flex.bodies.modal.kernel import pack_quartic, quartic_discrete_gradient, quartic_energy
 from skfem_flex.bodies.modal.stiffening import QuarticEnergy
-from skfem_flex.schemes.integrators import EnergyMomentum, Trapezoidal
 
 from helpers import (SPIN_UP_SECTION as SEC, assert_loop_measures_are_the_scenes, assert_same_run, contract_terms,
                      dense, random_floating_states, relerr)
@@ -126,16 +124,14 @@ def test_quartic_kernels_equal_quartic_energy(m):
         assert float(g @ (q1[3:] - q0[3:])) == pytest.approx(dv, rel=1e-11, abs=1e-12 * np.abs(g).max())
 
 
-def test_bodies_without_kernel_data_and_eligibility():
-    em = EnergyMomentum()
+def test_reduced_bodies_run_in_the_floating_frame_family():
+    """Reduced bodies, with or without joints and under every scheme, run compiled (no Python element)."""
     scene = spin_up_modal()
     assert isinstance(scene.bodies[0], ModalBody) and scene.bodies[0].n_elastic <= 10
-    assert compiled_loop.eligible(scene, em)
-    assert compiled_loop.eligible(spin_up_modal(strain="linear"), em)
-    assert compiled_loop.eligible(free_flying_modal(), em)
-    assert not compiled_loop.eligible(scene, Trapezoidal())
-    assert not compiled_loop.eligible(sf.scenes.slider_crank(body="beam-modal"), em)   # joints
-    assert not compiled_loop.eligible(sf.scenes.pendulum(), em)                          # no kernel data
+    for make, scheme in [(spin_up_modal, "energy-momentum"), (spin_up_modal, "trapezoidal"),
+                         (lambda: sf.scenes.slider_crank(body="beam-modal"), "energy-momentum")]:
+        res = sf.simulate(make(), t_end=2e-3, dt=1e-3, scheme=scheme)
+        assert res.run_path["python_elements"] == [], (scheme, res.run_path)
     beam = sf.scenes.spin_up_beam(n_elements=4).bodies[0]
     assert beam.compiled_kernel_data() is beam.compiled_kernel_data()
 
@@ -176,7 +172,6 @@ def free_spinning_plate():
 
 @pytest.mark.parametrize("make, t_end, dt", [(free_flying_modal, 1.0, 5e-3), (free_spinning_plate, 0.02, 2e-4)])
 def test_reduced_free_flight_compiled_equals_python_and_conserves(make, t_end, dt):
-    assert compiled_loop.eligible(make(), EnergyMomentum())
     runs = [sf.simulate(make(), t_end=t_end, dt=dt, compiled=c) for c in (True, False)]
     assert_same_run(*runs, **SAME_RUN_TOL)
     a = runs[0]

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 import skfem_flex as sf
-from skfem_flex.run.output import VTKSeries, read_pvd
-from skfem_flex.run.plots import save_plots
+from skfem_flex.io.output import VTKSeries, read_pvd
+from skfem_flex.io.plots import save_plots
 
 
 class Rod(sf.PointMass):
@@ -111,7 +111,7 @@ def test_rerun_replaces_an_older_series(tmp_path):
 KILLED_RUN = textwrap.dedent("""
     import sys
     import skfem_flex as sf
-    from skfem_flex.run.output import VTKSeries
+    from skfem_flex.io.output import VTKSeries
     sf.simulate(sf.scenes.pendulum(), t_end=1e4, dt=1e-3, output=[VTKSeries(sys.argv[1], "killed")])
 """)
 

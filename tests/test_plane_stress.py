@@ -131,7 +131,7 @@ def test_meshed_rod_stresses_vanish_under_finite_rigid_motion(tmp_path):
     nonzero stresses, so the arrays are really the rod's."""
     from skfem_flex.bodies.modal.plane_stress import _LINEAR
     from skfem_flex.bodies.rigid import rotation
-    from skfem_flex.run.output import VTKSeries
+    from skfem_flex.io.output import VTKSeries
     scene = sf.scenes.slider_crank(body="plane-stress-modal", mesh=str(CONROD))
     rod = scene.bodies[1]
     model = rod.model

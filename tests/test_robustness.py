@@ -20,8 +20,9 @@ from hypothesis import strategies as st
 import skfem_flex as sf
 from skfem_flex import scenes
 from skfem_flex.apps import cli
-from skfem_flex.compiled import single_body_loop as compiled_loop
-from skfem_flex.run.output import VTKSeries, read_pvd
+from skfem_flex.compiled import registry
+from skfem_flex.run import driver
+from skfem_flex.io.output import VTKSeries, read_pvd
 
 from helpers import ROOT
 
@@ -184,7 +185,7 @@ def test_energy_balance_warning(tmp_path, capsys):
 def test_full_disk_is_one_line_without_tmp_or_unlisted_frames(tmp_path, capsys, monkeypatch, failing):
     """ENOSPC while writing the 6th frame (its .vtu, or its listing after the .pvd was written)."""
     import meshio
-    from skfem_flex.run import output
+    from skfem_flex.io import output
     calls = {"n": 0}
     if failing == "vtu":
         real = meshio.write
@@ -221,7 +222,7 @@ def test_full_disk_is_one_line_without_tmp_or_unlisted_frames(tmp_path, capsys, 
 def test_series_cost_is_linear_in_the_frames(tmp_path, monkeypatch):
     """Writing N frames writes O(N log N) bytes of collections, not O(N²): the collections are
     rewritten when the unlisted frames reach 1/256 of the listed ones (or after a second)."""
-    from skfem_flex.run import output
+    from skfem_flex.io import output
     monkeypatch.setattr(output, "LISTING_SECONDS", 1e9)          # the count rule alone, deterministic
     written = {"bytes": 0, "calls": 0}
     real = output.write_text_atomically
@@ -278,14 +279,17 @@ def test_memory_estimate_before_allocating(monkeypatch):
         sf.scenes.get("spin_up_beam")(n_elements=100_000)
 
 
-def test_first_run_says_it_compiles(capsys, monkeypatch):
-    """A cold kernel cache: one line on stderr before compiling, compile time kept out of wall_time,
-    and no progress-bar rate over the compile ("18 s/step"): the bar (a stand-in logging what is
-    done to it) opens only after the compiling first chunk, counting that chunk's step as done
-    (tqdm's ``initial``, not in its rate), and is never updated before nor reset."""
+def test_compile_is_said_timed_apart_and_before_the_bar(monkeypatch):
+    """A compile (here a slow unit wrapped around building the stepper, through the registry's own notice
+    and clock): one line before and one after on the ``skfem_flex`` logger, its time in
+    ``result.compile_time`` and not in ``wall_time``, and the progress bar opened only after it (no rate
+    measured over the compile). A second, warm run says nothing."""
+    import logging
+    import time
+
     import tqdm
 
-    events = []
+    events, lines = [], []
 
     class Bar:
         def __init__(self, total=None, initial=0, **kw):
@@ -303,35 +307,58 @@ def test_first_run_says_it_compiles(capsys, monkeypatch):
         def close(self):
             events.append(("close",))
 
-    real_chunk = compiled_loop.run_chunk
+    class Lines(logging.Handler):
+        def emit(self, record):
+            lines.append(record.getMessage())
 
-    def run_chunk(*args):
-        events.append(("chunk", args[6]))
-        out = real_chunk(*args)
-        events.append(("chunk done", out["done"]))
-        return out
+    real_stepper = driver.Stepper
 
-    monkeypatch.setattr(tqdm, "tqdm", Bar)
-    monkeypatch.setattr(compiled_loop, "run_chunk", run_chunk)
-    monkeypatch.setattr(compiled_loop, "jit_cache_cold", lambda scene: True)
-    res = sf.simulate(sf.scenes.get("spin_up_beam")(), 0.2, 0.02, progress=True)
-    err = capsys.readouterr().err
-    assert err.count(compiled_loop.COMPILE_NOTICE) == 1
-    assert res.compile_time > 0 and 0 < res.wall_time
-    # the compiling chunk (one step) runs with no bar; the bar opens after it with that step done
-    assert events[:3] == [("chunk", 1), ("chunk done", 1), ("open", 1, 10)], events
-    assert not any(e[0] == "reset" for e in events) and events[-1] == ("close",), events
-    assert 1 + sum(e[1] for e in events if e[0] == "update") == res.steps == 10, events
+    def slow_stepper(*args, **kw):
+        def work():
+            time.sleep(0.5)
+            return real_stepper(*args, **kw)
+        events.append(("compile",))
+        return registry._compiling("a slow unit", work)
+
+    handler = Lines()
+    registry.LOGGER.addHandler(handler)
+    try:
+        monkeypatch.setattr(tqdm, "tqdm", Bar)
+        monkeypatch.setattr(driver, "Stepper", slow_stepper)
+        res = sf.simulate(sf.scenes.get("spin_up_beam")(), 0.2, 0.02, progress=True)
+        assert [m.split(" (")[0] for m in lines if "slow unit" in m][:1] == ["compiling a slow unit"], lines
+        assert any(m.startswith("compiled a slow unit in ") for m in lines), lines
+        assert res.compile_time >= 0.5 and res.wall_time < res.compile_time
+        assert events[0] == ("compile",) and events[1] == ("open", 0, 10), events
+        assert not any(e[0] == "reset" for e in events) and events[-1] == ("close",), events
+        assert sum(e[1] for e in events if e[0] == "update") == res.steps == 10, events
+        monkeypatch.setattr(driver, "Stepper", real_stepper)
+        lines.clear()
+        again = sf.simulate(sf.scenes.get("spin_up_beam")(), 0.2, 0.02)
+        assert not any("compil" in m for m in lines) and again.compile_time == 0.0, lines
+    finally:
+        registry.LOGGER.removeHandler(handler)
 
 
-def test_cold_cache_detection(tmp_path):
-    """With an empty Numba cache directory the kernels are cold (the Newton core for every scene, the
-    floating-frame kernels too for a beam); after a run in this process they are not."""
-    env = dict(os.environ, PYTHONPATH=str(ROOT), NUMBA_CACHE_DIR=str(tmp_path))
-    code = ("import skfem_flex as sf; from skfem_flex.compiled import single_body_loop as c; "
-            "print(c.jit_cache_cold(sf.scenes.get('spin_up_beam')()), c.jit_cache_cold(sf.scenes.pendulum()))")
-    proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
-    assert proc.stdout.split() == ["True", "True"], proc.stderr
-    for scene in (sf.scenes.get("spin_up_beam")(), sf.scenes.pendulum()):
-        sf.simulate(scene, 0.04, 0.02)
-        assert compiled_loop.jit_cache_cold(scene) is False
+def test_ctrl_c_during_a_cold_compile_stops_within_seconds(tmp_path):
+    """An empty kernel cache: the first run says what it compiles; Ctrl-C (SIGINT) while it compiles
+    ends the process within 5 s with exit status 130 and one line, not a traceback."""
+    import signal
+    import time
+
+    env = dict(os.environ, PYTHONPATH=str(ROOT), NUMBA_CACHE_DIR=str(tmp_path), SKFEM_FLEX_QUIET="0")
+    proc = subprocess.Popen([sys.executable, "-m", "skfem_flex.apps.cli", "run", "pendulum", "--t-end", "0.1"],
+                            env=env, stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
+                            cwd=str(tmp_path))
+    first = proc.stderr.readline()
+    assert first.startswith("skfem-flex: compiling "), first
+    time.sleep(0.5)
+    proc.send_signal(signal.SIGINT)
+    sent = time.perf_counter()
+    try:
+        out, err = proc.communicate(timeout=30)
+    finally:
+        proc.kill()
+    assert time.perf_counter() - sent <= 5.0
+    assert proc.returncode == 130, (proc.returncode, err)
+    assert "Traceback" not in err and "interrupted" in err, err

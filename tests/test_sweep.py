@@ -16,7 +16,7 @@ import xarray as xr
 from distributed import Client, LocalCluster
 
 import skfem_flex as sf
-from skfem_flex.schemes.integrators import NewtonSettings
+from skfem_flex.schemes import NewtonSettings
 from skfem_flex.apps.sweep import local_cluster, open_sweep, plan, probe_extremes
 
 from helpers import ROOT
@@ -243,9 +243,8 @@ def test_studies_run_their_cases_through_the_sweep_on_a_cluster_and_resume(clien
 
 
 def test_a_mixed_sweep_compiles_each_kernel_once_per_machine(tmp_path):
-    # three integrators, two kernel sets: trapezoidal and generalized-alpha share the floating-frame kernels,
-    # the energy-momentum step (Python path) adds its discrete gradient. Warming only the first case would
-    # leave the second set to both workers at once.
+    # three schemes, two step kernels: trapezoidal and generalized-alpha share the Newmark step, energy-momentum
+    # has its own; warming only the first case would leave the second kernel to both workers at once.
     cache, log = tmp_path / "numba-cache", tmp_path / "saves"
     cache.mkdir()
     log.mkdir()
@@ -277,7 +276,7 @@ def test_a_mixed_sweep_compiles_each_kernel_once_per_machine(tmp_path):
     assert set(ds.status.values) == {"completed"} and len(set(ds.worker.values)) == 2
     saves = [json.loads(line) for f in log.iterdir() for line in f.read_text().splitlines()]
     indexes = sorted(p.name for p in cache.rglob("*.nbi"))
-    assert any("energy_momentum_terms" in name for name in indexes) and any("momentum-" in n for n in indexes)
+    assert any("energy_momentum" in name for name in indexes) and any("newmark" in n for n in indexes), indexes
     # every kernel was compiled for each of its signatures once on this machine, and its index created once
     per_signature = {}
     for index, sig, _ in saves:
@@ -289,6 +288,19 @@ def test_a_mixed_sweep_compiles_each_kernel_once_per_machine(tmp_path):
         res = sf.simulate(sf.scenes.spin_up_beam(omega=float(case.omega)), 0.1, 0.01,
                           integrator=str(case.integrator.item()), compiled=False)
         assert _same_without_state(case, res), f"case {i} differs from the serial run"
+
+
+def test_build_key_follows_what_is_compiled():
+    """Cases share a build key when they compile the same units: numbers that change values only (a speed)
+    keep it; a size that switches the Newton matrix to sparse storage, a scheme or the Python path change it."""
+    from skfem_flex.compiled.pack import build_key
+
+    small = build_key(sf.scenes.spin_up_beam(n_elements=4, omega=4.0), "energy-momentum")
+    assert build_key(sf.scenes.spin_up_beam(n_elements=4, omega=6.0), "energy-momentum") == small
+    assert build_key(sf.scenes.spin_up_beam(n_elements=4), "trapezoidal") != small
+    assert build_key(sf.scenes.spin_up_beam(n_elements=4), "energy-momentum", python_only=True) != small
+    large = build_key(sf.scenes.spin_up_beam(n_elements=400), "energy-momentum")
+    assert large[1] == small[1] and large[2:] != small[2:]          # same families, other storage/solver
 
 
 def test_cli_sweep_shows_a_progress_bar_and_a_summary_table(client, tmp_path, capsys):

@@ -345,8 +345,8 @@ def _cmd_run(args):
     from .. import scenes
     from ..errors import DivergenceError, Interrupted
     from ..errors import SimulationError
-    from ..run.files import write_text_atomically
-    from ..run.output import VTKSeries
+    from ..io.files import write_text_atomically
+    from ..io.output import VTKSeries
     from ..run.simulate import SignalStop, simulate
 
     name, params, t_end, dt, integrator, rho_inf, every, no_vtk, out = _run_settings(args)
@@ -459,7 +459,7 @@ def _step_count(t_end, dt):
 
 def _resume_file(out):
     """The saved state to continue in ``out``: result.npz or checkpoint.npz, whichever reaches further."""
-    from ..run.result import Result
+    from ..io.result import Result
 
     best = None
     for f in ("result.npz", CHECKPOINT):
@@ -488,7 +488,7 @@ def _write_run_outputs(scene, result, sinks, out):
             files["probes_csv"] = result.probes_to_csv(out / "probes.csv")
     except OSError as exc:
         raise _OutputError(exc) from None
-    from ..run.plots import save_plots
+    from ..io.plots import save_plots
     try:
         for k, p in save_plots(scene, result, out).items():
             files[f"plot_{k}"] = p
@@ -704,7 +704,7 @@ def _analysis(name, compute):
 
 def _cmd_modes(args):
     from ..analysis import modes, write_mode_series
-    from ..run.files import write_text_atomically
+    from ..io.files import write_text_atomically
 
     factory = _catalogue_scene(args.scene)
     params = _scene_settings(args.scene, args.set)
@@ -870,8 +870,8 @@ def _sweep_grid(name, items):
 
 def _cmd_sweep(args):
     from .. import scenes
-    from ..run.plots import plot_sweep_extremes
-    from ..run.files import write_text_atomically
+    from ..io.plots import plot_sweep_extremes
+    from ..io.files import write_text_atomically
     from .sweep import plan, probe_extremes, run_cases
 
     if args.scene not in scenes.CATALOGUE:

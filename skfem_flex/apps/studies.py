@@ -331,7 +331,7 @@ def _study_rows(specs, row, store, client, resume, n_workers):
 
 def _reference(case, out_dir, name):
     """A fine energy-momentum run (loaded from out_dir if saved there before)."""
-    from ..run.result import Result
+    from ..io.result import Result
     path = Path(out_dir) / f"reference_{name}.npz" if out_dir else None
     if path is not None and path.exists() and hasattr(Result, "load"):
         return Result.load(path)

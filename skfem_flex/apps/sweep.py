@@ -97,16 +97,20 @@ class BudgetExceeded(SimulationError):
 class WallClockBudget:
     """Output sink that stops a run once it has used ``seconds`` of wall time.
 
-    It raises :class:`BudgetExceeded` at the first recorded step past the
-    budget; :func:`~skfem_flex.run.simulate.simulate` then attaches the history
-    so far to the exception.
+    The clock starts at the first record (the initial state), after the run has compiled what it
+    needs, so a cold cache does not eat the budget. It raises :class:`BudgetExceeded` at the first
+    recorded step past the budget; :func:`~skfem_flex.run.simulate.simulate` then attaches the
+    history so far to the exception.
     """
 
     def __init__(self, seconds):
-        self.seconds, self.start = float(seconds), time.perf_counter()
+        self.seconds, self.start = float(seconds), None
 
     def write(self, scene, t, q, v):
-        if time.perf_counter() - self.start > self.seconds:
+        now = time.perf_counter()
+        if self.start is None:
+            self.start = now
+        if now - self.start > self.seconds:
             raise BudgetExceeded(f"stopped: wall-clock budget of {self.seconds:g} s used up at t = {t:.6g} s")
 
     def close(self):
@@ -773,13 +777,18 @@ def _run_on_dask(specs, client, n_workers, finished):
 
 
 def _kernel_set(spec):
-    """What decides which Numba kernels a case compiles, and for which argument types: its scene, its
-    integrator, whether it may take the compiled loop, and its parameters that are not numbers (switches
-    such as a body type). Numbers (sizes, speeds, steps) change values, not the compiled code."""
-    switches = sorted((k, json.dumps(_canonical(v), sort_keys=True)) for k, v in spec.params.items()
-                      if isinstance(v, bool) or not isinstance(v, (int, float)))
-    return (spec.scene_name, spec.settings["integrator"], spec.settings.get("compiled") is not False,
-            tuple(switches))
+    """What decides which compiled units a case needs: the build key of its scene under its scheme
+    (:func:`skfem_flex.compiled.pack.build_key`: families, storage, solver), read from the packed scene
+    itself. A case whose scene cannot be built gets a key of its own (it fails in its task, not here)."""
+    from .. import scenes
+    from ..compiled.pack import build_key
+
+    try:
+        factory = scenes.get(spec.scene) if isinstance(spec.scene, str) else spec.scene
+        return build_key(factory(**spec.params), spec.settings["integrator"],
+                         python_only=spec.settings.get("compiled") is False)
+    except Exception as exc:          # reported by the case itself
+        return ("unbuilt", spec.task_name, type(exc).__name__)
 
 
 def _warm_worker(specs, first, dask_worker=None):

@@ -128,6 +128,15 @@ def packed_scene(scene, python_only=False):
     return hit
 
 
+def build_key(scene, scheme_name, python_only=False):
+    """What decides which compiled units a run of ``scene`` under the scheme named ``scheme_name`` needs:
+    the scheme, the element families it packs (in calling order), the Newton matrix's storage (dense or
+    CSR) and its solver. Two runs with equal keys compile nothing the other has not (numbers such as
+    sizes, speeds and steps change values, not code, unless they switch the storage or solver)."""
+    pk = packed_scene(scene, python_only)
+    return (str(scheme_name), tuple(module.NAME for module, _, _ in pk.families), int(pk.storage), pk.solver)
+
+
 def _momentum_layout(body):
     """(l_x, l_y, i_x, i_y, X, Y, i_angle) of a constant-mass body (local indices): p_x = Σ p[l_x],
     L = Σ (X + q[i_x]) p[i_y] − (Y + q[i_y]) p[i_x] + Σ p[i_angle]; from ``momentum_layout()`` or by

@@ -20,9 +20,9 @@ from ..numerics.resources import check_fits
 from ..scene_initial import consistent_initial_state
 from .guard import DivergenceGuard
 from .recorder import Recorder
-from .result import Result
+from ..io.result import Result
 from .signals import SignalStop
-from .stepper import Stepper
+from ..schemes.stepper import Stepper
 
 __all__ = ["Run", "CHECKPOINT_COST", "CHUNK_SECONDS"]
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .result import Result
+from ..io.result import Result
 
 __all__ = ["Recorder"]
 

@@ -103,7 +103,7 @@ class Stepper:
         ValueError
             If the mass/constraint matrix is singular (a coordinate without inertia, redundant constraints).
         """
-        from ..schemes.newmark import start_kernel, start_data
+        from .newmark import start_kernel, start_data
         pk = self.packed
         data = start_data(pk, q, v)
         self.ws.bind_state(data)
