@@ -13,7 +13,7 @@ Two scenes built from the package's parts, everything in SI units (m, kg, s, N, 
 
 Run ``python examples/your_own_scene.py [OUT_DIR]`` (default ``examples/output/``) for the plots.
 Importing the module computes the results without plotting; ``YOUR_SCENE_T_END`` (s) shortens
-the run (the test suite imports it with a short one).
+the run (the test suite imports it with a short one). Quick mode (``SKFEM_FLEX_EXAMPLE_QUICK=1``): 0.05 s.
 """
 import os
 import sys
@@ -89,7 +89,8 @@ mechanism = sf.Scene([crank, rod, slider, sensor], constraints=joints,
                              "crank_angle": lambda scene, t, q, v: q[scene.index(crank, "theta")]},  # rad
                      name="mechanism")
 
-T_END = float(os.environ.get("YOUR_SCENE_T_END", "1.0"))         # s
+QUICK = os.environ.get("SKFEM_FLEX_EXAMPLE_QUICK", "") not in ("", "0")
+T_END = float(os.environ.get("YOUR_SCENE_T_END", "0.05" if QUICK else "1.0"))         # s
 DT = 1e-3                                                         # s
 result = sf.simulate(mechanism, T_END, DT)
 #: E − E₀ − W over the run, J, and the scale it is judged against

@@ -72,16 +72,18 @@ def test_peer_exudyn():
     assert run_script("peer_exudyn").count("exudyn") == 3
 
 
-def test_profile_band_solve():
-    """The bordered band solve agrees with dense LU on the Newton matrix."""
-    out = run_script("profile_band_solve")
-    error = float(re.search(r"max \|x − x_dense\| / max \|x_dense\| = (\S+)", out).group(1))
-    assert error < 1e-10
+def test_profile_step():
+    """The profile names the run's families, storage and solver, and times a compiled and a Python run."""
+    out = run_script("profile_step")
+    assert "families: floating-frame bodies, gravity, point constraints" in out
+    assert "compile and start-up" in out and "Newton iterations per step" in out
+    fast, slow = (float(x) for x in re.findall(r"run: +([0-9.]+) µs per step", out))
+    assert 0 < fast < slow
 
 
-def test_profile_compiled_scene():
-    out = run_script("profile_compiled_scene")
-    assert "Newton iterations per step" in out and "compile and start-up" in out
+def test_your_own_scene(monkeypatch, tmp_path):
+    """The tutorial's scene (tests/test_your_own_scene.py checks its physics) runs to its end as a script."""
+    run_example("your_own_scene", monkeypatch, tmp_path)
 
 
 def test_sweep_benchmark(tmp_path):
