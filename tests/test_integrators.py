@@ -250,7 +250,7 @@ def test_each_scheme_carries_its_own_state():
     """Energy-momentum carries State (no algorithmic acceleration), the Newmark family NewmarkState with
     generalized-α's a (equal to q̈ at the start); a Newmark step refuses a state without it."""
     import skfem_flex as sf
-    from skfem_flex.schemes.integrators import NewmarkState, State
+    from skfem_flex.schemes.base import NewmarkState, State
     scene = sf.scenes.get("pendulum")()
     q, v = scene.initial_state()
     em = sf.EnergyMomentum().start(scene, State(0.0, q, v))

@@ -154,8 +154,11 @@ def assert_results_equal(a, b):
         elif isinstance(x, dict):
             assert list(x) == list(y), f.name
             for k in x:
-                assert x[k].dtype == y[k].dtype
-                np.testing.assert_array_equal(x[k], y[k], err_msg=f"{f.name}[{k}]")
+                if isinstance(x[k], np.ndarray) or isinstance(x[k], np.generic):
+                    assert x[k].dtype == y[k].dtype
+                    np.testing.assert_array_equal(x[k], y[k], err_msg=f"{f.name}[{k}]")
+                else:                   # run_path: plain strings and lists
+                    assert x[k] == y[k], (f.name, k, x[k], y[k])
         else:
             assert x == y and type(x) is type(y), (f.name, x, y)
 

@@ -128,6 +128,20 @@ def packed_scene(scene, python_only=False):
     return hit
 
 
+def _unmapped_point(form):
+    """A body point inside a compiled form (nested tuples and lists) that has no compiled position map (a
+    point of a user's body), or None: an element holding one runs through its Python methods."""
+    if isinstance(form, (tuple, list)):
+        for part in form:
+            hit = _unmapped_point(part)
+            if hit is not None:
+                return hit
+        return None
+    if getattr(form, "body", None) is not None and callable(getattr(form, "compiled_map", None)):
+        return form if _call(form, "compiled_map") is None else None
+    return None
+
+
 def build_key(scene, scheme_name, python_only=False):
     """What decides which compiled units a run of ``scene`` under the scheme named ``scheme_name`` needs:
     the scheme, the element families it packs (in calling order), the Newton matrix's storage (dense or
@@ -210,6 +224,9 @@ def _pack(scene, python_only=False):
                     off, nb = packer.block(b)
                     in_python("gravity", b, (np.arange(off, off + nb), np.asarray(form[1], dtype=float)),
                               f"body {b.name!r} gives no first moment of its mass")
+        elif mod is not None and _unmapped_point(form) is not None:
+            in_python("force", f, np.asarray(idx), f"body {_unmapped_point(form).body.name!r} gives no compiled "
+                      f"position map of its points")
         elif mod is not None:
             add(mod, (form, f, idx))
         else:
@@ -219,9 +236,12 @@ def _pack(scene, python_only=False):
         form = None if python_only else _call(c, "compiled_form")
         blocks = [] if form is None else (form[1] if form[0] == "rows" else [(form, None)])
         mods = [family_for(term[0]) for term, _ in blocks]
-        if form is None or any(m_ is None for m_ in mods):
+        unmapped = None if form is None else _unmapped_point(form)
+        if form is None or any(m_ is None for m_ in mods) or unmapped is not None:
             in_python("constraint", c, (np.asarray(idx), int(rows[0])), "compiled=False" if python_only else
-                      ("it has no compiled form" if form is None else "a block of it has no family"))
+                      ("it has no compiled form" if form is None else "a block of it has no family"
+                       if unmapped is None else f"body {unmapped.body.name!r} gives no compiled position map "
+                       f"of its points"))
             continue
         r = int(rows[0])
         for (term, law), mod in zip(blocks, mods):

@@ -3,6 +3,7 @@ checkpoints, progress and signals — everything :func:`~skfem_flex.simulate` do
 """
 from __future__ import annotations
 
+import ctypes
 import math
 import signal
 import sys
@@ -53,6 +54,7 @@ class Run:
         self.its = 0
         self.bar = None
         self.compile_time = 0.0
+        self.compile0 = self.compile_loop0 = registry.compile_seconds()
         self.stepper = self.recorder = self.guard = None
 
     # ------------------------------------------------------------------ setup
@@ -71,7 +73,6 @@ class Run:
 
     def _open(self, stop):
         """The stepper (compiling what this scene needs, answering Ctrl-C meanwhile) and the first state."""
-        before = registry.compile_seconds()
         registry.set_interrupt_check(lambda: stop.signum)
         try:
             self.stepper = Stepper(self.scene, self.scheme, python_only=self.control.compiled is False)
@@ -81,7 +82,6 @@ class Run:
             element, why = self.stepper.packed.python_elements[0]
             raise ValueError(f"compiled=True, but {type(element).__name__} {getattr(element, 'name', '')!r} has no "
                              f"compiled form ({why}); run it with compiled=None (through its Python methods)")
-        self.compile_time = registry.compile_seconds() - before
         self.recorder = Recorder(self.scene, self.stepper.packed)
 
     def _first_state(self):
@@ -131,10 +131,13 @@ class Run:
         hs, recorded = self._hs(k), self._recorded(k)
         ch = self.stepper.advance(self.t, hs, recorded, self.scheme.newton.max_iterations,
                                   self.scheme.newton.line_search)
-        self._take(ch.records, ch.n_records)
         done = ch.steps
+        self._land_on_end(self.step + done, ch.records, ch.n_records, done and recorded[done - 1])
+        self._take(ch.records, ch.n_records)
         self.t += float(hs[:done].sum())
         self.step += done
+        if self.step == self.n_steps:
+            self.t = self.t_end
         self.its += ch.iterations
         if done < k:                    # step `done` failed: halve it
             self._fail_or_halve(ch, hs[done], bool(recorded[done]))
@@ -144,9 +147,17 @@ class Run:
     def _fail_or_halve(self, ch, h, record):
         self._raise_python_error()
         recs, n_rec = self._halve(self.t, h, self.control.max_halvings, record, ch.status)
+        self._land_on_end(self.step + 1, recs, n_rec, record)
         self._take(recs, n_rec)
         self.t += h
         self.step += 1
+        if self.step == self.n_steps:
+            self.t = self.t_end
+
+    def _land_on_end(self, step, records, n_rec, recorded):
+        """The run's last step ends at t_end exactly (the loop's sum of step sizes may differ in its last bit)."""
+        if step == self.n_steps and recorded and n_rec:
+            records.t[n_rec - 1] = self.t_end
 
     def _halve(self, t, h, depth, record, status):
         """Step (t, h) split in two halves, recursively (depth levels at most); the records of its end."""
@@ -170,10 +181,28 @@ class Run:
     def _why(self, status):
         if status == REFUSED:
             c = self.stepper.ws.ctx[0]
-            return f"the {self.stepper.ws.family_name(int(c['bad_family']))} refused the step (an element " \
-                   f"folds inside out, turns by π or more in one step, or lost its direction)"
+            exc = self._refusal()
+            return f"the {self.stepper.ws.family_name(int(c['bad_family']))} refused the step (" + (
+                str(exc) if exc is not None else "an element folds inside out, turns by π or more in one step, "
+                "or lost its direction") + ")"
         return _FAILURES.get(status, f"Newton did not converge within {self.scheme.newton.max_iterations} "
                                      f"iterations")
+
+    def _refusal(self):
+        """The error the refusing family's elements raise through their own methods at the refused state
+        (the family's ``refusal_error``, at the loads' point or the step's end as its ``REFUSAL_STATE``
+        says), or None."""
+        c = self.stepper.ws.ctx[0]
+        k, families = int(c["bad_family"]), self.stepper.packed.families
+        fn = getattr(families[k][0], "refusal_error", None) if 0 <= k < len(families) else None
+        if fn is None:
+            return None
+        at_loads = getattr(families[k][0], "REFUSAL_STATE", "end") == "loads"
+        q, v, t = ("qe", "ve", "te") if at_loads else ("q1", "v1", "t1")
+        n = self.scene.n
+        # the context holds the addresses of the vectors the refusing kernel read (the scheme's own data)
+        q, v = (np.ctypeslib.as_array((ctypes.c_double * n).from_address(int(c[name]))).copy() for name in (q, v))
+        return fn(self.scene, q, v, float(c[t]))
 
     def _raise_python_error(self):
         if self.stepper.ws.ctx[0]["status"] == STATUS_PYTHON_ERROR:
@@ -210,12 +239,13 @@ class Run:
     def execute(self):
         """Run; returns the :class:`Result` (raises a SimulationError carrying it when stopped early)."""
         stop = SignalStop(self.control.handle_signals)
-        self.wall0 = time.perf_counter()
+        self.wall0, self.compile0 = time.perf_counter(), registry.compile_seconds()
         last_save, save_wait = self.wall0, self.checkpointing.every if self.checkpointing else 0.0
         try:
             self._open(stop)
             self._first_state()
-            self.wall0 = time.perf_counter()
+            self.stepper.advance(self.t, np.zeros(0), np.zeros(0, dtype=bool), 1, False)   # compiles the loop
+            self.wall0, self.compile_loop0 = time.perf_counter(), registry.compile_seconds()
             self._open_bar()
             length = 1
             while self.step < self.n_steps:
@@ -271,7 +301,11 @@ class Run:
         path = {"loop": "compiled", "solver": pk.solver, "storage": "dense" if pk.storage == 0 else "sparse",
                 "python_elements": [f"{type(e).__name__} {getattr(e, 'name', '')!r}: {why}"
                                     for e, why in pk.python_elements]}
-        return self.recorder.result(wall_time=time.perf_counter() - self.wall0, steps=self.step,
+        # compiles happen where a unit is first needed (building the stepper, the start, the first chunk):
+        # all of them count as compile time, none as run time
+        self.compile_time = registry.compile_seconds() - self.compile0
+        in_loop = registry.compile_seconds() - self.compile_loop0
+        return self.recorder.result(wall_time=max(time.perf_counter() - self.wall0 - in_loop, 0.0), steps=self.step,
                                     halvings=self.halvings, compile_time=self.compile_time, final_state=fs,
                                     scheme=self.scheme.name, dt=self.dt, run_path=path, **extra)
 

@@ -110,7 +110,7 @@ class Stepper:
         rec = np.zeros(1, dtype=FAMILY)
         rec[0] = data.record(start_kernel().address, -1, 0)
         table = time_table(pk.columns, float(t), np.zeros(0), False)
-        ok = _call(start_state, "the consistent start", self.ws.ctx, rec, self.solver, table, float(t))
+        ok = _call(start_state, "the consistent start's driver", self.ws.ctx, rec, self.solver, table, float(t))
         self._check_status()
         if not ok:
             raise ValueError("the initial mass/constraint matrix is singular: a coordinate has no inertia, or "

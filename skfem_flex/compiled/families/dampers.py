@@ -184,6 +184,10 @@ def _two_point(ctx, fam, tangent):
                     add_qq(ctx, st, o + 3 + j, o + 2, w * row[j])
 
 
+#: the driver's :func:`refusal_error` looks at the loads' evaluation point (q_e, v_e, t_e)
+REFUSAL_STATE = "loads"
+
+
 def refusal_error(scene, q, v, t):
     """The error the Python path raises where this family refused a state (``ctx.status = STATUS_REFUSED``,
     ``ctx.bad_family`` this family): the ValueError of the first two-point damper whose own

@@ -112,6 +112,32 @@ def _beams(ctx, fam):
                     mat[p] += w * data[t]
 
 
+#: the driver's :func:`refusal_error` looks at the refused trial end state (q_1, v_1, t_1)
+REFUSAL_STATE = "end"
+
+
+def refusal_error(scene, q, v, t):
+    """The error the exact beams' own methods raise at the state this family refused (an element folded
+    inside out: :class:`~skfem_flex.bodies.ElementInversionError`, naming the body and the element), or None.
+
+    Parameters
+    ----------
+    scene : Scene
+    q, v : ndarray
+        The refused trial coordinates and velocities (m, rad; m/s, rad/s).
+    t : float
+        Its time, s.
+    """
+    for b in scene.bodies:
+        if not b.has_potential or getattr(b, "compiled_strain_data", None) is None:
+            continue
+        try:
+            b.potential_gradient(np.asarray(q[scene.slice(b)], dtype=float))
+        except ValueError as exc:
+            return exc
+    return None
+
+
 def _kernel(ctx_p, fam_p):
     """The family's kernel (signature of :mod:`..abi`): TASK_EVAL and TASK_ENERGY."""
     ctx = context_of(ctx_p)
