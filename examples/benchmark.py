@@ -29,8 +29,11 @@ which the README quotes.
 Two more tables:
 
 * every catalogue scene with its default settings under each scheme: µs per
-  step over the first ``--catalogue-steps`` steps (after a two-step warm-up),
-  with the number of coordinates;
+  step (CPU time without the compile) over its whole default run (``--catalogue-steps N`` caps it),
+  with the number of coordinates and the path that ran;
+* random compositions (chains of rigid bars, floating-frame and exact beams, pins, hinges, gravity,
+  sometimes a spring) built one after another in a fresh process with an empty numba cache: what
+  each compiles (a scene compiles only the element families it holds, none twice);
 * with exudyn installed (``pip install ".[bench]"``), the same problems in
   both codes side by side in this process (:mod:`skfem_flex.apps.peer`), alternating,
   median of ``--repeat``, every step recorded on both sides: spin-up (8
@@ -42,7 +45,7 @@ Two more tables:
   flexible pendulum, where ours is slower; the two codes' beams agree to
   5e-7 m at equal mesh). Without exudyn our side still runs.
 
-Run ``python examples/benchmark.py [--repeat 3] [--window 1.0] [--record-every 10] [--catalogue-steps 200]
+Run ``python examples/benchmark.py [--repeat 3] [--window 1.0] [--record-every 10] [--catalogue-steps N]
 [--no-loop] [--no-catalogue] [--no-peer] [--flexible] [--limits] [--out DIR]``;
 ``--flexible`` runs only the flexible-body rows (``flexible.md``); ``--limits`` runs
 ``examples/benchmark_limits.py`` instead (memory against mesh size, VTK series cost against frame count).
@@ -266,29 +269,36 @@ SCHEMES = ("energy-momentum", "trapezoidal", "generalized-alpha")
 QUICK_CATALOGUE = ("pendulum", "flexible_pendulum")
 
 
-def catalogue_rows(steps=200):
-    """Rows (scene, coordinates, scheme, dt, µs per step) for every catalogue scene, default settings."""
+def catalogue_rows(steps=None):
+    """Rows (scene, coordinates, scheme, dt, µs per step, message, path) for every catalogue scene with its
+    default parameters over its whole default run (t_end, Δt of the catalogue): CPU time of ``simulate``
+    without its compile, divided by the steps. ``steps``: cap the run at this many steps (quick mode)."""
     rows = []
     for name in (QUICK_CATALOGUE if QUICK else sorted(sf.scenes.CATALOGUE)):
         factory = sf.scenes.CATALOGUE[name]
         dt = factory.defaults.get("dt", 1e-3)
-        t_end = min(factory.defaults.get("t_end", steps * dt), steps * dt)
+        t_end = factory.defaults.get("t_end", 200 * dt)
+        if steps is not None:
+            t_end = min(t_end, steps * dt)
         n = factory().n
         for scheme in SCHEMES:
             try:
                 sf.simulate(factory(), t_end=2 * dt, dt=dt, integrator=scheme)         # compile / load
+                start = time.process_time()
                 res = sf.simulate(factory(), t_end=t_end, dt=dt, integrator=scheme)
-                rows.append((name, n, scheme, dt, 1e6 * res.wall_time / res.steps, "", loop_name(factory(), scheme)))
+                cpu = time.process_time() - start - res.compile_time
+                rows.append((name, n, scheme, dt, 1e6 * cpu / res.steps, "", loop_name(factory(), scheme)))
             except sf.SimulationError as exc:
                 rows.append((name, n, scheme, dt, float("nan"), str(exc).splitlines()[0][:80], ""))
     return rows
 
 
 def catalogue_table(rows, steps):
-    lines = [f"Every catalogue scene with its default parameters and step, the first {steps} steps "
-             f"(or its default run if shorter), every step recorded, no files; after a two-step warm-up.", "",
+    span = "its whole default run" if steps is None else f"its default run, at most {steps} steps"
+    lines = [f"Every catalogue scene with its default parameters and step over {span} (CPU time of `simulate` "
+             f"without its compile, divided by the steps), every step recorded, no files.", "",
              "| scene | coordinates | Δt (s) | " + " | ".join(f"{s} µs/step" for s in SCHEMES)
-             + " | time loops (" + "; ".join(SCHEMES) + ") |",
+             + " | path (" + "; ".join(SCHEMES) + ") |",
              "|---|---|---|" + "---|" * (len(SCHEMES) + 1)]
     by, loops = {}, {}
     for name, n, scheme, dt, us, msg, loop in rows:
@@ -297,6 +307,82 @@ def catalogue_table(rows, steps):
     for (name, n, dt), cells in by.items():
         lines.append(f"| {name} | {n} | {dt:g} | " + " | ".join(cells.get(s, "") for s in SCHEMES)
                      + " | " + "; ".join(loops[(name, n, dt)].get(s, "") for s in SCHEMES) + " |")
+    return "\n".join(lines) + "\n"
+
+
+# ------------------------------------------------------------------ random compositions: what compiles
+COMPOSITIONS = 3 if QUICK else 8
+
+
+def composition(rng):
+    """A random chain of 1–4 one-metre links (rigid bars, floating-frame beams, exact beams), the first
+    pinned to the ground, each hinged to the next, under gravity, sometimes with a spring from the last tip
+    to the ground; built from the public API as a user would."""
+    import skfem
+    sec = sf.Section(EA=1e6, EI=1e3, kGA=5e5, rhoA=1.0, rhoI=1e-3)
+    links, joints, parts = [], [], []
+    for k in range(int(rng.integers(1, 5))):
+        kind = ("rigid", "floating", "exact")[int(rng.integers(0, 3))]
+        x0 = float(k)
+        if kind == "rigid":
+            body = sf.RigidBody.bar(1.0, 1.0, start=(x0, 0.0), name=f"bar {k}")
+            root, tip = body.point((-0.5, 0.0)), body.point((0.5, 0.0))
+        elif kind == "floating":
+            beam = sf.TimoshenkoBeam(skfem.MeshLine(np.linspace(0.0, 1.0, 5)), sec)
+            body = sf.FloatingBeam(beam, position=(x0, 0.0), name=f"beam {k}")
+            root, tip = body.point(0.0), body.point(1.0)
+        else:
+            body = sf.ExactBeam.from_points(sec, (x0, 0.0), (x0 + 1.0, 0.0), n_elements=4, name=f"exact {k}")
+            root, tip = body.point(0.0), body.point(1.0)
+        joints.append(sf.Pin(root, (0.0, 0.0), name="pin") if k == 0 else
+                      sf.Revolute(links[-1][1], root, name=f"hinge {k}"))
+        links.append((body, tip))
+        parts.append(kind)
+    forces = [sf.Gravity((0.0, -9.81))]
+    if rng.random() < 0.5:
+        forces.append(sf.LinearSpring(links[-1][1], None, 100.0, name="spring"))
+        parts.append("spring")
+    return sf.Scene([b for b, _ in links], constraints=joints, forces=forces, name=" + ".join(parts)), parts
+
+
+def compositions_worker(n, seed):
+    """In a fresh process (empty cache): n random compositions one after another, 5 steps each; prints JSON
+    rows (parts, compile time s, wall time of simulate s)."""
+    import json
+    rng = np.random.default_rng(seed)
+    for _ in range(n):
+        scene, parts = composition(rng)
+        start = time.perf_counter()
+        res = sf.simulate(scene, 5e-3, 1e-3)
+        print(json.dumps([parts, res.compile_time, time.perf_counter() - start]), flush=True)
+
+
+def compositions(n=COMPOSITIONS, seed=1):
+    """Rows of :func:`compositions_worker` run in a fresh process with an empty numba cache (quick mode:
+    the cache as it is)."""
+    import json
+    import os
+    import subprocess
+    import sys
+    import tempfile
+    with tempfile.TemporaryDirectory() as tmp:
+        env = dict(os.environ, SKFEM_FLEX_QUIET="1")
+        if not QUICK:
+            env["NUMBA_CACHE_DIR"] = tmp
+        code = f"import benchmark; benchmark.compositions_worker({n}, {seed})"
+        out = subprocess.run([sys.executable, "-c", code], env=env, cwd=str(Path(__file__).parent),
+                             capture_output=True, text=True, check=True)
+    return [json.loads(line) for line in out.stdout.splitlines() if line.startswith("[")]
+
+
+def compositions_table(rows):
+    lines = ["Random compositions (chains of rigid bars, floating-frame and exact beams, pins, hinges, gravity, "
+             "sometimes a spring), built one after another in one fresh process"
+             + (" [quick mode: the cache as it was]" if QUICK else " with an empty numba cache")
+             + ": what each compiles. A scene compiles only the element families it holds, and none it "
+             "shares with an earlier scene.", "",
+             "| # | links and forces | compile (s) | simulate, 5 steps, with its compile (s) |", "|---|---|---|---|"]
+    lines += [f"| {i + 1} | {' + '.join(parts)} | {c:.1f} | {w:.2f} |" for i, (parts, c, w) in enumerate(rows)]
     return "\n".join(lines) + "\n"
 
 
@@ -418,8 +504,8 @@ if __name__ == "__main__":
     ap.add_argument("--window", type=float, default=0.05 if QUICK else 1.0,
                     help="simulated seconds for meshes above 16 elements")
     ap.add_argument("--record-every", type=int, default=10, help="record every n-th step")
-    ap.add_argument("--catalogue-steps", type=int, default=3 if QUICK else 200,
-                    help="steps per catalogue scene and scheme")
+    ap.add_argument("--catalogue-steps", type=int, default=3 if QUICK else None,
+                    help="at most this many steps per catalogue scene and scheme (default: the whole run)")
     ap.add_argument("--no-loop", action="store_true", help="skip the spin-up/pendulum time-loop table")
     ap.add_argument("--no-catalogue", action="store_true", help="skip the table of every catalogue scene")
     ap.add_argument("--no-peer", action="store_true", help="skip the side-by-side runs with exudyn")
@@ -454,6 +540,8 @@ if __name__ == "__main__":
         parts.append(table(rows, args.record_every, warm, cold))
     if not args.no_startup:
         parts.append(startup_table(startup()))
+    if not args.no_startup:
+        parts.append(compositions_table(compositions()))
     if not args.no_catalogue:
         parts.append(catalogue_table(catalogue_rows(args.catalogue_steps), args.catalogue_steps))
     if not args.no_peer:

@@ -25,7 +25,7 @@ import numpy as np
 import scipy.sparse as sps
 
 from ..bodies.base import COMPILED_SIZE_LIMIT, DENSE_LIMIT
-from ..numerics.linear_solver import MAX_BORDER, MIN_DENSE_BORDERED, dense_bordered_plan, reordered_band_plan
+from ..numerics.band_plans import MAX_BORDER, MIN_DENSE_BORDERED, dense_bordered_plan, reordered_band_plan
 from .abi import Fields
 from .families import family_for
 from .points import MapStore
@@ -96,6 +96,7 @@ class PackedScene:
     pres: np.ndarray
     fpos: np.ndarray
     cayley: np.ndarray
+    angles: np.ndarray                  # free coordinates that are rotation angles (the schemes' turn rule)
     pres_cols: np.ndarray               # first of the (value, rate, acceleration) columns of each law
     probe_names: list                   # (name, first map, number of maps, combine)
     probe_maps: np.ndarray
@@ -183,12 +184,14 @@ def _pack(scene, python_only=False):
 
     first_moment = {}
     mass_blocks = []
+    angles = [np.asarray(scene.cayley_index, dtype=np.int64)]
     for b in scene.bodies:
         off, nb = packer.block(b)
         idx = np.arange(off, off + nb)
         kd = None if python_only else _call(b, "compiled_kernel_data")
         if kd is not None:
             moment = _call(b, "mass_moment_map")
+            angles.append(np.array([off + 2]))          # the frame's angle θ
             add(family_for("floating frame"), (kd, b, off))
             if moment is not None:
                 first_moment[id(b)] = ("frame", moment[0], moment[1], moment[2])
@@ -196,7 +199,9 @@ def _pack(scene, python_only=False):
         if b.constant_mass:
             block = sps.coo_matrix(b.mass_matrix(np.asarray(b.q0, dtype=float)))
             mass_blocks.append((block.row + off, block.col + off, block.data))
-            add(family_for("constant mass"), (_momentum_layout(b), b, off))
+            layout = _momentum_layout(b)
+            angles.append(off + np.asarray(layout[6], dtype=np.int64))
+            add(family_for("constant mass"), (layout, b, off))
             if not python_only:
                 try:
                     gam, c = b.mass_moment()
@@ -289,7 +294,8 @@ def _pack(scene, python_only=False):
         families=[], maps=Fields(packer.maps.data()), columns=packer.columns,
         mass=(mass.indptr.astype(np.int64), mass.indices.astype(np.int64), mass.data.astype(float)),
         free=free, pres=np.asarray(scene.prescribed_index, dtype=np.int64), fpos=fpos,
-        cayley=np.asarray(scene.cayley_index, dtype=np.int64), pres_cols=np.asarray(pres_cols, dtype=np.int64),
+        cayley=np.asarray(scene.cayley_index, dtype=np.int64),
+        angles=np.intersect1d(np.concatenate(angles), free).astype(np.int64), pres_cols=np.asarray(pres_cols, dtype=np.int64),
         probe_names=probe_names, probe_maps=np.asarray(probe_maps, dtype=np.int64), storage=DENSE,
         pattern=None, solver="dense", plan=None, python_elements=reasons, m=int(scene.n_constraints),
         rheonomic=any(getattr(c, "rheonomic", False) for c in scene.constraints))

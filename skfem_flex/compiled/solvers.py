@@ -7,7 +7,7 @@ Which one a scene gets is fixed once with its storage (:func:`skfem_flex.compile
   by address: :func:`lapack_address`, nothing of numba's linear algebra to compile);
 * ``bordered band``: stored dense, solved as a band with a dense border when the scene's pattern has
   such a plan (beams: frame coordinates and multipliers in the border), LAPACK if that solve is not
-  backward stable (:func:`skfem_flex.numerics.linear_solver.bordered_band_solve`);
+  backward stable (:func:`skfem_flex.numerics.band_kernels.bordered_band_solve`);
 * ``bordered band (CSR)``: stored as the values of its pattern, the same elimination; a solve that is
   not backward stable is reported singular, and the step goes back to Python.
 """
@@ -20,7 +20,7 @@ import numba
 import numpy as np
 from scipy.linalg import cython_lapack
 
-from ..numerics.linear_solver import bordered_band_solve, bordered_band_solve_csr
+from ..numerics.band_kernels import bordered_band_solve, bordered_band_solve_csr
 from .abi import call_pointers, context_of, family_of, fmat, fvec, i1, i32vec, ivec
 from .registry import compiled_kernel
 
@@ -31,7 +31,7 @@ SMALL_DENSE = 24
 
 
 class SolverPlan(NamedTuple):
-    """A band-with-border plan (:func:`~skfem_flex.numerics.linear_solver.dense_bordered_plan`): interior
+    """A band-with-border plan (:func:`~skfem_flex.numerics.band_plans.dense_bordered_plan`): interior
     coordinates in band order, border coordinates, (lower, upper) bandwidth; and the addresses of LAPACK's
     dgetrf and dgetrs and of an int32 work array of nx + 8 entries (:func:`lapack_work`)."""
     interior: np.ndarray

@@ -18,6 +18,7 @@ from ..compiled.tasks import STATUS_PYTHON_ERROR
 from ..errors import ConvergenceError, DivergenceError, Interrupted, OutputError, SimulationError
 from ..numerics.newton import NONFINITE_RESIDUAL, NONFINITE_UPDATE, SINGULAR
 from ..numerics.resources import check_fits
+from ..numerics.rotations import MAX_INCREMENT
 from ..scene_initial import consistent_initial_state
 from .guard import DivergenceGuard
 from .recorder import Recorder
@@ -181,6 +182,9 @@ class Run:
     def _why(self, status):
         if status == REFUSED:
             c = self.stepper.ws.ctx[0]
+            if not 0 <= int(c["bad_family"]) < len(self.stepper.packed.families):
+                return (f"the {self.scheme.name} step refused the steps: an angle coordinate turned by "
+                        f"{MAX_INCREMENT / np.pi:.1f}π or more in one step (too large a step for the rotation)")
             exc = self._refusal()
             return f"the {self.stepper.ws.family_name(int(c['bad_family']))} refused the step (" + (
                 str(exc) if exc is not None else "an element folds inside out, turns by π or more in one step, "
@@ -220,6 +224,10 @@ class Run:
             self._guarded(records, 0, n_rec)
 
     def _guarded(self, records, a, b):
+        beyond = self.guard.first_bound_violation(records.t[a:b], records.q[a:b])
+        if beyond is not None:
+            self.recorder.add(records, a, a + beyond[0] + 1)
+            raise beyond[1]
         d = records.derived
         bad = self.guard.first_energy_violation(records.t[a:b], d[a:b, 0], d[a:b, 1], records.work[a:b])
         if bad is None:

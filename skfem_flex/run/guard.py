@@ -23,6 +23,9 @@ class DivergenceGuard:
     * a coordinate or velocity is not finite;
     * a coordinate exceeds 10⁶ × max(scene size, largest initial coordinate, 1) — lengths in m,
       angles in rad (a body spinning at 10 rad/s needs 10⁵ s to reach it);
+    * a coordinate exceeds its body's own bound (``body.divergence_bounds()``, where a body gives one:
+      a floating-frame body's elastic coordinates beyond 10 × its length are no small deformation),
+      checked at every recorded state;
     * |T + V| exceeds 10⁶ × (E_s + max |W|), W the work done so far and E_s the largest |T| + |V|
       of the first :data:`_SCALE_RECORDS` recorded states (the scale a run released from rest
       establishes in its first steps; energy-conserving schemes keep T + V = E₀ + W, so this
@@ -39,6 +42,34 @@ class DivergenceGuard:
         self.e_scale = float(np.max(np.abs(kinetic[:_SCALE_RECORDS]) + np.abs(potential[:_SCALE_RECORDS])))
         self.w_max = float(np.max(np.abs(np.asarray(work, dtype=float)), initial=0.0))
         self.count = kinetic.size
+        bounds = np.full(scene.n, np.inf)
+        self.owner = {}
+        for body in scene.bodies:
+            own = getattr(body, "divergence_bounds", None)
+            own = own() if callable(own) else None
+            if own is not None:
+                sl = scene.slice(body)
+                bounds[sl] = np.minimum(bounds[sl], np.asarray(own, dtype=float))
+                self.owner.update({i: body for i in range(sl.start, sl.stop)})
+        self.bounds = bounds if np.isfinite(bounds).any() else None
+
+    def first_bound_violation(self, t, q):
+        """(index, DivergenceError) of the first recorded state beyond a body's own bound, or None: times
+        ``t`` (s), coordinates ``q`` (records, n)."""
+        if self.bounds is None or not t.size:
+            return None
+        over = np.abs(q) > self.bounds
+        if not over.any():
+            return None
+        k, i = np.unravel_index(int(np.argmax(over)), over.shape)
+        body = self.owner[i]
+        return int(k), DivergenceError(
+            f"diverged at t = {t[k]:.6g} s: coordinate {i} (of body {body.name!r}, its coordinate "
+            f"{i - self._start(body)}) reached {q[k, i]:.3g}, beyond the body's bound {self.bounds[i]:.3g} "
+            f"(no small deformation any more)")
+
+    def _start(self, body):
+        return min(i for i, b in self.owner.items() if b is body)
 
     def check_state(self, state):
         if not (np.all(np.isfinite(state.q)) and np.all(np.isfinite(state.v))):

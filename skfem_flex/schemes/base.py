@@ -11,7 +11,6 @@ keeps its digits as q grows) and μ = Δt λ with the package's one Newton core
 """
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass, field, fields
 
 import numpy as np
@@ -101,51 +100,6 @@ class Scheme:
         carries; values it does not carry (``pseudo`` for energy-momentum) are left out."""
         names = {f.name for f in fields(self.state_type)}
         return self.state_type(float(t), q, v, **{k: x for k, x in values.items() if k in names})
-
-    # ------------------------------------------------------------------ one step at a time
-    def _stepper(self, scene):
-        steppers = self.__dict__.setdefault("_steppers", weakref.WeakKeyDictionary())
-        hit = steppers.get(scene)
-        if hit is None:
-            from .stepper import Stepper
-            hit = steppers[scene] = Stepper(scene, self)
-        return hit
-
-    def start(self, scene, state):
-        """This scheme's state at ``state.t`` from its (q, v), with the consistent accelerations, multipliers
-        and prescribed forces (M q̈ + Φ_qᵀ λ = Q − ∇V, Φ_q q̈ = −(Φ_q q̇)_q q̇ − Φ_tt)."""
-        acc, lam, reaction = self._stepper(scene).start(state.t, np.asarray(state.q, dtype=float),
-                                                        np.asarray(state.v, dtype=float))
-        return self.make_state(state.t, np.array(state.q, dtype=float), np.array(state.v, dtype=float), acc=acc,
-                               pseudo=acc.copy(), lam=lam, prescribed_force=reaction)
-
-    def step(self, scene, state, h):
-        """One step of size ``h`` (s) from ``state`` (this scheme's state, e.g. from :meth:`start`) with this
-        scheme's compiled step; returns (the new state, Newton iterations). The loop of
-        :func:`~skfem_flex.run.simulate.simulate` runs the same step many times per call.
-
-        Raises
-        ------
-        ValueError
-            If ``state`` is not this scheme's state type or h is not a positive finite number.
-        ConvergenceError
-            If Newton does not converge (no halving here: ``simulate`` halves).
-        """
-        if type(state) is not self.state_type:
-            raise ValueError(f"{self.name} steps a {self.state_type.__name__}, got a {type(state).__name__} "
-                             f"(start it with {type(self).__name__}().start(scene, state))")
-        if not (isinstance(h, (int, float)) and np.isfinite(h) and h > 0):
-            raise ValueError(f"h must be a positive number of seconds, got {h!r}")
-        from ..errors import ConvergenceError
-        stepper = self._stepper(scene)
-        stepper.load(state)
-        chunk = stepper.advance(state.t, np.array([float(h)]), np.array([False]), self.newton.max_iterations,
-                                self.newton.line_search)
-        if chunk.steps != 1:
-            stepper.raise_python_error()
-            raise ConvergenceError(f"{self.name}: the step of {h:g} s from t = {state.t:.6g} s failed (status "
-                                   f"{chunk.status})", iterations=chunk.iterations, residual=float("nan"))
-        return stepper.state(state.t + float(h)), chunk.iterations
 
     def __repr__(self):
         return f"{type(self).__name__}()"

@@ -61,13 +61,14 @@ class EnergyMomentumData(NamedTuple):
     qm: np.ndarray
     vm: np.ndarray
     r: np.ndarray
+    angles: np.ndarray      # (nang,) free angle coordinates: an increment ≥ MAX_INCREMENT per step is refused
 
 
 @numba.njit(cache=True, _nrt=False)
 def _view(fam):
     return EnergyMomentumData(f1(fam, 0), f1(fam, 1), f1(fam, 2), f1(fam, 3), f1(fam, 4), f1(fam, 5), f1(fam, 6),
                               i1(fam, 7), i1(fam, 8), f1(fam, 9), f1(fam, 10), f1(fam, 11), f1(fam, 12), f1(fam, 13),
-                              f1(fam, 14), f1(fam, 15), f1(fam, 16))
+                              f1(fam, 14), f1(fam, 15), f1(fam, 16), i1(fam, 17))
 
 
 @numba.njit(cache=True, _nrt=False)
@@ -155,8 +156,12 @@ def _evaluate(ctx, s):
     for i in range(n):
         q1[i] = q0[i] + dq[i]
         z[i] = dq[i]
+    for c in s.angles:                  # a turn of ~π or more per step is not resolved: the step is refused
+        if not abs(dq[c]) < MAX_INCREMENT:
+            ctx.status = STATUS_REFUSED
+            return
     for c in s.cayley:
-        if abs(dq[c]) >= MAX_INCREMENT:  # 2 tan(Δψ/2) needs |Δψ| < π: the step is refused
+        if not abs(dq[c]) < MAX_INCREMENT:  # 2 tan(Δψ/2) needs |Δψ| < π: the step is refused
             ctx.status = STATUS_REFUSED
             return
         z[c], ratio[c], dratio[c], dz[c] = cayley_terms(dq[c])
@@ -307,7 +312,8 @@ class EnergyMomentum(Scheme):
         data = EnergyMomentumData(
             np.array(state.q, dtype=float), np.array(state.v, dtype=float), np.array(acc, dtype=float), z(n),
             np.array(lam, dtype=float), np.array(reaction, dtype=float), np.array([float(state.work), 0.0]),
-            packed.pres_cols, packed.cayley, z(n), z(n), np.ones(n), z(n), np.ones(n), z(n), z(n), z(n))
+            packed.pres_cols, packed.cayley, z(n), z(n), np.ones(n), z(n), np.ones(n), z(n), z(n), z(n),
+            packed.angles)
         return Fields(data)
 
     def unpack_state(self, fields, t):

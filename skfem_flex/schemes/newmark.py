@@ -36,6 +36,7 @@ from ..compiled.tasks import (PHASE_ACCEPT, PHASE_EVALUATE, PHASE_PREDICT, PHASE
                               ROWS_POSITION, ROWS_VELOCITY, SCHEME_NEWMARK, STATUS_MISSED, STATUS_OK,
                               STATUS_REFUSED, TASK_EVAL, TASK_EVAL_LOADS, TASK_LOADS, TASK_ROWS)
 from ..numerics.newton import all_finite, max_abs
+from ..numerics.rotations import MAX_INCREMENT
 
 __all__ = ["Newmark", "Trapezoidal", "GeneralizedAlpha", "NewmarkData", "start_kernel", "start_data"]
 
@@ -59,12 +60,14 @@ class NewmarkData(NamedTuple):
     dq: np.ndarray          # work vectors (n,)
     r: np.ndarray
     a_next: np.ndarray      # the algorithmic acceleration a₁ of the evaluation
+    angles: np.ndarray      # (nang,) free angle coordinates: an increment ≥ MAX_INCREMENT per step is refused
 
 
 @numba.njit(cache=True, _nrt=False)
 def _view(fam):
     return NewmarkData(f1(fam, 0), f1(fam, 1), f1(fam, 2), f1(fam, 3), f1(fam, 4), f1(fam, 5), f1(fam, 6),
-                       f1(fam, 7), f1(fam, 8), f1(fam, 9), i1(fam, 10), f1(fam, 11), f1(fam, 12), f1(fam, 13))
+                       f1(fam, 7), f1(fam, 8), f1(fam, 9), i1(fam, 10), f1(fam, 11), f1(fam, 12), f1(fam, 13),
+                       i1(fam, 14))
 
 
 @numba.njit(cache=True, _nrt=False)
@@ -193,6 +196,12 @@ def _evaluate(ctx, s):
         dq[free[i]] = x[i]
     for i in range(m):
         mu[i] = x[nf + i]
+    for c in s.angles:
+        # the energy-momentum step's rule: an angle turning by ~π or more in one step is not resolved
+        # (a converged Newton solution there is a spurious root, e.g. the joint flipped): halve instead
+        if not abs(dq[c]) < MAX_INCREMENT:
+            ctx.status = STATUS_REFUSED
+            return
     for i in range(n):
         q1[i] = q0[i] + dq[i]
         acc1[i] = (dq[i] - h * v0[i] - h * h * (0.5 - beta) * a0[i]) / (beta * h * h)
@@ -334,7 +343,7 @@ def _data(packed, params, q, v, acc, pseudo, lam, reaction, work):
     return Fields(NewmarkData(np.asarray(params, dtype=float), np.array(q, dtype=float), np.array(v, dtype=float),
                               np.array(acc, dtype=float), np.array(pseudo, dtype=float), np.array(lam, dtype=float),
                               np.array(reaction, dtype=float), np.asarray(work, dtype=float), z(n), z(m),
-                              packed.pres_cols, z(n), z(n), z(n)))
+                              packed.pres_cols, z(n), z(n), z(n), packed.angles))
 
 
 def _start_kernel(ctx_p, fam_p):

@@ -24,6 +24,7 @@ from ..compiled.registry import compiled_function
 from ..compiled.storage import DENSE
 from ..compiled.tasks import PHASE_EVALUATE, PHASE_PREDICT, STATUS_MISSED, STATUS_OK, STATUS_PYTHON_ERROR
 from ..compiled.workspace import Workspace
+from ..errors import ConvergenceError
 
 __all__ = ["Stepper", "Chunk"]
 
@@ -183,6 +184,42 @@ class Stepper:
             return self.ws.mat[:nx * nx].reshape(nx, nx).copy()
         pat = pk.pattern
         return sps.csr_matrix((self.ws.mat[:pat.nnz].copy(), pat.indices, pat.indptr), shape=(nx, nx))
+
+    # ------------------------------------------------------------------ one step at a time, from states
+    def starting_state(self, state):
+        """The scheme's state at ``state.t`` from its (q, v), with the consistent accelerations,
+        multipliers and prescribed forces (:meth:`start`)."""
+        q, v = np.array(state.q, dtype=float), np.array(state.v, dtype=float)
+        acc, lam, reaction = self.start(state.t, q, v)
+        return self.scheme.make_state(state.t, q, v, acc=acc, pseudo=acc.copy(), lam=lam,
+                                      prescribed_force=reaction)
+
+    def step(self, state, h):
+        """One step of size ``h`` (s) from ``state`` (the scheme's state type, e.g. from :meth:`starting_state`)
+        with the scheme's compiled step: (the new state, Newton iterations). ``simulate`` runs the same
+        step many times per call (and halves failed steps; this does not).
+
+        Raises
+        ------
+        ValueError
+            If ``state`` is not the scheme's state type or h is not a positive finite number.
+        ConvergenceError
+            If the step fails.
+        """
+        scheme = self.scheme
+        if type(state) is not scheme.state_type:
+            raise ValueError(f"{scheme.name} steps a {scheme.state_type.__name__}, got a {type(state).__name__} "
+                             f"(start it with Stepper.starting_state)")
+        if not (isinstance(h, (int, float)) and np.isfinite(h) and h > 0):
+            raise ValueError(f"h must be a positive number of seconds, got {h!r}")
+        self.load(state)
+        chunk = self.advance(state.t, np.array([float(h)]), np.array([False]), scheme.newton.max_iterations,
+                             scheme.newton.line_search)
+        if chunk.steps != 1:
+            self.raise_python_error()
+            raise ConvergenceError(f"{scheme.name}: the step of {h:g} s from t = {state.t:.6g} s failed (status "
+                                   f"{chunk.status})", iterations=chunk.iterations, residual=float("nan"))
+        return self.state(state.t + float(h)), chunk.iterations
 
     def _check_status(self):
         c = self.ws.ctx[0]
