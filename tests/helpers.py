@@ -120,7 +120,8 @@ def assert_same_run(a, b, q_tol=1e-9, v_tol=1e-7, e_tol=None):
     e_scale = np.abs(b.total_energy).max() + np.abs(b.external_work).max()
     for name in ("total_energy", "potential", "kinetic", "external_work"):
         assert np.abs(getattr(a, name) - getattr(b, name)).max() <= e_tol * e_scale, name
-    p_scale = np.abs(b.linear_momentum).max() + 1e-300
+    # momenta cancel (a spinning body about a pinned hub has |p| ≪ m |v|): compare on the scale of m |v| ~ E / |v|
+    p_scale = np.abs(b.linear_momentum).max() + e_scale / max(np.abs(b.v).max(), 1e-300)
     assert np.abs(a.linear_momentum - b.linear_momentum).max() <= e_tol * p_scale
     assert np.abs(a.angular_momentum - b.angular_momentum).max() <= v_tol * (np.abs(b.angular_momentum).max()
                                                                             + p_scale * np.abs(b.q[:, :2]).max())
@@ -139,12 +140,8 @@ def assert_same_run(a, b, q_tol=1e-9, v_tol=1e-7, e_tol=None):
 
 def assert_loop_measures_are_the_scenes(scene, rel):
     """T, V and the momenta the compiled loop computed for the recorded states equal the scene's at (q, v)."""
-    # imported here: a module that moves breaks the tests that use it, not every importer of helpers
-    from skfem_flex.compiled import single_body_loop as compiled_loop
-    from skfem_flex.schemes.integrators import EnergyMomentum
-
     res = sf.simulate(scene, t_end=0.2, dt=1e-2, record_every=3)
-    assert compiled_loop.eligible(scene, EnergyMomentum())
+    assert res.run_path["python_elements"] == [], res.run_path        # the loop's own measures, no Python
     for k in range(res.t.size):
         q, v = res.q[k], res.v[k]
         assert res.kinetic[k] == pytest.approx(scene.kinetic_energy(q, v), rel=rel)

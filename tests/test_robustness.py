@@ -362,3 +362,15 @@ def test_ctrl_c_during_a_cold_compile_stops_within_seconds(tmp_path):
     assert time.perf_counter() - sent <= 5.0
     assert proc.returncode == 130, (proc.returncode, err)
     assert "Traceback" not in err and "interrupted" in err, err
+
+
+def test_divergence_is_caught_at_the_bodys_own_bound():
+    """The spin-up with the linear axial strain (no geometric stiffening) diverges: its tip passes 1 m near
+    t = 10 s. The floating beam's own bound (elastic coordinates ≤ 10 beam lengths) stops it at the first
+    recorded state beyond 100 m, long before the run's end (it once ran to 30 s), keeping the history."""
+    with pytest.raises(sf.DivergenceError, match="beyond the body's bound 100") as info:
+        sf.simulate(sf.scenes.spin_up_beam(strain="linear"), 30.0, 1e-2)
+    res = info.value.result
+    tip = np.abs(res.probes["tip"][:, 1])
+    assert 9.0 < res.t[np.argmax(tip > 1.0)] < 11.0 and res.t[-1] < 20.0
+    assert np.abs(res.q[:-1, 3:]).max() <= 100.0 < np.abs(res.q[-1, 3:]).max()

@@ -18,8 +18,7 @@ The core is a *reverse-communication* state machine (as ARPACK's solvers): :func
 makes its state, and its driver does what it asks — EVALUATE the residual, tangent and scaled
 error at ``x_try`` and hand the error to :func:`newton_evaluated`, or SOLVE J y = r for the last
 evaluation and hand y to :func:`newton_solved` — until it answers with a status. The drivers hold
-no rule, only that dispatch: the compiled loops (:mod:`skfem_flex.compiled.single_body_loop`,
-:mod:`skfem_flex.compiled.scene_loop`) drive it from compiled code with their compiled residuals;
+no rule, only that dispatch: the compiled loop (:mod:`skfem_flex.compiled.loop`) drives it from compiled code with their compiled residuals;
 :func:`newton_solve` drives it from Python for a :class:`PythonSystem` — the documented slower
 path that user-defined elements and the Python-assembled scenes take: same core, same rules,
 Python arithmetic. (A core that took the residual as a function argument would be the more

@@ -14,7 +14,7 @@ w/Δt, not Δφ/Δt, as the mean angular velocity of coordinates that a body
 declares as Cayley coordinates (Simo, Tarnow & Doblaré 1995): with it the
 mid-point rule is equivariant under rotations, and exact energy and exact
 angular momentum no longer exclude each other (see
-:mod:`skfem_flex.bodies.exact.body`).
+:mod:`skfem_flex.bodies.exact.strain`).
 
 Shared by the bodies that write their discrete gradients in Cayley rates
 and by the integrator that uses them; it knows neither.
@@ -30,11 +30,25 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["sinc_half", "cayley_terms", "MAX_INCREMENT", "cayley", "cayley_derivative", "cayley_ratio", "cayley_ratio_derivative", "cayley_divided_difference",
+__all__ = ["sinc_half", "cayley_terms", "MAX_INCREMENT", "unresolved_turn", "cayley", "cayley_derivative", "cayley_ratio", "cayley_ratio_derivative", "cayley_divided_difference",
            "sinc", "dsinc"]
 
 #: largest incremental rotation per step the Cayley update accepts, rad (W has a pole at π)
 MAX_INCREMENT = 0.9 * np.pi
+
+
+@numba.njit(cache=True, _nrt=False)
+def unresolved_turn(dq, angles):
+    """True when an angle coordinate (indices ``angles`` into the increment ``dq``, rad) turned by
+    :data:`MAX_INCREMENT` or more (or by a non-finite amount) in one step: fewer than ~2 steps per
+    revolution resolve no rotation, and a converged Newton root there is spurious (a joint flipped). Every
+    scheme refuses such a step (it is halved)."""
+    for c in angles:
+        if not abs(dq[c]) < MAX_INCREMENT:
+            return True
+    return False
+
+
 #: below this |Δφ| the closed forms of the ratio's derivative cancel; its Taylor series is exact there
 SERIES_BELOW = 1e-2
 

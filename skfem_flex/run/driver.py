@@ -51,7 +51,8 @@ class Run:
         self.start_spec, self.project, self.resume = start, project, resume
         self.n_steps = self._step_count()
         self.step = self.halvings = 0
-        self.t = 0.0
+        self.t = self.t_first = 0.0
+        self.step_first = 0
         self.its = 0
         self.bar = None
         self.compile_time = 0.0
@@ -105,6 +106,7 @@ class Run:
                 else None for k in ("q", "v", "acc", "pseudo", "lam", "prescribed_force")})
             state.work = float(fs["work"])
             self.step, self.halvings, self.t = int(fs["step"]), int(fs["halvings"]), float(fs["t"])
+            self.t_first, self.step_first = self.t, self.step
             self.stepper.load(state)
             self.recorder.prefill(prior)
             for s in self.recording.output:
@@ -133,12 +135,10 @@ class Run:
         ch = self.stepper.advance(self.t, hs, recorded, self.scheme.newton.max_iterations,
                                   self.scheme.newton.line_search)
         done = ch.steps
-        self._land_on_end(self.step + done, ch.records, ch.n_records, done and recorded[done - 1])
+        self._stamp(self.step + 1 + np.flatnonzero(recorded[:done]), ch.records, ch.n_records)
         self._take(ch.records, ch.n_records)
-        self.t += float(hs[:done].sum())
         self.step += done
-        if self.step == self.n_steps:
-            self.t = self.t_end
+        self.t = self._time_of(self.step)
         self.its += ch.iterations
         if done < k:                    # step `done` failed: halve it
             self._fail_or_halve(ch, hs[done], bool(recorded[done]))
@@ -148,17 +148,21 @@ class Run:
     def _fail_or_halve(self, ch, h, record):
         self._raise_python_error()
         recs, n_rec = self._halve(self.t, h, self.control.max_halvings, record, ch.status)
-        self._land_on_end(self.step + 1, recs, n_rec, record)
+        if record:
+            self._stamp(np.array([self.step + 1]), recs, n_rec)
         self._take(recs, n_rec)
-        self.t += h
         self.step += 1
-        if self.step == self.n_steps:
-            self.t = self.t_end
+        self.t = self._time_of(self.step)
 
-    def _land_on_end(self, step, records, n_rec, recorded):
-        """The run's last step ends at t_end exactly (the loop's sum of step sizes may differ in its last bit)."""
-        if step == self.n_steps and recorded and n_rec:
-            records.t[n_rec - 1] = self.t_end
+    def _time_of(self, step):
+        """Time at the end of step ``step``: t₀ + (step − step₀) Δt, t_end for the last; the same whatever
+        the chunks (a sum of step sizes would differ in its last bits from one chunking to another)."""
+        return self.t_end if step == self.n_steps else self.t_first + (step - self.step_first) * self.dt
+
+    def _stamp(self, steps, records, n_rec):
+        """The recorded steps' times from their numbers (:meth:`_time_of`)."""
+        for i in range(min(n_rec, steps.size)):
+            records.t[i] = self._time_of(int(steps[i]))
 
     def _halve(self, t, h, depth, record, status):
         """Step (t, h) split in two halves, recursively (depth levels at most); the records of its end."""
@@ -183,8 +187,9 @@ class Run:
         if status == REFUSED:
             c = self.stepper.ws.ctx[0]
             if not 0 <= int(c["bad_family"]) < len(self.stepper.packed.families):
-                return (f"the {self.scheme.name} step refused the steps: an angle coordinate turned by "
-                        f"{MAX_INCREMENT / np.pi:.1f}π or more in one step (too large a step for the rotation)")
+                return (f"the {self.scheme.name} step refused the step: an angle coordinate turned by "
+                        f"{MAX_INCREMENT / np.pi:.1f}π or more in one step (too large a step for the rotation), "
+                        f"or the state is not finite")
             exc = self._refusal()
             return f"the {self.stepper.ws.family_name(int(c['bad_family']))} refused the step (" + (
                 str(exc) if exc is not None else "an element folds inside out, turns by π or more in one step, "

@@ -63,10 +63,12 @@ class DivergenceGuard:
             return None
         k, i = np.unravel_index(int(np.argmax(over)), over.shape)
         body = self.owner[i]
+        local = i - self._start(body)
+        names = getattr(body, "coordinate_names", None)
+        label = f"{names[local]!r}" if names is not None and local < len(names) else f"{local}"
         return int(k), DivergenceError(
-            f"diverged at t = {t[k]:.6g} s: coordinate {i} (of body {body.name!r}, its coordinate "
-            f"{i - self._start(body)}) reached {q[k, i]:.3g}, beyond the body's bound {self.bounds[i]:.3g} "
-            f"(no small deformation any more)")
+            f"diverged at t = {t[k]:.6g} s: coordinate {label} of body {body.name!r} reached {q[k, i]:.3g}, "
+            f"beyond the body's bound {self.bounds[i]:.3g} (no small deformation any more)")
 
     def _start(self, body):
         return min(i for i, b in self.owner.items() if b is body)

@@ -35,7 +35,7 @@ from ..compiled.storage import add_qq, clear, scale_row, storage_of
 from ..compiled.tasks import (PHASE_ACCEPT, PHASE_EVALUATE, PHASE_PREDICT, ROWS_POSITION, SCHEME_EM, STATUS_MISSED,
                               STATUS_OK, STATUS_REFUSED, TASK_EVAL, TASK_EVAL_LOADS, TASK_MOMENTUM)
 from ..numerics.newton import all_finite, max_abs, predicted_increment, roundoff_floor
-from ..numerics.rotations import MAX_INCREMENT, cayley_terms
+from ..numerics.rotations import MAX_INCREMENT, cayley_terms, unresolved_turn
 
 __all__ = ["EnergyMomentum", "EnergyMomentumData"]
 
@@ -156,10 +156,6 @@ def _evaluate(ctx, s):
     for i in range(n):
         q1[i] = q0[i] + dq[i]
         z[i] = dq[i]
-    for c in s.angles:                  # a turn of ~π or more per step is not resolved: the step is refused
-        if not abs(dq[c]) < MAX_INCREMENT:
-            ctx.status = STATUS_REFUSED
-            return
     for c in s.cayley:
         if not abs(dq[c]) < MAX_INCREMENT:  # 2 tan(Δψ/2) needs |Δψ| < π: the step is refused
             ctx.status = STATUS_REFUSED
@@ -252,7 +248,7 @@ def _accept(ctx, s):
     pres = ivec(ctx.pres, ctx.npres)
     q1, v1, p, ext = fvec(ctx.q1, n), fvec(ctx.v1, n), fvec(ctx.p, n), fvec(ctx.ext, n)
     mu, ddphi = fvec(ctx.mu, m), fvec(ctx.ddphi, m)
-    if not (all_finite(q1) and all_finite(v1)):
+    if unresolved_turn(s.dq, s.angles) or not (all_finite(q1) and all_finite(v1)):
         ctx.status = STATUS_REFUSED
         return
     w = _dot(s.z, ext)

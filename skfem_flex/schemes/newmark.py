@@ -36,7 +36,7 @@ from ..compiled.tasks import (PHASE_ACCEPT, PHASE_EVALUATE, PHASE_PREDICT, PHASE
                               ROWS_POSITION, ROWS_VELOCITY, SCHEME_NEWMARK, STATUS_MISSED, STATUS_OK,
                               STATUS_REFUSED, TASK_EVAL, TASK_EVAL_LOADS, TASK_LOADS, TASK_ROWS)
 from ..numerics.newton import all_finite, max_abs
-from ..numerics.rotations import MAX_INCREMENT
+from ..numerics.rotations import unresolved_turn
 
 __all__ = ["Newmark", "Trapezoidal", "GeneralizedAlpha", "NewmarkData", "start_kernel", "start_data"]
 
@@ -196,12 +196,6 @@ def _evaluate(ctx, s):
         dq[free[i]] = x[i]
     for i in range(m):
         mu[i] = x[nf + i]
-    for c in s.angles:
-        # the energy-momentum step's rule: an angle turning by ~π or more in one step is not resolved
-        # (a converged Newton solution there is a spurious root, e.g. the joint flipped): halve instead
-        if not abs(dq[c]) < MAX_INCREMENT:
-            ctx.status = STATUS_REFUSED
-            return
     for i in range(n):
         q1[i] = q0[i] + dq[i]
         acc1[i] = (dq[i] - h * v0[i] - h * h * (0.5 - beta) * a0[i]) / (beta * h * h)
@@ -252,7 +246,7 @@ def _accept(ctx, s):
     q1, v1, a1 = fvec(ctx.q1, n), fvec(ctx.v1, n), fvec(ctx.a1, n)
     acc1 = s.a_next
     ext, mu, phit = fvec(ctx.ext, n), fvec(ctx.mu, m), fvec(ctx.phit, m)
-    if not (all_finite(q1) and all_finite(v1)):
+    if unresolved_turn(s.dq, s.angles) or not (all_finite(q1) and all_finite(v1)):
         ctx.status = STATUS_REFUSED
         return
     # work of the loads (trapezoidal in time), of the prescribed laws and of rheonomic constraints

@@ -56,16 +56,17 @@ in the chord frame (``reference="pinned"``).
 
 This module holds the body contract; the pieces it is built from live beside it:
 
-=========================  ==========================================================================
-``floating_reference.py``  reference conditions → elastic coordinates q_f (free DOFs, names), K check
-``floating_inertia.py``    inertia integrals (scikit-fem forms → the ``BeamInertia`` invariants)
-``floating_strain.py``     stiffness K and the vectorised Green–Lagrange axial kernel, strains
-``floating_pattern.py``    the sparse CSR pattern, dense element scatter, compiled-kernel packing
-``floating_kernel.py``     the compiled (Numba) kinetic and strain arithmetic
-``floating_loads.py``      :class:`DistributedLoad`
-``floating_rotation.py``   centrifugal equilibrium and rotating-frame modes
-``floating_model.py``      the beam as an ``ElasticModel`` for reduction
-=========================  ==========================================================================
+=================  ==========================================================================
+``reference.py``   reference conditions → elastic coordinates q_f (free DOFs, names), K check
+``inertia.py``     inertia integrals (scikit-fem forms → the ``BeamInertia`` invariants)
+``strain.py``      stiffness K and the vectorised Green–Lagrange axial kernel, strains
+``pattern.py``     the sparse CSR pattern, dense element scatter, compiled-kernel packing
+``kernel.py``      the compiled (Numba) kinetic and strain arithmetic
+``rotation.py``    centrifugal equilibrium and rotating-frame modes
+``model.py``       the beam as an ``ElasticModel`` for reduction
+=================  ==========================================================================
+
+Loads on the beam are force elements (:class:`~skfem_flex.elements.forces.floating_beam_loads.DistributedLoad`).
 """
 from __future__ import annotations
 
@@ -77,7 +78,6 @@ from . import kernel as _kernel
 from ..base import DENSE_LIMIT, BodyGeometry, check_finite_vector
 from ..ffr import FloatingFrame, FramePoint
 from .inertia import beam_inertia
-from .loads import DistributedLoad
 from .model import beam_elastic_model
 from .pattern import (compose_sparse, dense_scatter, kernel_data, scatter_elements,
                                sparse_pattern)
@@ -88,7 +88,7 @@ from .strain import (axial_derivatives, axial_element_tangent, axial_gradient, a
 from ..rigid import E_MATRIX as E2, rotation as _rot
 from ..probes import LinearProbe
 
-__all__ = ["FloatingBeam", "DistributedLoad"]
+__all__ = ["FloatingBeam"]
 
 
 class FloatingBeam(FloatingFrame):
@@ -159,7 +159,7 @@ class FloatingBeam(FloatingFrame):
 
         # ------------------------------------------------ inertia, stiffness, axial kernel (assembled once)
         inertia = beam_inertia(beam, free, self.sparse)
-        self._set_invariants(mass=inertia.mass, S0=inertia.S0, I0=inertia.I0, Sbar=inertia.Sbar, c=inertia.c,
+        self.set_invariants(mass=inertia.mass, S0=inertia.S0, I0=inertia.I0, Sbar=inertia.Sbar, c=inertia.c,
                              k0n=inertia.k0n, MA=inertia.MA, H=inertia.H, Mff=inertia.Mff)
         self._pcache = (None, None)                       # ((q, v) bytes, M(q) v) of the last momentum
 
@@ -169,12 +169,12 @@ class FloatingBeam(FloatingFrame):
         self._ax = axial_quadrature(beam, free, self.sparse)
         self._gl_cache = {}
         # ------------------------------------------------ matrix layout and compiled-kernel data
-        blocks = dict(MA=self._MA, H=self._H, Mff=self._Mff, K=self._K)
+        blocks = dict(MA=self.invariants.MA, H=self.invariants.H, Mff=self.invariants.Mff, K=self._K)
         # the compiled kernels work on the sparse pattern for dense bodies too: the elastic block is a
         # band, and the full n × n pattern made them touch 4× the entries (flexible pendulum, 16 el.)
         self._pattern = sparse_pattern(n, nf, blocks, self._ax.loc)
         if not self.sparse:
-            self._ffd = blocks
+            self.elastic_blocks = blocks
             self._scatter = dense_scatter(self._ax.loc, nf)
             self._pattern_rows = np.repeat(np.arange(n), np.diff(self._pattern.indptr))
         self._kd = kernel_data(n, nf, strain == "green-lagrange", inertia, blocks, self._pattern, self._ax.dNt,
@@ -195,6 +195,17 @@ class FloatingBeam(FloatingFrame):
     @property
     def coordinate_names(self):
         return self._names
+
+    #: elastic coordinates beyond this many beam lengths (m, or rad for section rotations) are no small
+    #: deformation of the floating frame any more: the run has diverged (the run's guard reads
+    #: :meth:`divergence_bounds` at every recorded state)
+    ELASTIC_BOUND = 10.0
+
+    def divergence_bounds(self):
+        """Largest sane |q_i| per coordinate: none for the frame (R, θ; the run's global rule holds), and
+        :attr:`ELASTIC_BOUND` × max(L, 1 m) for the elastic coordinates, L the beam's length (m)."""
+        bound = self.ELASTIC_BOUND * max(self.x_max - self.x_min, 1.0)
+        return np.concatenate([np.full(3, np.inf), np.full(self.n_elastic, bound)])
 
     def elastic_vector(self, u=None, w=None, theta=None):
         """q_f from nodal fields: callables of x (m) or arrays over ``beam.x_nodes``.
@@ -230,7 +241,7 @@ class FloatingBeam(FloatingFrame):
         return self.beam.x_nodes.copy(), d[nd[:, 0]], d[nd[:, 1]], d[nd[:, 2]]
 
     # ================================================================ matrix composition
-    def _compose(self, top, left, terms=(), extra=None, loc=None):
+    def compose_matrix(self, top, left, terms=(), extra=None, loc=None):
         """n × n matrix from its reference rows ``top`` (3, n), the block ``left`` (nf, 3) below
         them and an elastic block Σ coef · X[key] for ``terms`` = [(coef, key)], key in
         {"MA", "H", "Mff", "K"}, plus ``extra`` (dense (nf, nf), dense bodies) or ``loc``
@@ -238,12 +249,12 @@ class FloatingBeam(FloatingFrame):
 
         Sparse bodies fill their one fixed CSR pattern (:func:`.floating_pattern.compose_sparse`)."""
         if not self.sparse:
-            return super()._compose(top, left, terms, extra)
+            return super().compose_matrix(top, left, terms, extra)
         return compose_sparse(self._pattern, top, left, terms, loc)
 
     def _axial_tangent(self, w, a, b, weps):
         """Σ_k w_k dε_k(a)ᵀ dε_k(b) + Σ_k weps_k d²ε_k, d²ε = D_uᵀD_u + D_wᵀD_w, for the strain states
-        a = (u', w') and b, as the keyword :meth:`_compose` takes: ``extra`` (the elements scattered
+        a = (u', w') and b, as the keyword :meth:`compose_matrix` takes: ``extra`` (the elements scattered
         into the dense elastic block) or ``loc`` (the element matrices, sparse bodies)."""
         out = axial_element_tangent(self._ax, w, a, b, weps)
         if not self.sparse:
@@ -297,10 +308,10 @@ class FloatingBeam(FloatingFrame):
     def potential_hessian(self, q):
         qf = q[3:]
         if self.strain == "linear":
-            return self._compose(None, None, [(1.0, "K")])
+            return self.compose_matrix(None, None, [(1.0, "K")])
         up, wp, eps = self._gl(qf)
         wq = self._ax.wq
-        return self._compose(None, None, [(1.0, "K")], **self._axial_tangent(wq, (up, wp), (up, wp), wq * eps))
+        return self.compose_matrix(None, None, [(1.0, "K")], **self._axial_tangent(wq, (up, wp), (up, wp), wq * eps))
 
     def potential_discrete_gradient(self, q0, q1):
         """Stress at the mean strain: g · (q1 − q0) = V(q1) − V(q0) exactly; with ∂g/∂q1.
@@ -314,14 +325,14 @@ class FloatingBeam(FloatingFrame):
         g = np.zeros(self.n_dofs)
         g[3:] = self._K @ qm
         if self.strain == "linear":
-            return g, self._compose(None, None, [(0.5, "K")])
+            return g, self.compose_matrix(None, None, [(0.5, "K")])
         up0, wp0, e0 = self._gl(q0[3:])
         up1, wp1, e1 = self._gl(q1[3:])
         upm, wpm = 0.5 * (up0 + up1), 0.5 * (wp0 + wp1)
         wq = self._ax.wq
         t = wq * (0.5 * (e0 + e1))
         g[3:] += axial_gradient(self._ax, upm, wpm, t)
-        return g, self._compose(None, None, [(0.5, "K")], **self._axial_tangent(0.5 * wq, (upm, wpm),
+        return g, self.compose_matrix(None, None, [(0.5, "K")], **self._axial_tangent(0.5 * wq, (upm, wpm),
                                                                                 (up1, wp1), 0.5 * t))
 
     def energy_momentum_terms(self, q0, q1, v0, v1, dt):
@@ -366,7 +377,7 @@ class FloatingBeam(FloatingFrame):
         return element_strain_energy(self._ax, self.section, self.strains(q))
 
     # ================================================================ points, probes, output
-    def _check_x(self, x, what="point"):
+    def axial_coordinate(self, x, what="point"):
         """``x`` (m) as a float on the beam; ValueError (naming ``what``) if not finite or off the beam."""
         if isinstance(x, bool) or not np.isscalar(x) or not np.isfinite(x):
             raise ValueError(f"{what}: axial coordinate x must be a finite number, got {x!r}")
@@ -375,9 +386,9 @@ class FloatingBeam(FloatingFrame):
             raise ValueError(f"{what}: x = {x!r} lies outside beam {self.name!r} [{self.x_min}, {self.x_max}]")
         return float(np.clip(x, self.x_min, self.x_max))
 
-    def _full_shape_at(self, x):
+    def full_shape_at(self, x):
         """(u, w, φ) at axial coordinate x per beam DOF, (3, beam.n_dofs)."""
-        x = self._check_x(x)
+        x = self.axial_coordinate(x)
         beam = self.beam
         pr = beam.field_basis.probes(np.array([[x]])).tocsr()
         S = np.zeros((3, beam.n_dofs))
@@ -387,13 +398,13 @@ class FloatingBeam(FloatingFrame):
 
     def shape_at(self, x):
         """(S(x) (2, n_elastic), N_φ(x) (n_elastic,)) at axial coordinate x (m)."""
-        S = self._full_shape_at(x)[:, self.free_dofs]
+        S = self.full_shape_at(x)[:, self.free_dofs]
         return S[:2].copy(), S[2].copy()
 
     def point(self, locator=None):
         """The material point of the axis at x = ``locator`` (m; default the tip)."""
         x = self.x_max if locator is None else locator
-        x = self._check_x(x)
+        x = self.axial_coordinate(x)
         S, Nphi = self.shape_at(x)
         return FramePoint(self, (x, 0.0), S, Nphi)
 
