@@ -14,7 +14,7 @@ prints a summary and writes ``flying_beam_snapshots.png`` (shapes every 1 s) and
 
 Energy, linear and angular momentum are conserved by the energy-momentum scheme to the Newton
 tolerance after the load stops (section angles advance at their Cayley rate; see
-:mod:`skfem_flex.bodies.exact.body`); the linear momentum then is the impulse of the load,
+:mod:`skfem_flex.bodies.exact.strain`); the linear momentum then is the impulse of the load,
 8 × 2.5 = 20 N s along x.
 
 Before each timed run, a run of a few steps of the same scene and scheme compiles the Numba kernels

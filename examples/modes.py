@@ -64,8 +64,8 @@ crank_modes = sf.modes(crank, about="static", n_modes=4)
 # ---------------------------------------------------------------- 3. Campbell
 SCALE = math.sqrt(1.2 * 10.0 ** 4 / 1.4e4)       # λ = ω · SCALE for the default rotating_beam section
 LAMBDAS = np.linspace(0.0, 12.0, 4 if QUICK else 13)
-green_lagrange = sf.campbell("rotating_beam", "omega", LAMBDAS / SCALE, n_modes=3)
-linear = sf.campbell("rotating_beam", "omega", LAMBDAS / SCALE, n_modes=4, strain="linear")
+green_lagrange = sf.campbell(sf.scenes.rotating_beam, "omega", LAMBDAS / SCALE, n_modes=3)
+linear = sf.campbell(sf.scenes.rotating_beam, "omega", LAMBDAS / SCALE, n_modes=4, strain="linear")
 #: with the linear strain the lowest bending mode diverges beyond λ ≈ 3.5 (a real pair s = ±σ, Im s = 0);
 #: the first two bending modes then are: nothing (NaN) and the lowest oscillating one
 diverging = np.nanmax(linear.growth_rate, axis=1) > 1e-9

@@ -8,8 +8,10 @@ from .numerics import jit_cache  # noqa: F401  (first: compiled kernels must see
 from .fem.section import Section
 from .fem.beam import TimoshenkoBeam
 from .bodies import Body, BodyGeometry, BodyPoint, PointMass
-from .bodies.floating.body import DistributedLoad, FloatingBeam
-from .bodies.exact.body import ElementInversionError, ExactBeam, ExactDistributedLoad, NodalLoad
+from .bodies.floating.body import FloatingBeam
+from .bodies.exact.body import ExactBeam
+from .bodies.exact.strain import ElementInversionError
+from .elements.forces import DistributedLoad, ExactDistributedLoad, NodalLoad
 from .elements.constraints import Constraint, Distance, UserConstraint
 from .bodies.rigid import RigidBody
 from .elements.constraints import Driver, Pin, Prismatic, Revolute, Slider, Weld

@@ -7,7 +7,7 @@ Every way a computation of the package can fail *after* its input was accepted i
     SimulationError (RuntimeError)       a run, solve or output that could not go on
     ├── ConvergenceError                 Newton–Raphson failed (time step, static solve, load step)
     │   └── ElementInversionError        an exact-beam element folds inside out
-    │                                    (skfem_flex.bodies.exact.body; also a ValueError)
+    │                                    (skfem_flex.bodies.exact.strain; also a ValueError)
     ├── DivergenceError                  the solution left every sane bound (non-finite, blown up)
     ├── Interrupted                      stopped by a signal (Ctrl-C, SIGTERM) after a whole step
     └── OutputError                      an output (VTK frame, checkpoint) could not be written

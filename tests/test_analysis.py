@@ -10,6 +10,7 @@ import pytest
 import skfem_flex as sf
 from skfem_flex import analysis, scenes
 from skfem_flex.io.output import read_pvd
+from skfem_flex.scene import DENSE_LIMIT
 
 G = 9.81
 
@@ -294,7 +295,7 @@ def test_damped_oscillator_damping_ratio():
 def test_free_beam_has_three_zero_modes_and_free_free_bending():
     n = 64                                             # 195 coordinates: sparse matrices, ARPACK
     res = sf.modes(scenes.free_beam(n_elements=n), about="static", n_modes=5)
-    assert res.system.n > analysis.DENSE_EIGEN_LIMIT
+    assert res.system.n > DENSE_LIMIT
     np.testing.assert_array_equal(res.eigenvalues[:3], 0.0)
     # Euler–Bernoulli free–free beam: ω₁ = 4.7300² √(EI/(ρA L⁴))
     assert res.omega[3] == pytest.approx(4.730041 ** 2 * np.sqrt(1.4e4 / (1.2 * 10.0 ** 4)), rel=1e-3)
@@ -307,7 +308,7 @@ def test_sparse_and_dense_eigensolvers_agree(monkeypatch):
     scene = scenes.rotating_beam(omega=2.0, n_elements=16)
     dense = sf.modes(scene, about="steady", n_modes=4)
     assert not sps_like(dense.system.stiffness)
-    monkeypatch.setattr(analysis, "DENSE_EIGEN_LIMIT", 10)
+    monkeypatch.setattr(analysis.linearization, "DENSE_LIMIT", 10)
     sparse = sf.modes(scene, about="steady", n_modes=4)
     assert sps_like(sparse.system.stiffness)
     np.testing.assert_allclose(sparse.omega, dense.omega, rtol=1e-8)
@@ -346,14 +347,14 @@ def test_null_space_basis_is_sparse_and_spans_the_tangent_space():
 # ------------------------------------------------------------------ Campbell and output
 def test_campbell_over_the_crank_angle():
     angles = [0.0, 1.0, 2.0, np.pi]
-    diagram = sf.campbell("slider_crank", "crank_angle", angles, n_modes=2, about="static", omega=0.0)
+    diagram = sf.campbell(scenes.slider_crank, "crank_angle", angles, n_modes=2, about="static", omega=0.0)
     assert diagram.unit == "rad" and np.all(np.isfinite(diagram.omega)) and np.all(diagram.growth_rate == 0)
     # at rest the rod carries no axial force: its bending frequency hardly depends on the crank angle
     assert np.ptp(diagram.omega[:, 0]) < 1e-3 * diagram.omega[0, 0]
 
 
 def test_campbell_of_the_rotating_beam(tmp_path):
-    diagram = sf.campbell("rotating_beam", "omega", [0.0, 4.0, 8.0], n_modes=2)
+    diagram = sf.campbell(scenes.rotating_beam, "omega", [0.0, 4.0, 8.0], n_modes=2)
     for i, om in enumerate(diagram.values):
         np.testing.assert_allclose(diagram.omega[i], scenes.rotating_beam_frequencies(om, n_modes=2), rtol=1e-3)
     csv_path, md_path = diagram.write_table(tmp_path / "campbell")
@@ -361,7 +362,13 @@ def test_campbell_of_the_rotating_beam(tmp_path):
     diagram.plot(tmp_path / "campbell.png")
     assert (tmp_path / "campbell.png").read_bytes()[:4] == b"\x89PNG"
     with pytest.raises(ValueError, match="no parameter 'spin'"):
-        sf.campbell("rotating_beam", "spin", [0.0])
+        sf.campbell(scenes.rotating_beam, "spin", [0.0])
+
+
+def test_campbell_wants_the_factory_not_its_name():
+    with pytest.raises(TypeError, match=r"build must be a function that builds the scene, e\.g\. "
+                                        r"sf\.scenes\.get\('rotating_beam'\), got 'rotating_beam'"):
+        sf.campbell("rotating_beam", "omega", [0.0])
 
 
 def test_mode_series_animates_each_mode(tmp_path):
@@ -430,7 +437,7 @@ def test_modes_about_a_very_slow_spin_equal_those_at_rest():
 
 def test_campbell_through_a_very_slow_spin():
     values = [0.0, 1e-6, 1e-4, 1e-3, 4.0]
-    diagram = sf.campbell("rotating_beam", "omega", values, n_modes=2)
+    diagram = sf.campbell(scenes.get("rotating_beam"), "omega", values, n_modes=2)
     assert np.all(np.isfinite(diagram.omega))
     for i, om in enumerate(values):
         np.testing.assert_allclose(diagram.omega[i], scenes.rotating_beam_frequencies(om, n_modes=2), rtol=1e-7)

@@ -7,7 +7,9 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 import skfem_flex as sf
-from skfem_flex.bodies.exact.body import ElementInversionError, ExactBeam, ExactDistributedLoad, NodalLoad
+from skfem_flex.bodies.exact.body import ExactBeam
+from skfem_flex.bodies.exact.strain import ElementInversionError
+from skfem_flex.elements.forces import ExactDistributedLoad, NodalLoad
 from skfem_flex.scenes.exact_beams import exact_spin_up_beam, flying_beam, very_flexible_pendulum
 
 from helpers import FLYING_BEAM_SECTION as SECTION, dense

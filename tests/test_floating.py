@@ -12,7 +12,8 @@ import pytest
 import skfem
 
 import skfem_flex as sf
-from skfem_flex.bodies.floating.body import FloatingBeam, DistributedLoad
+from skfem_flex.bodies.floating.body import FloatingBeam
+from skfem_flex.elements.forces import DistributedLoad
 
 from helpers import SPIN_UP_SECTION as SEC, dense, relerr
 

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Body", "BodyGeometry", "BodyPoint", "check_finite_vector", "to_dense"]
+__all__ = ["Body", "BodyGeometry", "BodyPoint", "check_finite_vector", "check_finite_number", "to_dense"]
 
 
 def check_finite_vector(name, value, size=None):
@@ -49,14 +49,33 @@ def check_finite_vector(name, value, size=None):
     return arr
 
 
+def check_finite_number(name, value):
+    """Return ``value`` as a finite float or raise ``ValueError`` (also for a bool or a non-number).
+
+    Parameters
+    ----------
+    name : str
+        Name used in the error message.
+    value : object
+        The candidate number.
+    """
+    try:
+        val = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a real number, got {value!r}") from None
+    if isinstance(value, bool) or not np.isfinite(val):
+        raise ValueError(f"{name} must be a finite real number, got {value!r}")
+    return val
+
+
 #: systems with at most this many coordinates use dense matrices; larger ones use
 #: ``scipy.sparse`` so that no n × n array is ever allocated for them (memory linear in the mesh)
 DENSE_LIMIT = 150
 #: most coordinates compiled code holds in a dense n × n matrix (2.9 MB): a body with a dense tangent
-#: (an unreduced ModalBody) packs compiled kernel data up to this size, and the compiled mechanism loop
-#: (skfem_flex.compiled.scene_loop) stores a Newton matrix that has no plan as a band with a small dense
+#: (an unreduced ModalBody) packs compiled kernel data up to this size, and the compiled loop
+#: (skfem_flex.compiled.pack) stores a Newton matrix that has no plan as a band with a small dense
 #: border dense up to this size; above DENSE_LIMIT it stores every other one as the values of its
-#: sparsity pattern, at any size. Larger dense cases run on the Python path (SuperLU).
+#: sparsity pattern, at any size. 
 COMPILED_SIZE_LIMIT = 600
 
 
@@ -170,7 +189,7 @@ class BodyPoint:
 
     def compiled_map(self):
         """The position map in the form the compiled mechanism loop evaluates
-        (:mod:`skfem_flex.compiled.scene_loop`): ``("linear", G, c)`` for r = G q + c,
+        (the element families of :mod:`skfem_flex.compiled.families`): ``("linear", G, c)`` for r = G q + c,
         ``("frame", m_R, y0, Y)`` for r = m_R R + A(θ)(y0 + Y q_f) with R = q[0:2], θ = q[2],
         q_f = q[3:]; None (the default) if it is neither (the scene then runs on the Python path)."""
         return None

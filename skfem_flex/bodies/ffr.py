@@ -55,8 +55,11 @@ from .base import Body, BodyPoint
 from .floating.kernel import sinc_half
 from .rigid import E_MATRIX as E2, rotation as _rot
 
-__all__ = ["FloatingFrame", "FramePoint"]
+__all__ = ["FloatingFrame", "FramePoint", "InertiaInvariants"]
 
+#: the inertia invariants of a floating-frame body (table in the module docstring), as
+#: :attr:`FloatingFrame.invariants` hands them out
+InertiaInvariants = namedtuple("InertiaInvariants", "mass S0 I0 Sbar c k0n MA H Mff")
 #: intermediates of the kinetic discrete gradient shared by the contract method and the fused time-loop call
 _KineticTerms = namedtuple("_KineticTerms", "g sig dsig kap dkap ca sa smx smy cmm w0 w1 b0x b0y b1x b1y "
                                             "c0x c0y c1x c1y Hf0 Hf1 X SbEwb SbTwb")
@@ -69,16 +72,17 @@ def _cross(a, b):
 class FloatingFrame(Body):
     """Kinetic energy, gravity and material points of a floating-frame body from its invariants.
 
-    Subclasses call :meth:`_set_invariants` once and then have ``mass_matrix``,
+    Subclasses call :meth:`set_invariants` once (and set ``elastic_blocks``, the dict of dense
+    elastic blocks "MA", "H", "Mff", "K" that :meth:`compose_matrix` sums) and then have ``mass_matrix``,
     ``momentum_jacobian``, ``quadratic_velocity_force``, ``kinetic_discrete_gradient``,
     gravity and momenta. Coordinates are (R_x, R_y, θ, q_f). Matrices are dense unless the
-    subclass overrides :meth:`_compose` (FloatingBeam does, for sparse bodies).
+    subclass overrides :meth:`compose_matrix` (FloatingBeam does, for sparse bodies).
     """
 
     constant_mass = False
     sparse = False
 
-    def _set_invariants(self, mass, S0, I0, Sbar, c, k0n, MA, H, Mff):
+    def set_invariants(self, mass, S0, I0, Sbar, c, k0n, MA, H, Mff):
         """Store the inertia invariants (table in the module docstring) and the products built from them.
 
         ``MA``, ``H``, ``Mff`` are dense arrays, or scipy.sparse when ``self.sparse``."""
@@ -102,10 +106,17 @@ class FloatingFrame(Body):
         self._top_template[:2, :2] = self.mass_total * np.eye(2)
         self._cache_key, self._cache_val = None, None
 
-    def _compose(self, top, left, terms=(), extra=None, loc=None):
+    @property
+    def invariants(self):
+        """The inertia invariants m, S_0, I_0, S̄, c, k_0n, M_A, H, M_ff (table in the module docstring) as an
+        :class:`InertiaInvariants`; M_A, H, M_ff dense or scipy.sparse as the body stores them."""
+        return InertiaInvariants(self.mass_total, self._S0, self._I0, self._Sbar, self._c, self._k0n, self._MA,
+                                 self._H, self._Mff)
+
+    def compose_matrix(self, top, left, terms=(), extra=None, loc=None):
         """Dense n × n matrix from its reference rows ``top`` (3, n), the block ``left`` (nf, 3)
         below them and an elastic block Σ coef · X[key] for ``terms`` = [(coef, key)], key in
-        ``self._ffd``, plus a dense ``extra`` (nf, nf). ``top``/``left`` None mean zero."""
+        ``self.elastic_blocks``, plus a dense ``extra`` (nf, nf). ``top``/``left`` None mean zero."""
         n = self.n_dofs
         out = np.zeros((n, n))
         if top is not None:
@@ -114,7 +125,7 @@ class FloatingFrame(Body):
             out[3:, :3] = left
         ff = out[3:, 3:]
         for coef, key in terms:
-            ff += coef * self._ffd[key]
+            ff += coef * self.elastic_blocks[key]
         if extra is not None:
             ff += extra
         return out
@@ -151,7 +162,7 @@ class FloatingFrame(Body):
         left = np.empty((self.n_elastic, 3))
         left[:, :2] = ASb.T
         left[:, 2] = a
-        return self._compose(top, left, [(1.0, "Mff")])
+        return self.compose_matrix(top, left, [(1.0, "Mff")])
 
     def momentum_jacobian(self, q, v):
         """B(q, v) = ∂(M(q) v)/∂q."""
@@ -169,7 +180,7 @@ class FloatingFrame(Body):
         top[2, 3:] = SbEb + 2.0 * om * cm - self._H @ f
         left = np.zeros((self.n_elastic, 3))
         left[:, 2] = SbEb
-        return self._compose(top, left, [(om, "H")])
+        return self.compose_matrix(top, left, [(om, "H")])
 
     def quadratic_velocity_force(self, q, v):
         """Q_v = ∂T/∂q − Ṁ v (eq. 26) with ∂Q_v/∂q and ∂Q_v/∂v."""
@@ -188,7 +199,7 @@ class FloatingFrame(Body):
         tq[:2, 2] = AE @ inner
         tq[:2, 3:] = om * om * (A @ self._Sbar)
         tq[2, 3:] = -2.0 * om * (self._MA @ f)
-        gq = self._compose(tq, None, [(om * om, "MA")])
+        gq = self.compose_matrix(tq, None, [(om * om, "MA")])
         tv = np.zeros((3, n))
         tv[:2, 2] = A @ (2.0 * om * sbar - 2.0 * (E2 @ Sf))
         tv[:2, 3:] = -2.0 * om * (AE @ self._Sbar)
@@ -196,7 +207,7 @@ class FloatingFrame(Body):
         tv[2, 3:] = -2.0 * om * cm
         lv = np.zeros((self.n_elastic, 3))
         lv[:, 2] = 2.0 * om * cm - 2.0 * Hf
-        gv = self._compose(tv, lv, [(-2.0 * om, "H")])
+        gv = self.compose_matrix(tv, lv, [(-2.0 * om, "H")])
         return g, gq, gv
 
     def _kinetic_terms(self, q0, q1, v0, v1, yf0, yf1):
@@ -248,7 +259,7 @@ class FloatingFrame(Body):
         tq[2, 3:] = -0.25 * sig * SbTwb
         lq = np.zeros((nf, 3))
         lq[:, 2] = 0.5 * dkap * SbEwb - 0.25 * kap * SbTwb
-        gq = self._compose(tq, lq, [(0.5 * w0 * w1, "MA")])
+        gq = self.compose_matrix(tq, lq, [(0.5 * w0 * w1, "MA")])
         SbEb0 = self._SbEt @ np.array([b0x, b0y])
         tv = np.zeros((3, n))
         e0x, e0y = -c0y, c0x                                       # E c_0, then A_m E c_0
@@ -259,7 +270,7 @@ class FloatingFrame(Body):
         lv = np.zeros((nf, 3))
         lv[:, :2] = (0.5 * kap * w0) * (self._SbEt @ np.array([[ca, sa], [-sa, ca]]))
         lv[:, 2] = 0.5 * kap * SbEb0 + w0 * cmm - 0.5 * Hf0
-        gv = self._compose(tv, lv, [(-0.5 * w0, "H")])
+        gv = self.compose_matrix(tv, lv, [(-0.5 * w0, "H")])
         return g, gq, gv
 
 
@@ -277,7 +288,7 @@ class FloatingFrame(Body):
         top[2, 3:] = row
         left = np.zeros((self.n_elastic, 3))
         left[:, 2] = row
-        return self._compose(top, left)
+        return self.compose_matrix(top, left)
 
     def _map_dg(self, q0, q1, y0, Y, mR=1.0):
         """D (2, n) with D (q1 − q0) = r(q1) − r(q0), r = mR R + A(θ)(y0 + Y q_f)."""
@@ -304,7 +315,7 @@ class FloatingFrame(Body):
         top[2, 3:] = 0.5 * sig * ((fA @ E2) @ Y)
         left = np.zeros((self.n_elastic, 3))
         left[:, 2] = -0.5 * math.sin(0.5 * d) * (Y.T @ fA) + 0.5 * kap * (Y.T @ (E2.T @ fA))
-        return self._compose(top, left)
+        return self.compose_matrix(top, left)
 
     # ================================================================ gravity
     def mass_moment(self):
@@ -350,7 +361,7 @@ class FloatingFrame(Body):
         """The packed arrays (:class:`~skfem_flex.bodies.floating.kernel.FloatingKernelData`) on which the
         compiled floating-frame kernels evaluate this body, or None if it has none (subclasses provide them).
 
-        What :mod:`skfem_flex.compiled.single_body_loop` asks a body for; the kernels' reference is the numpy
+        What the floating-frame family (:mod:`skfem_flex.compiled.families.floating_frame`) asks a body for; the kernels' reference is the numpy
         contract methods of the body."""
         return None
 

@@ -168,7 +168,7 @@ class Term:
         return 0.5 * (self.value(q0) + self.value(q1))
 
     def compiled_form(self):
-        """How the compiled mechanism loop (:mod:`skfem_flex.compiled.scene_loop`) evaluates this term,
+        """How the compiled mechanism loop (the element families of :mod:`skfem_flex.compiled.families`) evaluates this term,
         or None (the default: a constraint with such a term runs on the Python path).
 
         ``("constant", c)``; ``("points", [(point, sign), ...], c)`` for Σ sign · r(point) − c;

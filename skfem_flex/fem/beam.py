@@ -383,7 +383,7 @@ class TimoshenkoBeam:
         return vector
 
     @staticmethod
-    def _pairs(name, spec):
+    def point_pairs(name, spec):
         """Read None, one (x, value) pair or a sequence of pairs."""
         if spec is None:
             return np.zeros((0, 2))
@@ -430,7 +430,7 @@ class TimoshenkoBeam:
         if p is not None:
             vector += asm(forms.transverse_load(p), self.basis)
         for name, spec in (("h", h), ("Q", Q), ("M", M)):
-            for x, value in self._pairs(name, spec):
+            for x, value in self.point_pairs(name, spec):
                 vector += self.point_load(x, **{name: value})
         return vector
 

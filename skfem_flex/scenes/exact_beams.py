@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..bodies.exact.body import ExactBeam, NodalLoad
+from ..bodies.exact.body import ExactBeam
 from ..bodies.probes import LinearProbe, PointProbe
-from ..elements.forces import Gravity
+from ..elements.forces import Gravity, NodalLoad
 from ..elements.motion import MotionLaw, Prescribed, spin_up_law
 from ..scene import Scene
 from ..fem.section import Section
@@ -57,7 +57,7 @@ def flying_beam(n_elements=10, order=1, length=10.0, EA=1e4, GA=1e4, EI=100.0, r
     energy, linear and angular momentum stay constant to the Newton
     tolerance (``rotation_rate="cayley"``, the default; with
     ``"mid-point"`` angular momentum drifts by O(Δt²), 5e-4 relative at
-    Δt = 0.1; see :mod:`skfem_flex.bodies.exact.body`).
+    Δt = 0.1; see :mod:`skfem_flex.bodies.exact.strain`).
 
     ``GA`` is the shear stiffness as given in the paper (shear factor
     included). Probes: ``"end_a"`` (the loaded end), ``"end_b"`` (the other

@@ -1,4 +1,4 @@
-r"""Geometrically exact planar beam (Simo–Reissner) in absolute coordinates.
+r"""Geometrically exact planar beam (Simo–Reissner) in absolute coordinates: the body.
 
 :class:`ExactBeam` carries, at every node of the scikit-fem mesh of a
 :class:`~skfem_flex.fem.beam.TimoshenkoBeam`, the position r = (x, y) of the
@@ -7,131 +7,36 @@ cross-section (Simo & Vu-Quoc 1986; Lee & Yun, eq. 6); there is no
 floating frame. They are stored as the global displacement u = r − X(s) from
 the straight reference placement X(s) and the section rotation ψ = φ − α
 from the reference angle α, so that round-off scales with the motion, not
-with the distance from the origin (see the class notes). With ' = d/ds along
-the reference arc length s (the mesh coordinate) and t = (cos φ, sin φ),
-n = (−sin φ, cos φ) the section's tangent and normal, the strain measures are
+with the distance from the origin (see the class notes). The kinetic energy
 
 .. math::
 
-    ε = t · r' − 1 = x' \cos φ + y' \sin φ − 1, \qquad
-    γ = n · r' = −x' \sin φ + y' \cos φ, \qquad
-    κ = φ',
+    T = ½ \int ρA (\dot x² + \dot y²) + ρI \dot φ² \, ds
 
-zero in the straight, stress-free reference configuration (placed anywhere,
-at any angle), and invariant under rigid motions. Strain and kinetic energy
+makes the mass matrix the constant consistent mass of the linear beam
+(u_x, u_y, ψ play the roles of u, w, θ), assembled once by scikit-fem.
 
-.. math::
-
-    V = ½ \int EA ε² + kGA γ² + EI κ² \, ds, \qquad
-    T = ½ \int ρA (\dot x² + \dot y²) + ρI \dot φ² \, ds,
-
-so the mass matrix is the constant consistent mass of the linear beam
-(u_x, u_y, ψ play the roles of u, w, θ), assembled once by scikit-fem. The
-strains are sampled on the reduced Gauss rule (one point per P1 element, two
-per P2 element), which keeps slender beams free of shear and membrane
-locking; for P1 the curvature is constant per element and exact.
-
-Energy-conserving discrete gradient
------------------------------------
-Lee & Yun, eqs. (3b), (17)–(22): the section forces are taken at the
-mean strain, f_m = C (e_0 + e_1)/2, and the strain increment is written
-exactly through the incremental rotation. In the plane the incremental
-rotation is one angle Δφ with Rodrigues/Cayley parameter w = W(Δφ) =
-2 tan(Δφ/2) (:mod:`skfem_flex.numerics.rotations`); with \bar t = (t_0 + t_1)/2 and
-\bar r' = (r_0' + r_1')/2,
-
-.. math::
-
-    t_1 − t_0 = w \, E \bar t, \qquad
-    ε_1 − ε_0 = \bar t · Δr' + w_p \, (E \bar t · \bar r'), \qquad
-    γ_1 − γ_0 = E \bar t · Δr' − w_p \, (\bar t · \bar r')
-
-exactly at every strain point p (Simo, Tarnow & Doblaré 1995: \bar Λᵀ(Δr' −
-w E \bar r')). The point's Cayley parameter w_p = W(Δφ_p), Δφ_p = Σ N_a Δφ_a,
-and the curvature increment Δκ_p = Σ N_a' Δφ_a are written *exactly and
-linearly* in the nodal parameters w_a = W(Δφ_a) by divided differences of W
-about the element's first node a = 0 (W[x, y] = (W(x) − W(y))/(x − y) =
-sinc((x − y)/2)/(cos(x/2) cos(y/2)), smooth at x = y):
-
-.. math::
-
-    w_p = w_0 + W[Δφ_0, Δφ_p] \sum_{a ≥ 1} \frac{N_a}{W[Δφ_0, Δφ_a]} (w_a − w_0),
-    \qquad
-    Δκ_p = \sum_{a ≥ 1} \frac{N_a'}{W[Δφ_0, Δφ_a]} (w_a − w_0).
-
-The coefficients of w_a sum to 1 in w_p and to 0 in Δκ_p. The discrete
-gradient D_w V = Σ_p W_p f_mᵀ ∂Δe_p/∂(Δr, w) is then (i) exact,
-D_w V · (Δr, w) = V_1 − V_0, and (ii) *equivariant*: orthogonal to the
-infinitesimal rotation ξ = (E \bar r_a, 1) at the mean configuration, because
-a step (Δr_a, w_a) = c ξ leaves every strain unchanged (Δr' = c E \bar r'
-and w_p = c turn r' and t alike). Only r' enters, so its force resultant
-vanishes too.
-
-The energy-momentum integrator takes w_a/Δt as the mean angular velocity of
-the sections (the body declares its ψ coordinates as ``cayley_coordinates``)
-and this discrete gradient for the force; with the constant mass matrix both
-momenta then change only by external impulses, and energy by external work,
-to the Newton tolerance (flying beam: 1e-14). The body hands the gradient
-out conjugate to Δq (ψ rows times w/Δψ), so it is a valid exact discrete
-gradient for any caller; :meth:`ExactBeam.potential_discrete_gradient`
-differentiates it by complex steps.
-
-With the plain mid-point rate Δφ/Δt (``rotation_rate="mid-point"``)
-exact energy and exact angular momentum exclude each other: the step along
-ξ(q_m) turns nodes by 2 atan(c/2) but sections by c and changes V. Then the
-angular momentum changes per step by ΔL = −Δt D V · ξ(q_m) = O(Δt³), an
-O(Δt²) drift (flying beam: 5e-4 relative at Δt = 0.1, 6e-6 at Δt = 0.01).
-
-References
-----------
-J. C. Simo, L. Vu-Quoc, "On the dynamics of flexible beams under large
-overall motions — the plane case", J. Appl. Mech. 53 (1986) 849–863.
-J. C. Simo, N. Tarnow, M. Doblaré, "Non-linear dynamics of three-dimensional
-rods: exact energy and momentum conserving algorithms", IJNME 38 (1995).
-Lee & Yun, "The dynamics analysis for nonlinear flexible mechanisms using finite
-elements and algebraic quaternions" (mean velocity, stress at the mean strain).
+This module holds the body contract, the axis points (:class:`BeamPoint`), static
+equilibrium under load stepping (:meth:`ExactBeam.solve_static`) and the output cells. The
+strain measures, the strain energy and its energy-conserving (equivariant) discrete gradient,
+with their theory and references, are in :mod:`skfem_flex.bodies.exact.strain`; their compiled
+counterparts in :mod:`skfem_flex.bodies.exact.kernel`. Loads on the beam are force elements
+(:mod:`skfem_flex.elements.forces.exact_beam_loads`: ``NodalLoad``, ``ExactDistributedLoad``).
 """
 from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sps
-from skfem import Basis, ElementLineP1, ElementLineP2
 
-from ...fem.beam import ElementQuadrature, TimoshenkoBeam, gauss_line, line_mesh
-from ...elements.forces import ForceElement
 from ...errors import ConvergenceError
-from ...numerics.newton import NewtonSettings, newton_solve
-from ...numerics.rotations import MAX_INCREMENT as _MAX_INCREMENT, cayley_divided_difference, cayley_ratio
+from ...fem.beam import TimoshenkoBeam, line_mesh
 from ...fem.section import Section
-from ..base import Body, BodyGeometry, BodyPoint, check_finite_vector, keeps_methods, to_dense
+from ...numerics.newton import NewtonSettings, newton_solve
+from ..base import (DENSE_LIMIT, Body, BodyGeometry, BodyPoint, check_finite_number, check_finite_vector,
+                    to_dense)
+from .strain import ElementInversionError, StrainPoints
 
-__all__ = ["ExactBeam", "NodalLoad", "ExactDistributedLoad", "ElementInversionError"]
-
-#: bodies with at most this many coordinates hand out dense matrices
-DENSE_LIMIT = 400
-_E = np.array([[0.0, -1.0], [1.0, 0.0]])
-#: imaginary step of the complex-step tangent (any tiny value: no subtraction, no truncation error)
-_COMPLEX_STEP = 1e-30
-
-
-class ElementInversionError(ConvergenceError, ValueError):
-    """A configuration in which an element of an :class:`ExactBeam` folds inside out (1 + ε ≤ 0).
-
-    A :class:`~skfem_flex.schemes.integrators.ConvergenceError` (and a ``ValueError``):
-    raised during a time step, ``simulate`` first retries the step in halves
-    (a Newton iterate of a too-large step may fold transiently) and finally
-    reports the time, the step and this message, which names the element.
-    """
-
-
-def _finite(name, value):
-    try:
-        val = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} must be a real number, got {value!r}") from None
-    if isinstance(value, bool) or not np.isfinite(val):
-        raise ValueError(f"{name} must be a finite real number, got {value!r}")
-    return val
+__all__ = ["ExactBeam", "BeamPoint"]
 
 
 class ExactBeam(Body):
@@ -167,8 +72,8 @@ class ExactBeam(Body):
 
     Notes
     -----
-    Strains and the energy-conserving discrete gradient: see the module
-    docstring. The strain kernels are vectorised over elements on arrays
+    Strains and the energy-conserving discrete gradient: see
+    :mod:`skfem_flex.bodies.exact.strain` (:attr:`strain_points`). The strain kernels are vectorised over elements on arrays
     precomputed from scikit-fem bases; only the constant mass matrix is
     assembled (once). Coordinates are named ``ux{i}``, ``uy{i}``, ``psi{i}``
     for the i-th node along the beam (ascending s, P2 midpoints included);
@@ -207,7 +112,7 @@ class ExactBeam(Body):
         self.section = beam.section
         self.name = str(name)
         self.start = check_finite_vector("start", start, 2)
-        self.angle = _finite("angle", angle)
+        self.angle = check_finite_number("angle", angle)
         n = self.n_dofs = int(beam.n_dofs)
         self.dense = n <= DENSE_LIMIT
         sec = beam.section
@@ -224,40 +129,15 @@ class ExactBeam(Body):
         xref = np.zeros(n)
         xref[self.node_dofs[:, 0]] = self.reference_positions[:, 0]
         xref[self.node_dofs[:, 1]] = self.reference_positions[:, 1]
-        self._x_ref = xref                     # reference positions in the x, y slots, zero in the ψ slots
         names = [""] * n
         for i, (a, b, c) in enumerate(self.node_dofs):
             names[a], names[b], names[c] = f"ux{i}", f"uy{i}", f"psi{i}"
         self._names = tuple(names)
 
-        # element kernels: strains on the reduced rule (order points per element)
-        scalar = ElementLineP1() if beam.order == 1 else ElementLineP2()
-        quad = ElementQuadrature.from_basis(Basis(beam.mesh, scalar, quadrature=gauss_line(beam.order)))
-        self.ed = np.asarray(beam.element_dofs)                # (n_el, 3k) node-major (x, y, φ)
-        self.n_elements, nloc = self.ed.shape
-        self.k = nloc // 3
-        self._N = np.ascontiguousarray(np.transpose(quad.N, (1, 2, 0)))      # (n_el, n_p, k)
-        self._dN = np.ascontiguousarray(np.transpose(quad.dNdx, (1, 2, 0)))
-        self._W = np.asarray(quad.dx)                                        # (n_el, n_p), m
-        self._s_points = np.asarray(quad.x)
-        self._ex = self.ed[:, 0::3]
-        self._ey = self.ed[:, 1::3]
-        self._ep = self.ed[:, 2::3]
-        el_s = beam.mesh.p[0, beam.mesh.t]
-        self._el_lo, self._el_hi = el_s.min(axis=0), el_s.max(axis=0)
-
-        # scatter patterns into a fixed structure
-        rows = np.broadcast_to(self.ed[:, :, None], (self.n_elements, nloc, nloc)).ravel()
-        cols = np.broadcast_to(self.ed[:, None, :], (self.n_elements, nloc, nloc)).ravel()
-        keys = rows.astype(np.int64) * n + cols
-        if self.dense:
-            self._flat = keys
-        else:
-            uniq, inv = np.unique(keys, return_inverse=True)
-            self._inv = inv
-            self._csr_indices = (uniq % n).astype(np.int32)
-            self._csr_indptr = np.searchsorted(uniq // n, np.arange(n + 1)).astype(np.int32)
-            self._nnz = uniq.size
+        #: the strain points (reduced rule) and the strain energy on them: :class:`.strain.StrainPoints`
+        self.strain_points = StrainPoints(beam, self.angle, self.dense, self.name)
+        self.ed = self.strain_points.ed                        # (n_el, 3k) node-major (x, y, φ)
+        self.n_elements, self.k = self.strain_points.n_elements, self.strain_points.k
 
         # constant operators, assembled once by scikit-fem
         mass = beam.mass().tocsr()
@@ -279,15 +159,15 @@ class ExactBeam(Body):
         self.cayley_coordinates = tuple(int(i) for i in self.node_dofs[:, 2]) if rotation_rate == "cayley" else ()
         self.q0 = np.zeros(n) if q0 is None else check_finite_vector("q0", q0, n)
         self.v0 = np.zeros(n) if v0 is None else check_finite_vector("v0", v0, n)
-        kin = self._kinematics(self.q0, check=False)
+        kin = self.strain_points.kinematics(self.q0, check=False)
         bad = np.nonzero(kin["stretch"] <= 0.0)
         if bad[0].size:
             e = int(bad[0][0])
+            sp = self.strain_points
             raise ValueError(f"initial state q0 of {self.name!r} folds element {e} "
-                             f"(s in [{self._el_lo[e]:.6g}, {self._el_hi[e]:.6g}] m): "
+                             f"(s in [{sp.element_lo[e]:.6g}, {sp.element_hi[e]:.6g}] m): "
                              f"stretch 1 + ε = {kin['stretch'][bad][0]:.3g} <= 0")
-        self._cache_q = None
-        self._cache_kin = None
+
 
     # -------------------------------------------------------------- builders
     @classmethod
@@ -348,49 +228,11 @@ class ExactBeam(Body):
         """∫ r dm / m, m."""
         return (self._gamma @ q + self._gamma_c) / self.total_mass
 
-    # ------------------------------------------------------------- kinematics
-    def _kinematics(self, q, check=True):
-        """Strain-point values r', φ, φ', t, n and the strains ε, γ, κ."""
-        q = np.asarray(q, dtype=float)
-        U, V, P = q[self._ex], q[self._ey], q[self._ep]
-        ux = np.einsum("ek,epk->ep", U, self._dN)
-        uy = np.einsum("ek,epk->ep", V, self._dN)
-        psi = np.einsum("ek,epk->ep", P, self._N)
-        kap = np.einsum("ek,epk->ep", P, self._dN)
-        phi = self.angle + psi
-        c, s = np.cos(phi), np.sin(phi)
-        # ε = t·r' − 1 and γ = n·r' with r' = e_α + u', written so that no O(1) terms cancel
-        sh = np.sin(0.5 * psi)
-        eps = -2.0 * sh * sh + c * ux + s * uy
-        gam = -np.sin(psi) + (-s * ux + c * uy)
-        kin = dict(rx=self.direction[0] + ux, ry=self.direction[1] + uy, psi=psi, c=c, s=s, stretch=1.0 + eps,
-                   eps=eps, gam=gam, kap=kap)
-        if check:
-            self._check(kin)
-        return kin
 
-    def _check(self, kin):
-        st = kin["stretch"]
-        if not np.all(np.isfinite(st)):
-            raise ElementInversionError(f"{self.name}: non-finite strain (the configuration escaped)")
-        bad = np.nonzero(st <= 0.0)
-        if bad[0].size:
-            e = int(bad[0][0])
-            raise ElementInversionError(
-                f"{self.name}: element {e} (s in [{self._el_lo[e]:.6g}, {self._el_hi[e]:.6g}] m) folds inside "
-                f"out: stretch 1 + ε = {st[bad][0]:.3g} <= 0 ({bad[0].size} strain point(s) reversed)")
-
-    def _kin_cached(self, q):
-        if self._cache_q is not None and np.array_equal(self._cache_q, q):
-            return self._cache_kin
-        kin = self._kinematics(q)
-        self._cache_q, self._cache_kin = np.array(q, dtype=float), kin
-        return kin
-
+    # ------------------------------------------------------------- strains
     def strains(self, q):
         """(ε, γ, κ) at the strain points, each of shape (n_elements, n_points)."""
-        kin = self._kinematics(q, check=False)
-        return kin["eps"], kin["gam"], kin["kap"]
+        return self.strain_points.strains(q)
 
     def section_forces(self, q):
         """Axial force N = EA ε (N), shear force Q = kGA γ (N), bending moment M = EI κ (N m).
@@ -400,140 +242,22 @@ class ExactBeam(Body):
         eps, gam, kap = self.strains(q)
         return self.EA * eps, self.kGA * gam, self.EI * kap
 
-    # ----------------------------------------------------- element assembly
-    def _vec(self, crx, cry, cphi, cphip):
-        """Element vectors of a linear form c_r · δr' + c_φ δφ + c_φ' δφ', shape (n_el, n_p, 3k)."""
-        ne, npt, k = self._N.shape
-        out = np.empty((ne, npt, k, 3))
-        out[..., 0] = crx[..., None] * self._dN
-        out[..., 1] = cry[..., None] * self._dN
-        out[..., 2] = cphi[..., None] * self._N + cphip * self._dN
-        return out.reshape(ne, npt, 3 * k)
-
-    def _second(self, out, crphi_x, crphi_y, cphir_x, cphir_y, cphiphi):
-        """Add Σ_p of the bilinear form δr'·c_rφ Δφ + δφ c_φr·Δr' + δφ c_φφ Δφ (weights included)."""
-        N, dN = self._N, self._dN
-        out[:, :, 0, :, 2] += np.einsum("ep,epa,epb->eab", crphi_x, dN, N)
-        out[:, :, 1, :, 2] += np.einsum("ep,epa,epb->eab", crphi_y, dN, N)
-        out[:, :, 2, :, 0] += np.einsum("ep,epa,epb->eab", cphir_x, N, dN)
-        out[:, :, 2, :, 1] += np.einsum("ep,epa,epb->eab", cphir_y, N, dN)
-        out[:, :, 2, :, 2] += np.einsum("ep,epa,epb->eab", cphiphi, N, N)
-
-    def _scatter_vector(self, g_el):
-        return np.bincount(self.ed.ravel(), weights=g_el.ravel(), minlength=self.n_dofs)
-
-    def _scatter_matrix(self, k_el):
-        n = self.n_dofs
-        if self.dense:
-            return np.bincount(self._flat, weights=k_el.ravel(), minlength=n * n).reshape(n, n)
-        data = np.bincount(self._inv, weights=k_el.ravel(), minlength=self._nnz)
-        return sps.csr_matrix((data, self._csr_indices, self._csr_indptr), shape=(n, n))
-
-    def _grads(self, kin):
-        """∇ε, ∇γ, ∇κ as element vectors at the strain points."""
-        zero = np.zeros_like(kin["c"])
-        b_eps = self._vec(kin["c"], kin["s"], kin["gam"], 0.0)
-        b_gam = self._vec(-kin["s"], kin["c"], -kin["stretch"], 0.0)
-        b_kap = self._vec(zero, zero, zero, 1.0)
-        return b_eps, b_gam, b_kap
-
     # ------------------------------------------------------------- potential
     def potential_energy(self, q):
         """V = ½ ∫ EA ε² + kGA γ² + EI κ² ds, J."""
-        kin = self._kin_cached(q)
-        dens = self.EA * kin["eps"] ** 2 + self.kGA * kin["gam"] ** 2 + self.EI * kin["kap"] ** 2
-        return 0.5 * float(np.sum(self._W * dens))
+        return self.strain_points.energy(q)
 
     def potential_gradient(self, q):
-        kin = self._kin_cached(q)
-        b_eps, b_gam, b_kap = self._grads(kin)
-        W = self._W
-        g_el = np.einsum("ep,epi->ei", W * self.EA * kin["eps"], b_eps)
-        g_el += np.einsum("ep,epi->ei", W * self.kGA * kin["gam"], b_gam)
-        g_el += np.einsum("ep,epi->ei", W * self.EI * kin["kap"], b_kap)
-        return self._scatter_vector(g_el)
+        return self.strain_points.gradient(q)
 
     def potential_hessian(self, q):
-        kin = self._kin_cached(q)
-        b_eps, b_gam, b_kap = self._grads(kin)
-        W = self._W
-        k_el = np.einsum("ep,epi,epj->eij", W * self.EA, b_eps, b_eps)
-        k_el += np.einsum("ep,epi,epj->eij", W * self.kGA, b_gam, b_gam)
-        k_el += np.einsum("ep,epi,epj->eij", W * self.EI, b_kap, b_kap)
-        ne, k = self.n_elements, self.k
-        k_el = k_el.reshape(ne, k, 3, k, 3)
-        wn, wq = W * self.EA * kin["eps"], W * self.kGA * kin["gam"]
-        c, s = kin["c"], kin["s"]
-        # ∇²ε: δr'·n δφ twice, −(1 + ε) δφ²;  ∇²γ: −δr'·t δφ twice, −γ δφ²
-        self._second(k_el, wn * -s - wq * c, wn * c - wq * s, wn * -s - wq * c, wn * c - wq * s,
-                     -wn * kin["stretch"] - wq * kin["gam"])
-        return self._scatter_matrix(k_el.reshape(ne, 3 * k, 3 * k))
-
-    def _discrete_gradient_elements(self, ql0, ql1):
-        """Element vectors of the discrete gradient, (n_el, batch, 3k), in Δq-space.
-
-        ``ql0`` (n_el, 3k) and ``ql1`` (n_el, batch, 3k) are element coordinates
-        (node-major x, y, ψ); ``ql1`` may be complex (complex-step tangent).
-        See the module docstring for the equations.
-        """
-        N, dN, W = self._N, self._dN, self._W                   # (e, p, k), (e, p, k), (e, p)
-        ql0 = ql0[:, None, :]
-
-        def ends(ql):
-            U, V, P = ql[..., 0::3], ql[..., 1::3], ql[..., 2::3]
-            ux = np.einsum("ebk,epk->ebp", U, dN)
-            uy = np.einsum("ebk,epk->ebp", V, dN)
-            psi = np.einsum("ebk,epk->ebp", P, N)
-            kap = np.einsum("ebk,epk->ebp", P, dN)
-            phi = self.angle + psi
-            c, s = np.cos(phi), np.sin(phi)
-            sh = np.sin(0.5 * psi)
-            eps = -2.0 * sh * sh + c * ux + s * uy
-            gam = -np.sin(psi) + (-s * ux + c * uy)
-            return ux, uy, c, s, eps, gam, kap, P
-
-        ux0, uy0, c0, s0, eps0, gam0, kap0, P0 = ends(ql0)
-        ux1, uy1, c1, s1, eps1, gam1, kap1, P1 = ends(ql1)
-        wb = W[:, None, :]
-        n_bar = wb * self.EA * 0.5 * (eps0 + eps1)
-        q_bar = wb * self.kGA * 0.5 * (gam0 + gam1)
-        m_bar = wb * self.EI * 0.5 * (kap0 + kap1)
-        rbx = self.direction[0] + 0.5 * (ux0 + ux1)              # r̄'
-        rby = self.direction[1] + 0.5 * (uy0 + uy1)
-        tbx, tby = 0.5 * (c0 + c1), 0.5 * (s0 + s1)              # t̄ = mean section tangent at the point
-        a = -tby * rbx + tbx * rby                               # r̄' · E t̄
-        b = tbx * rbx + tby * rby                                # r̄' · t̄
-
-        # nodal Cayley rates w_a = W(Δψ_a) → point rate w_p and curvature increment, exactly and linearly,
-        # through divided differences about the element's first node (coefficients sum to 1 and to 0)
-        X = P1 - P0                                              # (e, b, k)
-        Xp = np.einsum("ebk,epk->ebp", X, N)
-        dd_p = cayley_divided_difference(X[..., :1], Xp)         # (e, b, p)
-        dd_a = cayley_divided_difference(X[..., :1], X[..., 1:])  # (e, b, k−1)
-        beta = dd_p[..., None] * N[:, None, :, 1:] / dd_a[:, :, None, :]
-        c_w = np.concatenate([1.0 - beta.sum(axis=-1, keepdims=True), beta], axis=-1)      # (e, b, p, k)
-        k_w = dN[:, None, :, 1:] / dd_a[:, :, None, :]
-        k_w = np.concatenate([-k_w.sum(axis=-1, keepdims=True), k_w], axis=-1)
-
-        fx = np.einsum("ebp,epk->ebk", n_bar * tbx - q_bar * tby, dN)
-        fy = np.einsum("ebp,epk->ebk", n_bar * tby + q_bar * tbx, dN)
-        fw = (np.einsum("ebp,ebpk->ebk", n_bar * a - q_bar * b, c_w)
-              + np.einsum("ebp,ebpk->ebk", m_bar, k_w))
-        out = np.empty(ql1.shape, dtype=np.result_type(ql1, float))
-        out[..., 0::3] = fx
-        out[..., 1::3] = fy
-        out[..., 2::3] = fw / cayley_ratio(X)                   # conjugate to w → conjugate to Δψ
-        return out
+        return self.strain_points.hessian(q)
 
     def potential_discrete_gradient(self, q0, q1):
         """Equivariant discrete gradient: stress at the mean strain, strain increments in Cayley rates.
 
-        Returns (g, ∂g/∂q1) with g · (q1 − q0) = V(q1) − V(q0) to round-off;
-        its ψ rows are those of the Cayley-rate gradient times w/Δψ (module
-        docstring), so that the integrator's scaling by Δψ/w recovers it.
-        The tangent is the complex-step derivative of the element vectors
-        (exact to round-off; the coefficients of the divided differences make
-        a closed form long and error-prone).
+        Returns (g, ∂g/∂q1) with g · (q1 − q0) = V(q1) − V(q0) to round-off
+        (:meth:`.strain.StrainPoints.discrete_gradient`).
 
         Raises
         ------
@@ -542,29 +266,14 @@ class ExactBeam(Body):
         ConvergenceError
             If a nodal rotation increment abs(Δψ) reaches π (no Cayley parameter).
         """
-        self._kin_cached(q0)
-        self._kinematics(q1)                                    # folded elements are reported here
-        q0, q1 = np.asarray(q0, dtype=float), np.asarray(q1, dtype=float)
-        dpsi = np.abs(q1[self.node_dofs[:, 2]] - q0[self.node_dofs[:, 2]])
-        if dpsi.size and dpsi.max() >= _MAX_INCREMENT:
-            i = int(np.argmax(dpsi))
-            raise ConvergenceError(f"{self.name}: the section at node {i} turns by {dpsi[i]:.3g} rad in one step; "
-                                   f"the Cayley parameter 2 tan(Δψ/2) needs |Δψ| < π (take a smaller step)")
-        ql0, ql1 = q0[self.ed], q1[self.ed]
-        nloc = ql1.shape[1]
-        h = _COMPLEX_STEP
-        probe = ql1[:, None, :] + (1j * h) * np.eye(nloc)[None]
-        g = self._discrete_gradient_elements(ql0, probe)        # (e, j, i): perturbation j, row i
-        g_el = g[:, 0, :].real
-        k_el = np.transpose(g.imag, (0, 2, 1)) / h
-        return self._scatter_vector(g_el), self._scatter_matrix(k_el)
+        return self.strain_points.discrete_gradient(q0, q1)
 
     def compiled_strain_data(self):
-        """The packed arrays of the compiled strain-energy kernels (:mod:`.exact_kernel`), built once.
+        """The packed arrays of the compiled strain-energy kernels (:mod:`.kernel`), built once.
 
         An :class:`~skfem_flex.bodies.exact.kernel.ExactKernelData` (element DOF map, shape functions
         and weights at the strain points, EA, kGA, EI, reference direction and angle, the tangent's
-        CSR pattern). The compiled mechanism loop (:mod:`skfem_flex.compiled.scene_loop`) takes a
+        CSR pattern). The exact-beam family (:mod:`skfem_flex.compiled.families.exact_beam`) takes a
         constant-mass body that provides it; the kernels do not depend on the rotation rate.
         """
         kd = getattr(self, "_kernel_data", None)
@@ -610,7 +319,7 @@ class ExactBeam(Body):
         if isinstance(s, bool) or not np.isscalar(s):
             raise ValueError(f"a point of ExactBeam {self.name!r} is located by its reference coordinate s "
                              f"(a number in m), got {s!r}")
-        s = _finite("s", s)
+        s = check_finite_number("s", s)
         tol = 1e-9 * self.length
         if not self.s_min - tol <= s <= self.s_max + tol:
             raise ValueError(f"s = {s!r} lies outside ExactBeam {self.name!r}, whose reference coordinate "
@@ -641,7 +350,7 @@ class ExactBeam(Body):
         """Generalized force of a dead global force (N) and moment (N m) at the axis point s."""
         pt = self.point(s)
         f = check_finite_vector("force", force, 2)
-        return pt.jr.T @ f + _finite("moment", moment) * pt.jphi
+        return pt.jr.T @ f + check_finite_number("moment", moment) * pt.jphi
 
     # -------------------------------------------------------------- statics
     def solve_static(self, load, fixed, load_steps=10, q_start=None, tol=1e-10, max_iterations=40):
@@ -754,10 +463,11 @@ class ExactBeam(Body):
         cells = np.column_stack([np.arange(n_nodes - 1), np.arange(1, n_nodes)])
         if not hasattr(self, "_seg_element"):
             mid = 0.5 * (self.s_nodes[:-1] + self.s_nodes[1:])
-            self._seg_element = np.array([int(np.nonzero((self._el_lo <= m) & (m <= self._el_hi))[0][0])
+            sp = self.strain_points
+            self._seg_element = np.array([int(np.nonzero((sp.element_lo <= m) & (m <= sp.element_hi))[0][0])
                                           for m in mid])
-        kin = self._kinematics(q, check=False)
-        W = self._W
+        kin = self.strain_points.kinematics(q, check=False)
+        W = self.strain_points.W
         wsum = W.sum(axis=1)
         mean = lambda a: (W * a).sum(axis=1) / wsum  # noqa: E731
         sed = 0.5 * (self.EA * kin["eps"] ** 2 + self.kGA * kin["gam"] ** 2 + self.EI * kin["kap"] ** 2)
@@ -812,130 +522,3 @@ class BeamPoint(BodyPoint):
     def compiled_map(self):
         return "linear", to_dense(self.jr), self.reference_position.copy()
 
-
-def _time_function(fn):
-    if fn is None:
-        return None
-    if not callable(fn):
-        raise ValueError(f"time_function must be callable t -> factor, got {fn!r}")
-    val = fn(0.0)
-    if not np.isfinite(float(val)):
-        raise ValueError(f"time_function(0) must be finite, got {val!r}")
-    return fn
-
-
-def _factor(fn, t):
-    if fn is None:
-        return 1.0
-    val = float(fn(t))
-    if not np.isfinite(val):
-        raise ValueError(f"time_function({t!r}) is not finite: {val!r}")
-    return val
-
-
-class NodalLoad(ForceElement):
-    """Point force and moment on an :class:`ExactBeam` axis point, dead or follower.
-
-    Parameters
-    ----------
-    body : ExactBeam
-    s : float
-        Reference coordinate of the point (m); between nodes the load is
-        shared by the shape functions.
-    force : array_like, shape (2,)
-        Force in N, global components (for a follower load: its components
-        when the section has its reference angle).
-    moment : float
-        Moment in N m (counter-clockwise positive).
-    time_function : callable t -> float, optional
-        Dimensionless factor (default 1).
-    follower : bool
-        If True the force turns with the section: F(q) = A(ϑ(q) − ϑ_ref) F0,
-        ϑ the section angle at the point, ϑ_ref its value in ``body.q0``.
-    name : str
-
-    Notes
-    -----
-    Non-conservative: the integrators evaluate it at the step midpoint (energy
-    scheme) and record its work as external work. Generalized force
-    f = c(t) (J_rᵀ F(q) + J_φ M), ∂f/∂q = c(t) J_rᵀ A E F0 ⊗ J_φ for a follower.
-    """
-
-    conservative = False
-
-    def __init__(self, body, s, force=(0.0, 0.0), moment=0.0, time_function=None, follower=False,
-                 name="nodal_load"):
-        if not isinstance(body, ExactBeam):
-            raise ValueError(f"NodalLoad acts on an ExactBeam, got {body!r}")
-        self.bodies = (body,)
-        self.body = body
-        self.point = body.point(s)
-        self.force = check_finite_vector("force", force, 2)
-        self.moment = _finite("moment", moment)
-        self.time_function = _time_function(time_function)
-        self.follower = bool(follower)
-        self.name = str(name)
-        self.reference_angle = self.point.angle(body.q0)
-        self._dead = self.point.jr.T @ self.force + self.moment * self.point.jphi
-
-    def force_at(self, q, t):
-        """Global force vector (N) at configuration q and time t."""
-        c = _factor(self.time_function, t)
-        if not self.follower:
-            return c * self.force
-        d = self.point.angle(q) - self.reference_angle
-        cd, sd = np.cos(d), np.sin(d)
-        return c * np.array([cd * self.force[0] - sd * self.force[1], sd * self.force[0] + cd * self.force[1]])
-
-    def compiled_form(self):
-        if self.follower or not keeps_methods(self, NodalLoad, ("generalized_force", "force_at")):
-            return None
-        base = np.array([self.force[0], self.force[1], self.moment])
-        return ("generalized force", np.vstack([to_dense(self.point.jr), to_dense(self.point.jphi).reshape(1, -1)]),
-                lambda t: _factor(self.time_function, t) * base)
-
-    def generalized_force(self, q, v, t):
-        c = _factor(self.time_function, t)
-        if not self.follower or c == 0.0:
-            return c * self._dead, None, None
-        f_now = self.force_at(q, t)
-        f = self.point.jr.T @ f_now + c * self.moment * self.point.jphi
-        df = np.outer(self.point.jr.T @ (_E @ f_now), self.point.jphi)
-        return f, df, None
-
-
-class ExactDistributedLoad(ForceElement):
-    """Dead distributed load (N/m of reference length) on an :class:`ExactBeam`, global components.
-
-    Consistent load vector ∫ p · N ds assembled once by scikit-fem
-    (:meth:`TimoshenkoBeam.load` with x ↔ u, y ↔ w), scaled by ``time_function``.
-
-    Parameters
-    ----------
-    body : ExactBeam
-    px, py : float or callable s -> value, optional
-        Load per unit reference length along global x and y, N/m.
-    time_function : callable t -> float, optional
-    """
-
-    conservative = False
-
-    def __init__(self, body, px=None, py=None, time_function=None, name="distributed_load"):
-        if not isinstance(body, ExactBeam):
-            raise ValueError(f"ExactDistributedLoad acts on an ExactBeam, got {body!r}")
-        for label, val in (("px", px), ("py", py)):
-            if val is not None and not callable(val):
-                _finite(label, val)
-        self.bodies = (body,)
-        self.vector = body.beam.load(f=px, p=py)
-        self.time_function = _time_function(time_function)
-        self.name = str(name)
-
-    def generalized_force(self, q, v, t):
-        return _factor(self.time_function, t) * self.vector, None, None
-
-    def compiled_form(self):
-        if not keeps_methods(self, ExactDistributedLoad, ("generalized_force",)):
-            return None
-        return "generalized force", np.asarray(self.vector, dtype=float).reshape(1, -1), \
-            lambda t: np.array([_factor(self.time_function, t)])

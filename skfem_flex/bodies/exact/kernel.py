@@ -3,7 +3,7 @@ r"""Compiled (Numba) strain energy and energy-conserving discrete gradient of an
 
 Same equations as the numpy methods :meth:`ExactBeam.potential_energy
 <skfem_flex.bodies.exact.body.ExactBeam.potential_energy>` and :meth:`ExactBeam.potential_discrete_gradient
-<skfem_flex.bodies.exact.body.ExactBeam.potential_discrete_gradient>` (module docstring of ``exact.py``:
+<skfem_flex.bodies.exact.body.ExactBeam.potential_discrete_gradient>` (module docstring of :mod:`.strain`:
 stress at the mean strain, strain increments written exactly through the Cayley parameters
 w_a = 2 tan(Δψ_a/2) and their divided differences), in one loop over elements and strain points
 on the arrays that :func:`pack` collects once (``ExactBeam.compiled_strain_data()``):
@@ -37,13 +37,13 @@ t̄ = ½(t₀ + t₁), r̄' = e_α + ½(u₀' + u₁'), a = r̄'·E t̄, b = r̄
 (W[x, 0] = w/Δψ, the inverse of ``rotations.cayley_ratio``); its derivatives with respect to the
 point values use ∂ε₁/∂(u_x', u_y', ψ) = (c, s, γ₁), ∂γ₁/∂(…) = (−s, c, −(1 + ε₁)), ∂t̄/∂ψ₁ = ½ n₁,
 and those of the coefficients c_w, k_w of the divided differences W[x, y] (module docstring of
-``exact.py``) use ∂W[x, y]/∂x = (½ sinc'(h) + ½ sinc(h) tan(x/2)) / (cos(x/2) cos(y/2)),
+``strain.py``) use ∂W[x, y]/∂x = (½ sinc'(h) + ½ sinc(h) tan(x/2)) / (cos(x/2) cos(y/2)),
 h = (x − y)/2 (and symmetrically in y), all free of cancellation.
 
 Failure is reported, not raised (a compiled time loop hands the step back to Python, whose
 methods raise the proper error): the discrete gradient returns :data:`TURN` if a nodal increment
 |Δψ| reaches ``rotations.MAX_INCREMENT`` (or is not finite) and :data:`FOLDED` if q0 or q1 folds an
-element (stretch 1 + ε ≤ 0 or not finite at a strain point, as ``ExactBeam._check``). The increments
+element (stretch 1 + ε ≤ 0 or not finite at a strain point, as ``StrainPoints.kinematics``). The increments
 are checked first (the divided differences need |Δψ| < π), so a state both turned too far and folded
 reports TURN where the numpy method raises ElementInversionError; :func:`potential_energy` checks
 nothing (:func:`state_status` does).
@@ -94,8 +94,9 @@ def pack(body):
     pat_ptr = np.ascontiguousarray(np.searchsorted(uniq // n, np.arange(n + 1)), dtype=np.int64)
     map_el = np.ascontiguousarray(inv.reshape(ne, nloc, nloc), dtype=np.int64)
     f64 = lambda a: np.ascontiguousarray(a, dtype=float)        # noqa: E731
+    sp = body.strain_points
     return ExactKernelData(
-        n, ed, f64(body._N), f64(body._dN), f64(body._W), float(body.EA), float(body.kGA), float(body.EI),
+        n, ed, f64(sp.N), f64(sp.dN), f64(sp.W), float(body.EA), float(body.kGA), float(body.EI),
         float(body.direction[0]), float(body.direction[1]), float(body.angle), float(MAX_INCREMENT),
         np.ascontiguousarray(body.node_dofs[:, 2], dtype=np.int64), pat_ptr, pat_idx, map_el)
 
@@ -105,7 +106,7 @@ def _end(kd, q, e, p):
     """(u_x', u_y', ψ, κ, cos φ, sin φ, ε, γ) at strain point p of element e for the state q.
 
     ε = −2 sin²(ψ/2) + c u_x' + s u_y', γ = −sin ψ + (−s u_x' + c u_y'), φ = α + ψ (no O(1) terms
-    cancel, as ``ExactBeam._kinematics``)."""
+    cancel, as ``StrainPoints.kinematics``)."""
     ed, N, dN = kd.ed, kd.N, kd.dN
     ux, uy, psi, kap = 0.0, 0.0, 0.0, 0.0
     for a in range(N.shape[2]):

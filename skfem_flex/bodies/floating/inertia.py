@@ -43,7 +43,7 @@ def axis_moments(du, dw, dth, prm):
 @dataclass(frozen=True, eq=False)
 class BeamInertia:
     """The inertia invariants of a beam on its elastic coordinates (module docstring), the arguments
-    of :meth:`FloatingFrame._set_invariants <skfem_flex.bodies.ffr.FloatingFrame._set_invariants>`.
+    of :meth:`FloatingFrame.set_invariants <skfem_flex.bodies.ffr.FloatingFrame.set_invariants>`.
 
     Attributes
     ----------

@@ -47,7 +47,7 @@ from ...numerics.rotations import dsinc, sinc
 from ..modal.kernel import quartic_discrete_gradient, quartic_energy
 
 __all__ = ["FloatingKernelData", "pack", "energy_momentum_terms", "newmark_terms", "momentum", "potential_energy",
-           "sinc_half"]
+           "sinc_half", "csr_parts"]
 
 #: the arrays a floating-frame body hands its kernels (built once by :func:`pack`)
 FloatingKernelData = namedtuple("FloatingKernelData", [
@@ -60,7 +60,7 @@ FloatingKernelData = namedtuple("FloatingKernelData", [
     "quartic", "k3p", "k3q", "k3a", "k3b", "k4a", "k4s", "k4w", "map_ee"])
 
 
-def _csr_parts(mat):
+def csr_parts(mat):
     """(indptr, indices, data) of a canonical CSR copy of ``mat`` (int64 indices)."""
     import scipy.sparse as sps
     x = sps.csr_matrix(mat, copy=True)
@@ -91,7 +91,7 @@ def pack(n, nf, green, mass, s0, i0, sbar, c, k0n, blocks, pattern, maps, dn=Non
     maps : dict
         Positions in the pattern data: ``"top"`` (3 n, rows 0–2 row-major), ``"left"``
         (nf × 3 row-major, rows 3…, columns 0–2), for each block key the positions of
-        the entries of its canonical CSR form (:func:`_csr_parts`), and with ``quartic``
+        the entries of its canonical CSR form (:func:`csr_parts`), and with ``quartic``
         ``"ee"`` (nf × nf row-major: the whole elastic block).
     dn : (n_el, n_qp, n_l), optional
         dN/dx of the local shape functions at the axial quadrature points, 1/m.
@@ -105,7 +105,7 @@ def pack(n, nf, green, mass, s0, i0, sbar, c, k0n, blocks, pattern, maps, dn=Non
         The cubic and quartic tensors of a :class:`~skfem_flex.bodies.modal.stiffening.QuarticEnergy` on the
         elastic coordinates, as :func:`.modal_kernel.pack_quartic` arranges them.
     """
-    parts = {k: _csr_parts(blocks[k]) for k in ("MA", "H", "Mff", "K")}
+    parts = {k: csr_parts(blocks[k]) for k in ("MA", "H", "Mff", "K")}
     i64 = lambda a: np.ascontiguousarray(a, dtype=np.int64)      # noqa: E731
     f64 = lambda a: np.ascontiguousarray(a, dtype=float)         # noqa: E731
     if green and dn is None:

@@ -49,14 +49,14 @@ def beam_elastic_model(body):
     strain = GreenLagrange(grads, np.array([[1.0, 0.0]]), np.eye(2)[None], np.array([[sec.EA]]), qd.dx.ravel())
     itf = {}
     for label, x in (("root", body.x_min), ("tip", body.x_max)):
-        itf[label] = Interface(label, np.array([x, 0.0]), sps.csr_matrix(body._full_shape_at(x)))
+        itf[label] = Interface(label, np.array([x, 0.0]), sps.csr_matrix(body.full_shape_at(x)))
     order = np.argsort(beam.x_nodes)
     conn = np.stack([order[:-1], order[1:]], axis=1)
 
     def locate(X):
         if abs(X[1]) > 1e-9 * beam.length:
             raise ValueError(f"point {tuple(X)} is off the axis of beam {body.name!r} (y must be 0)")
-        S = body._full_shape_at(X[0])
+        S = body.full_shape_at(X[0])
         return S[:2], S[2]
 
     def output(d):

@@ -8,7 +8,7 @@ element matrices of the axial kernel (``floating_strain.py``) on each element's 
 * Sparse bodies (:class:`SparsePattern`) fill one fixed CSR pattern, the union of all pieces,
   through index maps computed once, so a matrix costs one ``np.zeros`` and a few scatters (no
   COO conversion or sorting per call, which dominated the time of large bodies).
-* Dense bodies compose with ``FloatingFrame._compose`` and scatter the element matrices into the
+* Dense bodies compose with ``FloatingFrame.compose_matrix`` and scatter the element matrices into the
   elastic block through :class:`DenseScatter` (O(n) work, not the O(n³) of dense dεᵀ dε).
 * :func:`kernel_data` packs the arrays the compiled kernels (``floating_kernel.py``) work on: the
   tangent is written as the data of the body's one CSR pattern (dense bodies use it too, and
@@ -196,7 +196,7 @@ def kernel_data(n, nf, green, inertia, blocks, pattern, dNt, loc, wq):
     r, c = np.divmod(np.arange(nf * 3), 3)
     maps["left"] = at((r + 3) * n + c)
     for key, mat in blocks.items():
-        ptr_b, idx_b, _ = _kernel._csr_parts(mat)
+        ptr_b, idx_b, _ = _kernel.csr_parts(mat)
         rows_b = np.repeat(np.arange(nf, dtype=np.int64), np.diff(ptr_b))
         maps[key] = at((rows_b + 3) * n + idx_b + 3)
     lr, lc, keep = _element_pairs(loc)

@@ -47,7 +47,7 @@ def _centrifugal_system(body, omega2, tol):
     element length while the round-off of K q grows with the stiffness EA/h, so a tolerance that
     holds on 100 elements is below round-off on 101 or more.
     """
-    MA, c = body._MA, body._c
+    MA, c = body.invariants.MA, body.invariants.c
     q = body.q0.copy()
 
     def fun(x):
@@ -167,7 +167,7 @@ def rotating_modes(body, omega, n_modes=3, bending_only=True):
     qf = centrifugal_equilibrium(body, om)
     q = body.q0.copy()
     q[3:] = qf
-    K = body.potential_hessian(q)[3:, 3:] - om * om * body._MA
+    K = body.potential_hessian(q)[3:, 3:] - om * om * body.invariants.MA
     nf = body.n_elastic
     lam = None
     if nf > DENSE_MODES_LIMIT:
@@ -208,8 +208,8 @@ def _bending(body, lam, vec, bending_only):
 
 def _modes_dense(body, K, om):
     """All eigenpairs of [[0, I], [−K, −G]] z = s [[I, 0], [0, M]] z (G = 2ωH), oscillating ones kept."""
-    M = to_dense(body._Mff)
-    G = 2.0 * om * to_dense(body._H)
+    M = to_dense(body.invariants.Mff)
+    G = 2.0 * om * to_dense(body.invariants.H)
     nf = body.n_elastic
     I = np.eye(nf)
     Z = np.zeros((nf, nf))
@@ -234,8 +234,8 @@ def _lowest_modes_sparse(body, K, om, n_modes, bending_only):
     """
     nf = body.n_elastic
     K = sps.csc_matrix(K)
-    M = sps.csr_matrix(body._Mff)
-    G = sps.csr_matrix(2.0 * om * body._H)
+    M = sps.csr_matrix(body.invariants.Mff)
+    G = sps.csr_matrix(2.0 * om * body.invariants.H)
     try:
         # no pivoting and one symmetric permutation: U's diagonal holds the pivots of a symmetric
         # LDLᵀ, whose signs are the signs of K's eigenvalues (Sylvester's law of inertia)

@@ -206,7 +206,7 @@ class ModalBody(FloatingFrame):
             ru = model.rotary_unit
             I0 += float(ru @ (model.rotary_mass @ ru))
             k0n += Phi.T @ (model.rotary_mass @ ru)
-        self._set_invariants(mass=float(T[:, 0] @ (M @ T[:, 0])), S0=T.T @ Mx, I0=I0, Sbar=T.T @ MPhi,
+        self.set_invariants(mass=float(T[:, 0] @ (M @ T[:, 0])), S0=T.T @ Mx, I0=I0, Sbar=T.T @ MPhi,
                              c=Phi.T @ Mx, k0n=k0n, MA=MA, H=Phi.T @ (M @ (model.turn @ Phi)), Mff=Mff)
         K = Phi.T @ (model.stiffness @ Phi)
         K = 0.5 * (K + K.T)
@@ -215,7 +215,8 @@ class ModalBody(FloatingFrame):
             raise ValueError(f"basis of body {self.name!r} carries rigid-body motion (ΦᵀKΦ is singular, smallest "
                              f"eigenvalue {ev[0]:.3g} of {ev[-1]:.3g}); apply a reference condition")
         self.energy = model.strain.reduced(Phi, K) if strain == "green-lagrange" else QuarticEnergy(K)
-        self._ffd = dict(MA=self._MA, H=self._H, Mff=self._Mff, K=K)
+        inv = self.invariants
+        self.elastic_blocks = dict(MA=inv.MA, H=inv.H, Mff=inv.Mff, K=K)
         self._kd = None                                  # packed on first request (compiled_kernel_data)
         # modal stress fields: cell-mean displacement gradients of every basis vector, (n_cells, 4, m)
         self._modal_gradients = (None if model.stress_operators is None
@@ -254,14 +255,14 @@ class ModalBody(FloatingFrame):
         return g
 
     def potential_hessian(self, q):
-        return self._compose(None, None, extra=self.energy.hessian(np.asarray(q)[3:]))
+        return self.compose_matrix(None, None, extra=self.energy.hessian(np.asarray(q)[3:]))
 
     def potential_discrete_gradient(self, q0, q1):
         """Exact discrete gradient of V (stress at the mean strain) with ∂/∂q1."""
         g = np.zeros(self.n_dofs)
         ge, dge = self.energy.discrete_gradient(np.asarray(q0)[3:], np.asarray(q1)[3:])
         g[3:] = ge
-        return g, self._compose(None, None, extra=dge)
+        return g, self.compose_matrix(None, None, extra=dge)
 
     # ================================================================ compiled kernels
     def compiled_kernel_data(self):
@@ -271,7 +272,7 @@ class ModalBody(FloatingFrame):
 
         The tangent goes into the full n × n pattern (the data reshapes to the dense matrix). This
         body's own methods stay in numpy: they are the kernels' reference (tests/test_modal_kernel.py),
-        and the compiled energy-momentum loop (:mod:`skfem_flex.compiled.single_body_loop`) uses the kernels."""
+        and the floating-frame family (:mod:`skfem_flex.compiled.families.floating_frame`) runs the kernels."""
         if self.n_dofs > COMPILED_SIZE_LIMIT:
             return None
         if self._kd is None:
@@ -279,14 +280,15 @@ class ModalBody(FloatingFrame):
             ptr, idx = np.arange(0, n * n + 1, n), np.tile(np.arange(n), n)
             r, c = np.divmod(np.arange(nf * 3), 3)
             maps = {"top": np.arange(3 * n), "left": (r + 3) * n + c}
-            for key, mat in self._ffd.items():           # MA, H, Mff, K: their canonical CSR entries
-                ptr_b, idx_b, _ = fk._csr_parts(mat)
+            for key, mat in self.elastic_blocks.items():           # MA, H, Mff, K: their canonical CSR entries
+                ptr_b, idx_b, _ = fk.csr_parts(mat)
                 maps[key] = (np.repeat(np.arange(nf), np.diff(ptr_b)) + 3) * n + idx_b + 3
             r, c = np.divmod(np.arange(nf * nf), nf)
             maps["ee"] = (r + 3) * n + c + 3
             quartic = None if self.energy.linear else pack_quartic(self.energy.K3, self.energy.K4)
-            self._kd = fk.pack(n, nf, False, self.mass_total, self._S0, self._I0, self._Sbar, self._c, self._k0n,
-                               self._ffd, (ptr, idx), maps, quartic=quartic)
+            inv = self.invariants
+            self._kd = fk.pack(n, nf, False, inv.mass, inv.S0, inv.I0, inv.Sbar, inv.c, inv.k0n,
+                               self.elastic_blocks, (ptr, idx), maps, quartic=quartic)
         return self._kd
 
     # ================================================================ points and output

@@ -16,7 +16,7 @@ end values and E the quarter turn:
 * velocity and acceleration rows: ∂(Φ_q v₁)/∂q = n₁ · ∂(J_e v₁)/∂q + (g · v₁) (E n₁)ᵀ J_e
   + ((J_e v₁) · E n₁ − (g · v₁)(e₁ · n₁)) g.
 
-The equations are those of the old compiled loop (``scene_loop._rotated_row``), in the same order of
+The equations are those of the numpy terms (:mod:`skfem_flex.elements.point_terms`), in the same order of
 summation; :func:`~skfem_flex.compiled.rows.finish_row` writes what the task and the row level need.
 """
 from __future__ import annotations

@@ -1,4 +1,4 @@
-r"""Loads on a :class:`~skfem_flex.bodies.FloatingBeam`: distributed and point loads of eq. (43).
+r"""Loads on a :class:`~skfem_flex.bodies.floating.body.FloatingBeam`: distributed and point loads of eq. (43).
 
 A load F on the axis does the virtual work ∫ δrᵀ F dx with δr = δR + A E (x_0 + S q_f) δθ + A S δq_f,
 so its generalized force is fixed by a few integrals of the load against the beam's shape
@@ -12,8 +12,9 @@ import math
 
 import numpy as np
 
-from ...elements.forces import ForceElement
-from ..rigid import E_MATRIX as E2, rotation as _rot
+from ...bodies.floating.body import FloatingBeam
+from ...bodies.rigid import E_MATRIX, rotation
+from .base import ForceElement
 
 __all__ = ["DistributedLoad"]
 
@@ -51,7 +52,6 @@ class DistributedLoad(ForceElement):
 
     def __init__(self, body, f=None, p=None, h=None, Q=None, M=None, frame="body", time_function=None,
                  name="distributed load"):
-        from .body import FloatingBeam     # floating.py re-exports this class: import at call time
         if not isinstance(body, FloatingBeam):
             raise ValueError(f"DistributedLoad needs a FloatingBeam, got {body!r}")
         if frame not in ("body", "global"):
@@ -62,10 +62,10 @@ class DistributedLoad(ForceElement):
         self.time_function = time_function
         beam, free = body.beam, body.free_dofs
         qd = beam.quadrature
-        pairs = {k: beam._pairs(k, v) for k, v in (("h", h), ("Q", Q), ("M", M))}
+        pairs = {k: beam.point_pairs(k, v) for k, v in (("h", h), ("Q", Q), ("M", M))}
         for k, arr in pairs.items():
             for x, _ in arr:
-                body._check_x(x, f"point load {k}")
+                body.axial_coordinate(x, f"point load {k}")
 
         def field(load):
             if load is None:
@@ -114,11 +114,11 @@ class DistributedLoad(ForceElement):
         top = np.zeros((3, n))
         left = np.zeros((body.n_elastic, 3))
         if self.frame == "body":
-            A = _rot(q[2])
+            A = rotation(q[2])
             out[:2] = A @ self._Fbar
             out[2] = self._my + self._M + float(self._L2 @ qf)
             out[3:] = self._LM + self._L1
-            top[:2, 2] = A @ (E2 @ self._Fbar)
+            top[:2, 2] = A @ (E_MATRIX @ self._Fbar)
             top[2, 3:] = self._L2
         else:
             a2, a1 = self._my + float(self._L2 @ qf), self._mx + float(self._L1 @ qf)
@@ -128,4 +128,4 @@ class DistributedLoad(ForceElement):
             top[2, 2] = -s * a2 - c * a1
             top[2, 3:] = c * self._L2 - s * self._L1
             left[:, 2] = -s * self._L1 + c * self._L2
-        return k * out, k * body._compose(top, left), None
+        return k * out, k * body.compose_matrix(top, left), None
