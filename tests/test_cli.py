@@ -222,6 +222,21 @@ def test_the_report_says_the_step_the_run_took(capsys, tmp_path):
     assert "spring_mass: 11 steps of 0.1 s (the last one 0.05 s) to t = 1.05 s" in capsys.readouterr().out
 
 
+def test_the_summary_names_the_code_path_and_the_compile_time(capsys, tmp_path):
+    """Which path ran is never silent: summary.json holds ``run_path`` (loop, solver, storage, the elements
+    that ran through Python) and the run's compile time, and the printed report names them."""
+    out = tmp_path / "o"
+    assert cli.main(["run", "pendulum", "--t-end", "0.05", "--dt", "0.01", "--out", str(out), "--no-vtk"]) == 0
+    printed = capsys.readouterr().out
+    summary = json.loads((out / "summary.json").read_text())
+    path = summary["run_path"]
+    assert path["loop"] == "compiled" and path["python_elements"] == []
+    assert isinstance(path["solver"], str) and path["solver"] and path["storage"] in ("dense", "sparse")
+    assert isinstance(summary["compile_time_s"], float) and summary["compile_time_s"] >= 0.0
+    assert f"{path['solver']} solver" in printed and "compiled loop" in printed, printed
+    assert f"of which {summary['compile_time_s']:.2f} s compiling" in printed, printed
+
+
 def test_probe_plots_label_their_units():
     from skfem_flex.io.plots import plot_probes, probe_units
 

@@ -23,16 +23,19 @@ import pytest
 
 import skfem_flex as sf
 from skfem_flex.apps import cli
+from skfem_flex.apps.cli import catalogue as cli_list
 from skfem_flex.run import driver
 from skfem_flex.numerics import resources
 from skfem_flex.apps import studies
+from skfem_flex.apps.studies import stability_study
 from skfem_flex.numerics.resources import InsufficientMemoryError
 from skfem_flex.io.result import Result
 
 from helpers import ROOT
 
-simulate_module = importlib.import_module("skfem_flex.run.simulate")
-sweep_module = importlib.import_module("skfem_flex.apps.sweep")
+simulate_module = importlib.import_module("skfem_flex.run.driver")      # the run's clock
+budget_module = importlib.import_module("skfem_flex.apps.sweep.budget")
+task_module = importlib.import_module("skfem_flex.apps.sweep.task")
 
 SYSTEM = 64_000_000_000           # bytes the (fake) system reports available: more than any limit below
 
@@ -139,7 +142,7 @@ def test_address_space_limit_refuses_cleanly_in_a_subprocess(tmp_path):
 
 # ------------------------------------------------------------------ 2. checkpoint interval
 class _FakeClock:
-    """time for skfem_flex.run.simulate: perf_counter is a counter the test advances."""
+    """time for skfem_flex.run.driver: perf_counter is a counter the test advances."""
 
     def __init__(self):
         self.now = 0.0
@@ -178,6 +181,9 @@ def test_checkpoint_waits_twenty_times_the_save(tmp_path, monkeypatch):
                       checkpoint_every=1.0, compiled=False)
     assert res.steps == 600 and len(saves) >= 5
     assert saves[0][0] >= 1.0
+    # the last save is the run's end (a checkpoint always holds the end of a run); the scheduled ones before it
+    assert saves[-1][0] >= 600.0
+    saves = saves[:-1]
     for (b0, e0), (b1, _) in zip(saves, saves[1:]):
         assert b1 - e0 >= max(1.0, 20 * (e0 - b0)) - 1e-9, saves
     # every save but the last (the run may end before its wait is over) was paid for by 20 times its time
@@ -201,6 +207,9 @@ def test_cheap_checkpoints_keep_the_interval(tmp_path, monkeypatch):
 
     sf.simulate(sf.scenes.pendulum(), 0.5, 0.01, output=[OneSecondPerStep()], checkpoint=tmp_path / "c.npz",
                 checkpoint_every=3.0, compiled=False)
+    # the scheduled saves, then the one at the run's end (a checkpoint always holds the end of a run)
+    assert saves[-1] == clock.now
+    saves = saves[:-1]
     gaps = [b - a for a, b in zip(saves, saves[1:])]
     assert len(saves) >= 10 and all(g == 3.0 for g in gaps), saves
 
@@ -239,9 +248,10 @@ def test_stability_budget_does_not_count_the_compile(monkeypatch):
             cold[0] = False
         return real_stepper(*args, **kw)
 
-    monkeypatch.setattr(sweep_module, "time", Clock())       # the budget's clock
+    monkeypatch.setattr(budget_module, "time", Clock())      # the budget's clock
+    monkeypatch.setattr(task_module, "time", Clock())        # the case's run time
     monkeypatch.setattr(driver, "Stepper", stepper)
-    monkeypatch.setattr(studies, "QUICK_BUDGET", 30.0)
+    monkeypatch.setattr(stability_study, "QUICK_BUDGET", 30.0)
     rows = studies.stability(cases=["spin_up_omega4_dt5ms"], schemes=["energy-momentum"], quick=True, budget=30.0)
     assert not cold[0]                    # it did compile
     (row,) = rows
@@ -308,7 +318,7 @@ def test_cli_warnings_are_one_line(capsys, monkeypatch):
         warnings.warn("overflow encountered in multiply", RuntimeWarning)
         return 0
 
-    monkeypatch.setattr(cli, "_cmd_list", noisy)
+    monkeypatch.setattr(cli_list, "_cmd_list", noisy)
     with warnings.catch_warnings():
         warnings.simplefilter("always")
         before = warnings.showwarning

@@ -152,15 +152,15 @@ def test_divergence_exits_3_and_keeps_outputs(tmp_path, capsys):
 def test_divergence_guard_energy_rule():
     """A non-conservative scheme whose energy grows 10⁶ times beyond the scale of its first steps
     plus the work done is stopped; a run released from rest (T₀ + V₀ = 0) is not."""
-    from skfem_flex.run.simulate import _SCALE_RECORDS, DIVERGENCE_FACTOR, _DivergenceGuard
+    from skfem_flex.run.guard import DIVERGENCE_FACTOR, SCALE_RECORDS, DivergenceGuard
     scene = sf.scenes.pendulum()
 
-    guard = _DivergenceGuard(scene, np.array([0.5, 0.0]), [0.0], [0.0], [0.0])
+    guard = DivergenceGuard(scene, np.array([0.5, 0.0]), [0.0], [0.0], [0.0])
 
     def record(t, kinetic, potential):
         guard.check_energy(t, kinetic, potential, 0.0)
     record(0.01, 1e-5, -1e-5 + 1e-17)                          # round-off from rest: no scale yet, no error
-    for k in range(_SCALE_RECORDS):
+    for k in range(SCALE_RECORDS):
         record(0.02 + 0.01 * k, 2.0, -1.0)                     # the first steps set E_s = 3 J
     record(1.0, 0.9 * DIVERGENCE_FACTOR * 3.0, 0.0)             # below the bound
     with pytest.raises(sf.SimulationError, match="diverged at t = 2"):
@@ -254,8 +254,10 @@ def test_large_body_allocates_no_dense_n_by_n():
     """A pinned flexible pendulum above the small-system threshold (both integrator families): one
     step's peak Python memory stays far below one dense n × n matrix, and doubling the mesh about
     doubles it (it grew with n² before: 2.5 GB for 4 000 elements)."""
-    small = sf.scenes.get("flexible_pendulum")(n_elements=20)
-    for integrator in ("generalized-alpha", "energy-momentum"):      # compile and import outside the count
+    # compile and import outside the count (a scene above the dense limit: its storage and solver are the
+    # large ones' — compiling them holds ~10 MB of Python memory for a moment)
+    small = sf.scenes.get("flexible_pendulum")(n_elements=60)
+    for integrator in ("generalized-alpha", "energy-momentum"):
         sf.simulate(small, 0.002, 0.001, integrator=integrator)
     peaks = []
     # large enough that a dense n × n would dominate what is linear (the solver's index plans, ~6 kB
@@ -322,6 +324,8 @@ def test_compile_is_said_timed_apart_and_before_the_bar(monkeypatch):
 
     handler = Lines()
     registry.LOGGER.addHandler(handler)
+    level = registry.LOGGER.level
+    registry.LOGGER.setLevel(logging.INFO)          # SKFEM_FLEX_QUIET may have set WARNING
     try:
         monkeypatch.setattr(tqdm, "tqdm", Bar)
         monkeypatch.setattr(driver, "Stepper", slow_stepper)
@@ -338,6 +342,7 @@ def test_compile_is_said_timed_apart_and_before_the_bar(monkeypatch):
         assert not any("compil" in m for m in lines) and again.compile_time == 0.0, lines
     finally:
         registry.LOGGER.removeHandler(handler)
+        registry.LOGGER.setLevel(level)
 
 
 def test_ctrl_c_during_a_cold_compile_stops_within_seconds(tmp_path):

@@ -345,3 +345,26 @@ def test_cli_study_on_a_cluster_with_a_store_and_a_rerun_that_computes_nothing(c
     assert main(["study", "stability", "--workers", "2", "--scheduler", "tcp://x:1", "--out", str(tmp_path / "d")]) == 2
     err = capsys.readouterr().err
     assert "not allowed with argument" in err and len(err.strip().splitlines()) == 1
+
+
+UNGUARDED = '''import skfem_flex as sf
+
+ds = sf.sweep("pendulum", vary={"length": [0.5, 0.7]}, t_end=0.03, dt=0.01, n_workers=2)
+print(ds.status.values)
+'''
+
+
+def test_a_sweep_in_a_script_without_the_main_guard_stops_with_one_clear_line(tmp_path):
+    """The README's snippet saved as a script without ``if __name__ == "__main__":`` and run as
+    ``python script.py``: the local cluster's workers import the script again. The workers end quietly and
+    the driver stops with one line naming the line to put under the guard, not pages of
+    ``RuntimeError: Nanny failed to start``."""
+    script = tmp_path / "script.py"
+    script.write_text(UNGUARDED)
+    proc = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 1 and proc.stdout == "", (proc.stdout, proc.stderr)
+    said = [line for line in proc.stderr.splitlines() if "if __name__ ==" in line]
+    assert len(said) == 1, proc.stderr
+    assert said[0].startswith("skfem_flex.apps.sweep.cluster.UnguardedScriptError: put the sweep at line 3 of ")
+    assert "script.py" in said[0] and "client=\"serial\"" in said[0]
+    assert "Nanny" not in proc.stderr and "RuntimeError" not in proc.stderr and "bootstrapping" not in proc.stderr

@@ -7,14 +7,14 @@ import numpy as np
 
 from ..errors import DivergenceError
 
-__all__ = ["DivergenceGuard", "DIVERGENCE_FACTOR"]
+__all__ = ["DivergenceGuard", "DIVERGENCE_FACTOR", "SCALE_RECORDS"]
 
 
 #: a run is diverged when a coordinate exceeds this many times the scene's size, or the energy this
 #: many times its initial scale plus the work done
 DIVERGENCE_FACTOR = 1e6
 #: recorded states over which the energy scale of the divergence rule is taken
-_SCALE_RECORDS = 10
+SCALE_RECORDS = 10
 
 
 class DivergenceGuard:
@@ -27,7 +27,7 @@ class DivergenceGuard:
       a floating-frame body's elastic coordinates beyond 10 × its length are no small deformation),
       checked at every recorded state;
     * |T + V| exceeds 10⁶ × (E_s + max |W|), W the work done so far and E_s the largest |T| + |V|
-      of the first :data:`_SCALE_RECORDS` recorded states (the scale a run released from rest
+      of the first :data:`SCALE_RECORDS` recorded states (the scale a run released from rest
       establishes in its first steps; energy-conserving schemes keep T + V = E₀ + W, so this
       catches the others).
     """
@@ -39,7 +39,7 @@ class DivergenceGuard:
         size = max(float(scene.length_scale), float(np.max(np.abs(q0), initial=0.0)), 1.0)
         self.q_bound = DIVERGENCE_FACTOR * size
         kinetic, potential = np.asarray(kinetic, dtype=float), np.asarray(potential, dtype=float)
-        self.e_scale = float(np.max(np.abs(kinetic[:_SCALE_RECORDS]) + np.abs(potential[:_SCALE_RECORDS])))
+        self.e_scale = float(np.max(np.abs(kinetic[:SCALE_RECORDS]) + np.abs(potential[:SCALE_RECORDS])))
         self.w_max = float(np.max(np.abs(np.asarray(work, dtype=float)), initial=0.0))
         self.count = kinetic.size
         bounds = np.full(scene.n, np.inf)
@@ -86,7 +86,7 @@ class DivergenceGuard:
         would stop the run, or None; the guard's energy scale and work bound advance over the
         records before it (then store the block up to that record and call :meth:`check_energy`)."""
         first = self.count                                     # index of the block's first record
-        n_early = min(t.size, max(0, _SCALE_RECORDS - first))  # these still set the scale: in order
+        n_early = min(t.size, max(0, SCALE_RECORDS - first))  # these still set the scale: in order
         for i in range(n_early):
             w_max = max(self.w_max, abs(work[i]))
             e_scale = max(self.e_scale, abs(kinetic[i]) + abs(potential[i]))
@@ -120,7 +120,7 @@ class DivergenceGuard:
         self.count += 1
         self.w_max = max(self.w_max, abs(work))
         energy = kinetic + potential
-        if self.count <= _SCALE_RECORDS:
+        if self.count <= SCALE_RECORDS:
             self.e_scale = max(self.e_scale, abs(kinetic) + abs(potential))
         scale = self.e_scale + self.w_max
         if self._violated(energy, scale):
