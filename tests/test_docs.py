@@ -22,7 +22,6 @@ MAX_README_LINES = 250
 UNDOCUMENTED = {
     "jit_cache": "imported for its side effect (Numba's cache rule), not an API",
     "scenes": "a module: its factories are documented one by one on docs/api/scenes.rst",
-    "NewtonSettings": "its docstring (numerics/newton.py) makes Sphinx warn; that file is being rewritten",
 }
 
 

@@ -45,7 +45,7 @@ def force_balance(scene, q, v, a, t):
     scale : float
         Largest single term (N), the scale of a converged residual.
     floor : ndarray (n,)
-        |∇²V| |q|, the round-off floor of the internal forces.
+        abs(∇²V) abs(q), the round-off floor of the internal forces.
     """
     grad = scene.potential_gradient(q)
     hess = scene.potential_hessian(q)
@@ -105,7 +105,7 @@ class EquilibriumState:
         True for a relative equilibrium under the scene's steady motion.
     residual_tolerance : float
         The largest force imbalance (N) the solve accepted as zero:
-        rtol · max(largest force term, start imbalance) + 16 ε ‖|∇²V| |q|‖∞ (0 if unknown).
+        rtol · max(largest force term, start imbalance) + 16 ε ‖abs(∇²V) abs(q)‖∞ (0 if unknown).
     """
 
     t: float

@@ -8,7 +8,7 @@ the border; accepted when its normwise backward error is below 1e-12); otherwise
 matrices go to LAPACK gesv. The plans (which entry goes where) depend only on the sparsity
 pattern and are built once per pattern.
 
-Compiled code (``compiled_scene``) solves its Newton matrix the same way, band LU of the interior
+Compiled code (:mod:`skfem_flex.compiled.solvers`) solves its Newton matrix the same way, band LU of the interior
 and dense Schur complement of the border, with the plans of :mod:`skfem_flex.numerics.band_plans`
 (:func:`~skfem_flex.numerics.band_plans.dense_bordered_plan`, once per pattern; the border by the
 same rule, :func:`~skfem_flex.numerics.band_plans.choose_border`) and the Numba kernels of

@@ -60,7 +60,7 @@ class NewtonSettings:
     A step is converged when every scaled measure is at most one:
     ‖r‖∞ ≤ ``rtol`` · (largest term of the balance it checks), ‖Φ‖∞ ≤
     ``ctol`` · (scale of Φ), and for the energy-conserving scheme
-    |v̄ · r| ≤ ``etol`` · (energy scale). The scales come from the terms
+    abs(v̄ · r) ≤ ``etol`` · (energy scale). The scales come from the terms
     themselves, so the defaults work for a 1 kg oscillator and for a steel
     beam with forces of 10⁷ N alike. An update below round-off of the state
     also ends the iteration (the residual is then as small as floating

@@ -202,7 +202,7 @@ class FloatingBeam(FloatingFrame):
     ELASTIC_BOUND = 10.0
 
     def divergence_bounds(self):
-        """Largest sane |q_i| per coordinate: none for the frame (R, θ; the run's global rule holds), and
+        """Largest sane absolute value of each coordinate: none for the frame (R, θ; the run's global rule holds), and
         :attr:`ELASTIC_BOUND` × max(L, 1 m) for the elastic coordinates, L the beam's length (m)."""
         bound = self.ELASTIC_BOUND * max(self.x_max - self.x_min, 1.0)
         return np.concatenate([np.full(3, np.inf), np.full(self.n_elastic, bound)])
