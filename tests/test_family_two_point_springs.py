@@ -9,13 +9,10 @@ l₀ = 0 (κ = ½ k), on rigid bodies (frame maps: ∂(Dᵀf)/∂q_b) and point 
    and the recorded potential (TASK_ENERGY) equals the springs' ``potential_energy``.
 3. Energy-momentum conserves T + V to the Newton tolerance.
 """
-import numpy as np
 import pytest
 
 import skfem_flex as sf
-from force_family_checks import (compare_runs, derivative_check, evaluation_points, initial_energy, local,
-                                 random_stepper,
-                                 scatter)
+from force_family_checks import check_spring_run, check_spring_step
 
 
 def free_springs(forces=True):
@@ -48,32 +45,12 @@ def spring_mechanism():
                     name="spring mechanism")
 
 
-def _potential(scene, q):
-    """V(q) of the scene's springs (gravity left out), J."""
-    return sum(f.potential_energy(local(scene, f, q)) for f, _ in scene.conservative_forces
-               if not isinstance(f, sf.Gravity))
-
-
 @pytest.mark.parametrize("scheme", ["energy-momentum", "trapezoidal"])
 @pytest.mark.parametrize("factory", [free_springs])
 def test_newton_matrix_and_potential_part_follow_the_specification(factory, scheme):
     """Newton matrix = 5-point differences of the residual to 1e-10 of its scale; g_p = the elements'
     discrete gradients to 1e-12 relative; the springs' share of the matrix is not negligible."""
-    scene = factory()
-    for seed in range(3):
-        st, q0, v0 = random_stepper(scene, scheme, seed)
-        x = 0.3 * np.random.default_rng(10 + seed).normal(size=st.packed.nx)
-        h = 0.2
-        mat, err = derivative_check(st, 0.3, h, x)
-        assert err <= 1e-10, err
-        (qa, qb), _ = evaluation_points(st, 0.3, h)
-        expected = sum(scatter(scene, f, f.potential_discrete_gradient(local(scene, f, qa), local(scene, f, qb))[0])
-                       for f, _ in scene.conservative_forces)          # no gravity in these scenes
-        gp = st.ws.vectors["gp"]
-        assert np.abs(gp - expected).max() <= 1e-12 * np.abs(expected).max()
-        bare = random_stepper(factory(forces=False), scheme, seed)[0]
-        mat0 = bare.evaluate(0.3, h, x)[1]
-        assert np.abs(mat - mat0).max() >= 0.05 * np.abs(mat).max()
+    check_spring_step(factory, scheme)
 
 
 @pytest.mark.parametrize("scheme", ["energy-momentum", "trapezoidal", "generalized-alpha"])
@@ -82,15 +59,4 @@ def test_newton_matrix_and_potential_part_follow_the_specification(factory, sche
 def test_runs_equal_the_python_path(factory, t_end, dt, scheme):
     """q to 1e-10 relative (they agree to ~1e-15), the recorded potential to 1e-12 of the energy scale;
     energy-momentum keeps T + V − work to the Newton tolerance."""
-    new, old, dq = compare_runs(factory, scheme, t_end, dt)
-    assert dq <= 1e-10, dq
-    scene = factory()
-    e_scale = np.abs(old.total_energy).max()
-    pot = np.array([_potential(scene, q) for q in new.q])
-    grav = old.potential[1:] - np.array([_potential(scene, q) for q in old.q[1:]])       # gravity's share
-    assert np.abs(new.derived[:, 1] - grav - pot).max() <= 1e-12 * e_scale
-    assert np.abs(new.derived[:, 1] - old.potential[1:]).max() <= 1e-10 * e_scale
-    assert np.ptp(pot) > 0.01 * e_scale                 # the springs did work
-    if scheme == "energy-momentum":
-        energy = new.derived[:, 0] + new.derived[:, 1] - new.work
-        assert np.abs(energy - initial_energy(scene)).max() <= 1e-8 * e_scale
+    check_spring_run(factory, t_end, dt, scheme)
