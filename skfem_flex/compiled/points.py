@@ -23,8 +23,9 @@ import numpy as np
 
 from ..numerics.rotations import sinc_half
 from .abi import f1, f2, i2
+from .storage import add_qq
 
-__all__ = ["LINEAR", "FRAME", "KIND", "OFF", "NB", "GPTR", "YPTR", "M_R", "CX", "CY", "Y0X", "Y0Y", "MapData", "MapStore", "maps_view", "position_into", "jacobian_into",
+__all__ = ["add_frame_dgrad_jacobian", "LINEAR", "FRAME", "KIND", "OFF", "NB", "GPTR", "YPTR", "M_R", "CX", "CY", "Y0X", "Y0Y", "MapData", "MapStore", "maps_view", "position_into", "jacobian_into",
            "dgrad_into", "dgrad_jacobian_parts", "frame_offset", "hessian_parts", "velocity_jacobian_into"]
 
 LINEAR, FRAME = 0, 1
@@ -238,3 +239,26 @@ def velocity_jacobian_into(maps, k, q, v, out):
         yx, yy = maps.ydat[y + j], maps.ydat[y + ne + j]
         out[0, 3 + j] = w * (C * (-yy) - S * yx)
         out[1, 3 + j] = w * (S * (-yy) + C * yx)
+
+
+@numba.njit(cache=True, _nrt=False)
+def add_frame_dgrad_jacobian(ctx, st, maps, k, qa, qb, fx, fy, w, work, floor):
+    """Newton matrix += w ∂(D_kᵀ f)/∂q_b of map k (zero for LINEAR), and its round-off floor
+    |w ∂(Dᵀf)/∂q_b| (|q_a| + |q_b|) into ``floor`` (global); qa, qb the global coordinates, ``work`` ≥
+    2 n_b + 2 floats."""
+    if maps.ints[k, KIND] == LINEAR:
+        return
+    o, nb = maps.ints[k, OFF], maps.ints[k, NB]
+    f = work[:2]
+    f[0], f[1] = fx, fy
+    row, col = work[2:nb - 1], work[nb - 1:2 * nb - 4]
+    h22 = dgrad_jacobian_parts(maps, k, qa[o:o + nb], qb[o:o + nb], f, row, col)
+    a2 = abs(qa[o + 2]) + abs(qb[o + 2])
+    add_qq(ctx, st, o + 2, o + 2, w * h22)
+    fl2 = abs(w * h22) * a2
+    for j in range(nb - 3):
+        add_qq(ctx, st, o + 2, o + 3 + j, w * row[j])
+        add_qq(ctx, st, o + 3 + j, o + 2, w * col[j])
+        fl2 += abs(w * row[j]) * (abs(qa[o + 3 + j]) + abs(qb[o + 3 + j]))
+        floor[o + 3 + j] += abs(w * col[j]) * a2
+    floor[o + 2] += fl2

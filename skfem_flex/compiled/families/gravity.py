@@ -12,9 +12,9 @@ import numba
 import numpy as np
 
 from ..abi import context_of, f2, family_at, family_of, fmat, fvec, i1
-from ..points import KIND, LINEAR, NB, OFF, dgrad_into, dgrad_jacobian_parts, maps_view, position_into
+from ..points import NB, OFF, add_frame_dgrad_jacobian, dgrad_into, maps_view, position_into
 from ..registry import compiled_kernel
-from ..storage import add_qq, storage_of
+from ..storage import storage_of
 from ..tasks import TASK_ENERGY, TASK_EVAL
 from . import FamilyPack
 
@@ -68,20 +68,8 @@ def _evaluate(ctx, d):
         f[0], f[1] = -d.g[i, 0], -d.g[i, 1]
         for j in range(nb):
             gp[o + j] += f[0] * dk[0, j] + f[1] * dk[1, j]
-        if maps.ints[k, KIND] == LINEAR:
-            continue
-        row, col = scratch[2 * nb:3 * nb - 3], scratch[3 * nb:4 * nb - 3]
-        h22 = dgrad_jacobian_parts(maps, k, qa[o:o + nb], qb[o:o + nb], f, row, col)
-        w = ctx.w_gp * ctx.c_dg * ctx.dq1
-        a2 = abs(qa[o + 2]) + abs(qb[o + 2])
-        add_qq(ctx, st, o + 2, o + 2, w * h22)
-        fl2 = abs(w * h22) * a2
-        for j in range(nb - 3):
-            add_qq(ctx, st, o + 2, o + 3 + j, w * row[j])
-            add_qq(ctx, st, o + 3 + j, o + 2, w * col[j])
-            fl2 += abs(w * row[j]) * (abs(qa[o + 3 + j]) + abs(qb[o + 3 + j]))
-            floor[o + 3 + j] += abs(w * col[j]) * a2
-        floor[o + 2] += fl2
+        add_frame_dgrad_jacobian(ctx, st, maps, k, qa, qb, f[0], f[1], ctx.w_gp * ctx.c_dg * ctx.dq1,
+                                 scratch[2 * nb:4 * nb + 2], floor)
 
 
 @numba.njit(cache=True, _nrt=False)

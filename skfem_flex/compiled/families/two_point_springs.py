@@ -30,7 +30,8 @@ import numba
 import numpy as np
 
 from ..abi import context_of, f2, family_at, family_of, fmat, fvec, i2
-from ..points import KIND, LINEAR, NB, OFF, dgrad_into, dgrad_jacobian_parts, jacobian_into, maps_view, position_into
+from ..points import (NB, OFF, add_frame_dgrad_jacobian, dgrad_into, jacobian_into,
+                      maps_view, position_into)
 from ..registry import compiled_kernel
 from ..storage import add_qq, storage_of
 from ..tasks import TASK_ENERGY, TASK_EVAL
@@ -85,29 +86,6 @@ def pair_distance(maps, ka, kb, ax, ay, q, r):
     o = maps.ints[kb, OFF]
     position_into(maps, kb, q[o:o + maps.ints[kb, NB]], r)
     return dx - r[0], dy - r[1]
-
-
-@numba.njit(cache=True, _nrt=False)
-def add_frame_dgrad_jacobian(ctx, st, maps, k, qa, qb, fx, fy, w, work, floor):
-    """Newton matrix += w ∂(D_kᵀ f)/∂q_b of map k (zero for LINEAR), and its round-off floor
-    |w ∂(Dᵀf)/∂q_b| (|q_a| + |q_b|) into ``floor`` (global); qa, qb the global coordinates, ``work`` ≥
-    2 n_b + 2 floats."""
-    if maps.ints[k, KIND] == LINEAR:
-        return
-    o, nb = maps.ints[k, OFF], maps.ints[k, NB]
-    f = work[:2]
-    f[0], f[1] = fx, fy
-    row, col = work[2:nb - 1], work[nb - 1:2 * nb - 4]
-    h22 = dgrad_jacobian_parts(maps, k, qa[o:o + nb], qb[o:o + nb], f, row, col)
-    a2 = abs(qa[o + 2]) + abs(qb[o + 2])
-    add_qq(ctx, st, o + 2, o + 2, w * h22)
-    fl2 = abs(w * h22) * a2
-    for j in range(nb - 3):
-        add_qq(ctx, st, o + 2, o + 3 + j, w * row[j])
-        add_qq(ctx, st, o + 3 + j, o + 2, w * col[j])
-        fl2 += abs(w * row[j]) * (abs(qa[o + 3 + j]) + abs(qb[o + 3 + j]))
-        floor[o + 3 + j] += abs(w * col[j]) * a2
-    floor[o + 2] += fl2
 
 
 @numba.njit(cache=True, _nrt=False)
