@@ -15,13 +15,13 @@ import numba
 import numpy as np
 
 from ..numerics.newton import CONVERGED, EVALUATE, newton_evaluated, newton_reset, newton_solved
-from .abi import call, call_families, fvec, ivec
+from .abi import CONTEXT, FAMILY, call, call_families, fvec, ivec
 from .points import NB, OFF, maps_view, position_into
 from .abi import family_at
 from .tasks import (PHASE_ACCEPT, PHASE_EVALUATE, PHASE_PREDICT, PHASE_START, STATUS_OK, TASK_ENERGY,
                     TASK_MOMENTUM, TASK_ROWS)
 
-__all__ = ["Records", "NewtonArrays", "run_steps", "start_state", "evaluate_once", "record_at", "REFUSED", "DERIVED"]
+__all__ = ["Records", "NewtonArrays", "entry_types", "run_steps", "start_state", "evaluate_once", "record_at", "REFUSED", "DERIVED"]
 
 #: status of :func:`run_steps` when an element refused a state, a Python element raised or a kernel wrote
 #: outside the Newton pattern (``ctx.status`` says which)
@@ -44,6 +44,13 @@ class Records(NamedTuple):
     probes: np.ndarray       # (nr, number of probe maps, 2)
     probe_maps: np.ndarray   # (number of probe maps,) map indices
 
+    @classmethod
+    def empty(cls, nr, n, m, npres, probe_maps):
+        """Zeroed records of ``nr`` rows for n coordinates, m multipliers, npres prescribed coordinates."""
+        z = np.zeros
+        return cls(z(nr), z((nr, n)), z((nr, n)), z((nr, m)), z(nr), z(nr, dtype=np.int64), z((nr, npres)),
+                   z((nr, len(DERIVED))), z((nr, probe_maps.size, 3)), np.ascontiguousarray(probe_maps, np.int64))
+
 
 class NewtonArrays(NamedTuple):
     """The Newton core's state (:func:`~skfem_flex.numerics.newton.newton_start`), allocated once per chunk."""
@@ -52,6 +59,11 @@ class NewtonArrays(NamedTuple):
     x_try: np.ndarray
     fl: np.ndarray
     ints: np.ndarray
+
+    @classmethod
+    def empty(cls, nx):
+        """Zeroed arrays for nx Newton unknowns."""
+        return cls(np.zeros(nx), np.zeros(nx), np.zeros(nx), np.zeros(4), np.zeros(5, dtype=np.int64))
 
 
 @numba.njit(cache=True, _nrt=False)
@@ -206,3 +218,19 @@ def start_state(ctx, scheme, solver, table, t):
         x[i] = -y[i]
     call(scheme[0].kernel, c.self, sch)
     return c.status == STATUS_OK
+
+
+def entry_types():
+    """{name: argument types} of the loop's entry points as :class:`~skfem_flex.schemes.stepper.Stepper`
+    calls them. The types do not depend on the scene (sizes live in the context), so one compile of each
+    serves every scene; this lets them be compiled before a scene's arrays exist (:mod:`.ahead`)."""
+    ctx, rec = np.zeros(1, dtype=CONTEXT), np.zeros(1, dtype=FAMILY)
+    vector, table = np.zeros(1), np.zeros((1, 1))
+    records = Records.empty(1, 1, 1, 1, np.zeros(1, dtype=np.int64))
+
+    def types(*args):
+        return tuple(numba.typeof(a) for a in args)
+    return {"run_steps": types(ctx, rec, rec, vector, 0.0, np.zeros(1, dtype=np.bool_), records,
+                               NewtonArrays.empty(1), 0, False, table),
+            "record_at": types(ctx, records, 0.0, table),
+            "start_state": types(ctx, rec, rec, table, 0.0)}

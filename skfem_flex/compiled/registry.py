@@ -15,28 +15,90 @@ process).
 """
 from __future__ import annotations
 
+import contextlib
+import importlib
 import logging
 import os
 import sys
 import threading
 import time
+from dataclasses import dataclass
+from types import SimpleNamespace
 
 from numba.core.ccallback import CFunc
 
 from .abi import KERNEL_SIGNATURE
 
 __all__ = ["compiled_kernel", "compiled_function", "compile_seconds", "compiled_names", "set_interrupt_check",
-           "LOGGER"]
+           "interruptible", "planning", "is_cached", "count_compiled", "Unit", "LOGGER"]
 
 #: the package's logger for compile notices (INFO; ``logging.getLogger("skfem_flex").setLevel(logging.WARNING)``
 #: or ``SKFEM_FLEX_QUIET=1`` silences it)
 LOGGER = logging.getLogger("skfem_flex")
 
 _KERNELS = {}
+_PLAN = [None]
 _INTERRUPT = [None]
 _FUNCTIONS = {}
 _SECONDS = [0.0]
 _NAMES = []
+
+
+@dataclass(frozen=True)
+class Unit:
+    """One compiled unit, named so that another process can make it (:mod:`.ahead`).
+
+    ``kind`` is "kernel" (a ``numba.cfunc`` of :data:`~.abi.KERNEL_SIGNATURE` made from the plain function
+    ``module.name``, with numba's reference counting when ``nrt``) or "function" (the ``numba.njit``
+    function ``module.name`` for the argument types ``argtypes``); ``what`` names it in notices."""
+
+    kind: str
+    module: str
+    name: str
+    what: str
+    nrt: bool = False
+    argtypes: tuple = ()
+
+    def target(self):
+        """The plain function (kernel) or the dispatcher (function) the unit is made from."""
+        return getattr(importlib.import_module(self.module), self.name)
+
+    def make(self):
+        """Load the unit from the cache, or compile it (with notices)."""
+        if self.kind == "kernel":
+            return compiled_kernel(self.target(), self.what, self.nrt)
+        return compiled_function(self.target(), self.argtypes, self.what)
+
+
+@contextlib.contextmanager
+def planning():
+    """Inside ``with planning() as units:``, :func:`compiled_kernel` compiles nothing: it appends the
+    :class:`Unit` it would make to ``units`` and returns a stand-in whose ``address`` is 0."""
+    units = []
+    _PLAN[0] = units
+    try:
+        yield units
+    finally:
+        _PLAN[0] = None
+
+
+def is_cached(unit):
+    """Whether ``unit`` is made already in this process or can be loaded from the cache."""
+    if unit.kind == "kernel":
+        if (unit.module, unit.name) in _KERNELS:
+            return True
+        return _load_cached_kernel(_new_cfunc(unit.target(), unit.nrt)) is not None
+    dispatcher = unit.target()
+    if tuple(unit.argtypes) in dispatcher.overloads:
+        return True
+    return _load_cached_function(dispatcher, unit.argtypes) is not None
+
+
+def count_compiled(names, seconds):
+    """Count ``names`` (compiled elsewhere for this process, :mod:`.ahead`) and ``seconds`` of waiting for
+    them in :func:`compiled_names` and :func:`compile_seconds`."""
+    _NAMES.extend(names)
+    _SECONDS[0] += seconds
 
 
 def compile_seconds():
@@ -55,7 +117,7 @@ def compiled_names():
     return tuple(_NAMES)
 
 
-def _in_thread(work, what):
+def interruptible(work, what):
     """Run ``work()`` in a daemon thread, waiting in slices of 0.1 s (Ctrl-C reaches the caller at once)."""
     box = {}
 
@@ -84,12 +146,33 @@ def _compiling(what, work):
     """Say that ``what`` is being compiled, do it, say how long it took."""
     LOGGER.info("compiling %s (first use on this machine, cached afterwards) ...", what)
     start = time.perf_counter()
-    value = _in_thread(work, what)
+    value = interruptible(work, what)
     seconds = time.perf_counter() - start
     _SECONDS[0] += seconds
     _NAMES.append(what)
     LOGGER.info("compiled %s in %.1f s", what, seconds)
     return value
+
+
+def _new_cfunc(pyfunc, nrt):
+    res = CFunc(pyfunc, (KERNEL_SIGNATURE.args, KERNEL_SIGNATURE.return_type), locals={},
+                options={} if nrt else {"_nrt": False})
+    res.enable_caching()
+    return res
+
+
+def _load_cached_kernel(res):
+    try:
+        return res._cache.load_overload(res._sig, res._targetdescr.target_context)
+    except Exception:                   # an unreadable cache entry: compile
+        return None
+
+
+def _load_cached_function(dispatcher, argtypes):
+    try:
+        return dispatcher._cache.load_overload(tuple(argtypes), dispatcher.targetctx)
+    except Exception:                   # an unreadable cache entry: compile
+        return None
 
 
 def compiled_kernel(pyfunc, what, nrt=False):
@@ -98,18 +181,14 @@ def compiled_kernel(pyfunc, what, nrt=False):
     (numba's reference-counted memory); without it no array a kernel passes on is reference counted, which
     is most of a small scene's cost otherwise."""
     key = (pyfunc.__module__, pyfunc.__qualname__)
+    if _PLAN[0] is not None:
+        _PLAN[0].append(Unit("kernel", pyfunc.__module__, pyfunc.__qualname__, what, nrt))
+        return SimpleNamespace(address=0)
     hit = _KERNELS.get(key)
     if hit is not None:
         return hit
-    res = CFunc(pyfunc, (KERNEL_SIGNATURE.args, KERNEL_SIGNATURE.return_type), locals={},
-                options={} if nrt else {"_nrt": False})
-    res.enable_caching()
-    cached = None
-    try:
-        cached = res._cache.load_overload(res._sig, res._targetdescr.target_context)
-    except Exception:                   # an unreadable cache entry: compile
-        cached = None
-    if cached is None:
+    res = _new_cfunc(pyfunc, nrt)
+    if _load_cached_kernel(res) is None:
         _compiling(what, res.compile)
     else:
         res.compile()                   # loads the entry just found
@@ -120,14 +199,10 @@ def compiled_kernel(pyfunc, what, nrt=False):
 def compiled_function(dispatcher, argtypes, what):
     """``dispatcher`` (a ``numba.njit`` function) compiled for the argument types ``argtypes`` (a tuple of
     numba types) or loaded from the cache, with a notice when it compiles."""
-    key = (dispatcher, argtypes)
+    key = (dispatcher, tuple(argtypes))
     if key in _FUNCTIONS or tuple(argtypes) in dispatcher.overloads:
         return dispatcher
-    try:
-        cached = dispatcher._cache.load_overload(tuple(argtypes), dispatcher.targetctx)
-    except Exception:                   # an unreadable cache entry: compile
-        cached = None
-    if cached is None:
+    if _load_cached_function(dispatcher, argtypes) is None:
         _compiling(what, lambda: dispatcher.compile(tuple(argtypes)))
     else:
         dispatcher.compile(tuple(argtypes))

@@ -18,15 +18,17 @@ import scipy.sparse as sps
 
 from ..compiled import solvers
 from ..compiled.abi import FAMILY, Fields
-from ..compiled.loop import DERIVED, NewtonArrays, Records, evaluate_once, record_at, run_steps, start_state
-from ..compiled.pack import time_table
-from ..compiled.registry import compiled_function
+from ..compiled.ahead import compile_units
+from ..compiled.loop import (NewtonArrays, Records, entry_types, evaluate_once, record_at, run_steps,
+                             start_state)
+from ..compiled.pack import packed_scene, time_table
+from ..compiled.registry import Unit, compiled_function, planning
 from ..compiled.storage import DENSE
 from ..compiled.tasks import PHASE_EVALUATE, PHASE_PREDICT, STATUS_MISSED, STATUS_OK, STATUS_PYTHON_ERROR
 from ..compiled.workspace import Workspace
 from ..errors import ConvergenceError
 
-__all__ = ["Stepper", "Chunk"]
+__all__ = ["Stepper", "Chunk", "units"]
 
 
 @dataclass
@@ -42,6 +44,26 @@ class Chunk:
 
 
 _READY = set()
+_SOLVERS = {"dense": solvers.dense_solver, "bordered band": solvers.bordered_band_solver,
+            "bordered band (CSR)": solvers.csr_bordered_band_solver}
+
+
+def units(packed, scheme):
+    """The compiled units (:class:`~skfem_flex.compiled.registry.Unit`) a run of the packed scene under
+    ``scheme`` needs, the largest first: the scheme's step, the time loop, the element families, the
+    consistent start, the recorder, the solver."""
+    from .newmark import start_kernel
+    with planning() as kernels:
+        scheme.kernel()
+        for module, _, _ in packed.families:
+            module.kernel()
+        start_kernel()
+        _SOLVERS[packed.solver]()
+    types = entry_types()
+    loop = [Unit("function", run_steps.__module__, name, what, argtypes=types[name])
+            for name, what in (("run_steps", "the time loop"), ("record_at", "the recorder"),
+                               ("start_state", "the consistent start's driver"))]
+    return kernels[:1] + loop[:1] + kernels[1:-2] + loop[1:2] + kernels[-2:] + loop[2:]
 
 
 def _call(fn, what, *args):
@@ -67,18 +89,19 @@ class Stepper:
 
     def __init__(self, scene, scheme, python_only=False):
         self.scene, self.scheme = scene, scheme
-        self.ws = Workspace(scene, scheme.newton, python_only)
-        pk = self.packed = self.ws.packed
-        kernel = {"dense": solvers.dense_solver, "bordered band": solvers.bordered_band_solver,
-                  "bordered band (CSR)": solvers.csr_bordered_band_solver}.get(pk.solver)
+        pk = packed_scene(scene, python_only)
+        kernel = _SOLVERS.get(pk.solver)
         if kernel is None:
             raise NotImplementedError(f"no compiled solver for {pk.solver!r} storage yet")
+        compile_units(units(pk, scheme))
+        self.ws = Workspace(scene, scheme.newton, python_only)
+        pk = self.packed = self.ws.packed
         self.lapack_work, lapack = solvers.lapack_work(pk.nx)
         self.solver_fields = Fields(_plan_fields(pk, lapack))
         self.solver = np.zeros(1, dtype=FAMILY)
         self.solver[0] = self.solver_fields.record(kernel().address, -1, 0)
         nx = pk.nx
-        self.newton = NewtonArrays(np.zeros(nx), np.zeros(nx), np.zeros(nx), np.zeros(4), np.zeros(5, dtype=np.int64))
+        self.newton = NewtonArrays.empty(nx)
         self.ws.ctx[0]["x"] = self.newton.x_try.ctypes.data
         self.data = None
         self.record = np.zeros(1, dtype=FAMILY)
@@ -129,10 +152,8 @@ class Stepper:
         return acc, lam, reaction
 
     def _records(self, nr):
-        pk, n, m = self.packed, self.scene.n, self.packed.m
-        return Records(np.zeros(nr), np.zeros((nr, n)), np.zeros((nr, n)), np.zeros((nr, m)), np.zeros(nr),
-                       np.zeros(nr, dtype=np.int64), np.zeros((nr, pk.pres.size)), np.zeros((nr, len(DERIVED))),
-                       np.zeros((nr, pk.probe_maps.size, 3)), pk.probe_maps)
+        pk = self.packed
+        return Records.empty(nr, self.scene.n, pk.m, pk.pres.size, pk.probe_maps)
 
     def record_now(self, t):
         """One record (:class:`~skfem_flex.compiled.loop.Records`) of the loaded state at time t."""
