@@ -122,7 +122,7 @@ def loop_name(scene, integrator="energy-momentum", compiled=None):
     return "compiled + Python" if path["python_elements"] else "compiled"
 
 
-STARTUP_SCENES = ("pendulum",) if QUICK else ("pendulum", "flexible_pendulum", "spin_up_beam")
+STARTUP_SCENES = ("pendulum",) if QUICK else tuple(sorted(sf.scenes.CATALOGUE))
 
 
 STARTUP_PROBE = ("import json, sys, time; t0 = time.perf_counter(); import skfem_flex as sf; "
