@@ -695,14 +695,10 @@ def test_above_the_compiled_size_limit_csr_storage_equals_dense_storage(monkeypa
     assert_same_run(a, b, tol=dict(v=3e-9, energy_balance=np.inf if scheme != "energy-momentum" else 1e-10))
 
 
-@pytest.mark.xfail(strict=True, raises=NotImplementedError,
-                   reason="package bug: a Newton matrix above the dense storage limit without a band "
-                          "plan gets the solver 'sparse (SuperLU)', for which Stepper has no kernel "
-                          "(NotImplementedError); e.g. simulate(flexible_pendulum(n_elements=220), "
-                          "compiled=False), whose Python elements' pattern has no band plan")
 def test_a_matrix_without_band_plan_above_the_dense_limit_is_solved(monkeypatch):
     """A Newton matrix with no band plan (an unreduced plane-stress strip's dense tangent) above the dense
-    storage limit is stored as CSR and solved by SuperLU, and the run is the dense storage's. The limits are
+    storage limit is stored as CSR and solved by SuperLU (compiled/sparse_solver.py), and the run is the dense
+    storage's. The limits are
     lowered here so that a small scene takes that path (the 220-element pendulum's Python path takes it at
     the real limits, after a minute of packing)."""
     factory = sf.scenes.get("flexible_pendulum")
@@ -820,11 +816,6 @@ def test_csr_storage_reports_an_entry_outside_its_pattern(monkeypatch):
     assert st.ws.ctx[0]["missed"] == 0 and st.ws.ctx[0]["status"] == STATUS_OK
 
 
-@pytest.mark.xfail(strict=True, raises=ValueError,
-                   reason="package bug: the consistent start (schemes/newmark.py _start, used by Stepper.start for "
-                          "every scheme) does not check ctx.missed: an entry written outside a CSR pattern is "
-                          "dropped from the start's matrix, here reported as 'the initial mass/constraint matrix "
-                          "is singular' (a wrong start if the reduced matrix is regular)")
 def test_a_run_reports_an_entry_outside_its_pattern(monkeypatch):
     """A run whose kernels write outside the Newton matrix's CSR pattern stops with the AssertionError that
     names the family, from its first evaluation on (the consistent start included)."""
@@ -859,9 +850,6 @@ def test_a_damper_whose_points_coincide_during_a_step():
         sf.simulate(crossing_mass(), t_end=2 * dt, dt=dt, compiled=False)
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError,
-                   reason="package bug: Stepper.start ignores STATUS_REFUSED and reports a refused start state as "
-                          "'the initial mass/constraint matrix is singular'")
 def test_a_damper_whose_points_coincide_at_the_start_is_named():
     """A run started with a damper's points coincident stops with the damper's error on both paths (the
     Python path raises it from the damper's ``generalized_force``; the compiled start should name the

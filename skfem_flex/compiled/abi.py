@@ -20,6 +20,8 @@ while the loop runs: the workspace owns it (:class:`~skfem_flex.compiled.workspa
 """
 from __future__ import annotations
 
+import ctypes
+
 import numba
 import numpy as np
 from llvmlite import ir
@@ -29,7 +31,7 @@ from numba.extending import intrinsic
 from numba.np.arrayobj import make_array, populate_array
 
 __all__ = ["CONTEXT", "CONTEXT_FIELDS", "FAMILY", "FAMILY_SIZE", "KERNEL_SIGNATURE", "call", "call_pointers", "call_families", "fvec",
-           "fmat", "ivec", "i32vec", "imat", "context_of", "context_at", "family_of", "family_at", "Fields", "f1", "f2", "f3",
+           "fmat", "ivec", "i32vec", "imat", "context_of", "context_at", "record_view", "vector_view", "family_of", "family_at", "Fields", "f1", "f2", "f3",
            "i1", "i2"]
 
 
@@ -206,6 +208,18 @@ def _record_intrinsic(record_type, doc):
 
 
 context_at = _record_intrinsic(CONTEXT_TYPE, "The context record at ``address`` (writes go through).")
+
+
+def record_view(address, dtype=CONTEXT):
+    """From Python: the record of ``dtype`` at ``address`` as a numpy record (writes go through); the
+    Python side of the ABI, for kernels that are ctypes callbacks."""
+    return np.frombuffer((ctypes.c_char * dtype.itemsize).from_address(int(address)), dtype=dtype)[0]
+
+
+def vector_view(address, n, dtype=np.float64):
+    """From Python: the ``n`` entries of ``dtype`` at ``address`` as a numpy array (writes go through)."""
+    ctype = ctypes.c_double if np.dtype(dtype) == np.float64 else ctypes.c_int64
+    return np.ctypeslib.as_array(ctypes.cast(int(address), ctypes.POINTER(ctype)), shape=(max(int(n), 1),))[:int(n)]
 family_at = _record_intrinsic(FAMILY_TYPE, "The family record at ``address``.")
 
 

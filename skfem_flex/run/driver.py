@@ -3,7 +3,6 @@ checkpoints, progress and signals — everything :func:`~skfem_flex.simulate` do
 """
 from __future__ import annotations
 
-import ctypes
 import math
 import signal
 import sys
@@ -13,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..compiled import registry
+from ..compiled.abi import vector_view
 from ..compiled.loop import REFUSED
 from ..compiled.tasks import STATUS_PYTHON_ERROR
 from ..errors import ConvergenceError, DivergenceError, Interrupted, OutputError, SimulationError
@@ -199,19 +199,15 @@ class Run:
 
     def _refusal(self):
         """The error the refusing family's elements raise through their own methods at the refused state
-        (the family's ``refusal_error``, at the loads' point or the step's end as its ``REFUSAL_STATE``
-        says), or None."""
+        (at the loads' point or the step's end as the family's ``REFUSAL_STATE`` says), or None."""
         c = self.stepper.ws.ctx[0]
         k, families = int(c["bad_family"]), self.stepper.packed.families
-        fn = getattr(families[k][0], "refusal_error", None) if 0 <= k < len(families) else None
-        if fn is None:
-            return None
-        at_loads = getattr(families[k][0], "REFUSAL_STATE", "end") == "loads"
+        at_loads = 0 <= k < len(families) and getattr(families[k][0], "REFUSAL_STATE", "end") == "loads"
         q, v, t = ("qe", "ve", "te") if at_loads else ("q1", "v1", "t1")
         n = self.scene.n
         # the context holds the addresses of the vectors the refusing kernel read (the scheme's own data)
-        q, v = (np.ctypeslib.as_array((ctypes.c_double * n).from_address(int(c[name]))).copy() for name in (q, v))
-        return fn(self.scene, q, v, float(c[t]))
+        q, v = (vector_view(c[name], n).copy() for name in (q, v))
+        return self.stepper.refusal(q, v, float(c[t]))[1]
 
     def _raise_python_error(self):
         if self.stepper.ws.ctx[0]["status"] == STATUS_PYTHON_ERROR:

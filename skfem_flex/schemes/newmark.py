@@ -315,6 +315,8 @@ def _start(ctx, s):
     phi = fvec(ctx.phi, m)
     for i in range(m):
         res[nf + i] = phi[i]
+    if ctx.missed:
+        ctx.status = STATUS_MISSED
     ctx.err = 0.0 if all_finite(res) else np.nan
 
 

@@ -23,8 +23,10 @@ from ..compiled.loop import (NewtonArrays, Records, entry_types, evaluate_once, 
                              start_state)
 from ..compiled.pack import packed_scene, time_table
 from ..compiled.registry import Unit, compiled_function, planning
+from ..compiled.sparse_solver import sparse_solver
 from ..compiled.storage import DENSE
-from ..compiled.tasks import PHASE_EVALUATE, PHASE_PREDICT, STATUS_MISSED, STATUS_OK, STATUS_PYTHON_ERROR
+from ..compiled.tasks import (PHASE_EVALUATE, PHASE_PREDICT, STATUS_MISSED, STATUS_OK, STATUS_PYTHON_ERROR,
+                              STATUS_REFUSED)
 from ..compiled.workspace import Workspace
 from ..errors import ConvergenceError
 
@@ -45,7 +47,7 @@ class Chunk:
 
 _READY = set()
 _SOLVERS = {"dense": solvers.dense_solver, "bordered band": solvers.bordered_band_solver,
-            "bordered band (CSR)": solvers.csr_bordered_band_solver}
+            "bordered band (CSR)": solvers.csr_bordered_band_solver, "sparse (SuperLU)": sparse_solver}
 
 
 def units(packed, scheme):
@@ -53,17 +55,19 @@ def units(packed, scheme):
     ``scheme`` needs, the largest first: the scheme's step, the time loop, the element families, the
     consistent start, the recorder, the solver."""
     from .newmark import start_kernel
-    with planning() as kernels:
+    with planning() as step:
         scheme.kernel()
+    with planning() as families:
         for module, _, _ in packed.families:
             module.kernel()
+    with planning() as rest:
         start_kernel()
         _SOLVERS[packed.solver]()
     types = entry_types()
     loop = [Unit("function", run_steps.__module__, name, what, argtypes=types[name])
             for name, what in (("run_steps", "the time loop"), ("record_at", "the recorder"),
                                ("start_state", "the consistent start's driver"))]
-    return kernels[:1] + loop[:1] + kernels[1:-2] + loop[1:2] + kernels[-2:] + loop[2:]
+    return step + loop[:1] + families + loop[1:2] + rest + loop[2:]
 
 
 def _call(fn, what, *args):
@@ -136,6 +140,10 @@ class Stepper:
         table = time_table(pk.columns, float(t), np.zeros(0), False)
         ok = _call(start_state, "the consistent start's driver", self.ws.ctx, rec, self.solver, table, float(t))
         self._check_status()
+        if self.ws.ctx[0]["status"] == STATUS_REFUSED:
+            family, exc = self.refusal(q, v, t)
+            raise ValueError(f"the start state is refused by the {family}: " + (
+                str(exc) if exc is not None else "an element folds inside out or lost its direction"))
         if not ok:
             raise ValueError("the initial mass/constraint matrix is singular: a coordinate has no inertia, or "
                              "constraints are redundant")
@@ -241,6 +249,15 @@ class Stepper:
             raise ConvergenceError(f"{scheme.name}: the step of {h:g} s from t = {state.t:.6g} s failed (status "
                                    f"{chunk.status})", iterations=chunk.iterations, residual=float("nan"))
         return self.state(state.t + float(h)), chunk.iterations
+
+    def refusal(self, q, v, t):
+        """(the name of the family that refused the last evaluation, the error its elements raise through
+        their own methods at state (q, v) at time t — the family's ``refusal_error`` — or None)."""
+        k, families = int(self.ws.ctx[0]["bad_family"]), self.packed.families
+        if not 0 <= k < len(families):
+            return "scheme", None
+        fn = getattr(families[k][0], "refusal_error", None)
+        return self.ws.family_name(k), (fn(self.scene, q, v, float(t)) if fn is not None else None)
 
     def _check_status(self):
         c = self.ws.ctx[0]

@@ -23,7 +23,7 @@ import numba
 import numpy as np
 import scipy.sparse as sps
 
-from ..abi import CONTEXT, context_at
+from ..abi import context_at, record_view, vector_view
 from ..rows import finish_row
 from ..storage import add_qq, storage_of
 from ..tasks import (ROWS_ACCELERATION, ROWS_VELOCITY, SCHEME_EM, SCHEME_NEWMARK, STATUS_PYTHON_ERROR, TASK_ENERGY,
@@ -93,8 +93,7 @@ class _Context:
 
     def __init__(self, address):
         self.address = address
-        buf = (ctypes.c_char * CONTEXT.itemsize).from_address(address)
-        self.rec = np.frombuffer(buf, dtype=CONTEXT)[0]
+        self.rec = record_view(address)
 
     def __getitem__(self, name):
         return self.rec[name]
@@ -107,8 +106,7 @@ class _Context:
         if view is None:
             if len(self._views) > 256:
                 self._views.clear()
-            view = self._views[key] = np.ctypeslib.as_array(ctypes.cast(addr, ctypes.POINTER(ctypes.c_double)),
-                                                            shape=(max(n, 1),))[:n]
+            view = self._views[key] = vector_view(addr, n)
         return view
 
 
@@ -291,8 +289,8 @@ def _run(ctx, items):
 def _callback(ctx_address, fam_address):
     ctx = _Context(ctx_address)
     try:
-        fam = np.frombuffer((ctypes.c_char * 72).from_address(fam_address), dtype=np.int64)
-        key = int(np.ctypeslib.as_array(ctypes.cast(int(fam[4]), ctypes.POINTER(ctypes.c_int64)), shape=(1,))[0])
+        fam = vector_view(fam_address, 9, np.int64)
+        key = int(vector_view(fam[4], 1, np.int64)[0])
         _run(ctx, _FAMILIES[key])
     except BaseException as exc:        # nothing may cross the compiled loop: kept and raised in Python
         _PENDING.append(exc)
