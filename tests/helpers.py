@@ -164,3 +164,11 @@ def load_example(name):
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def default_sigint():
+    """``preexec_fn`` of a child that a test interrupts: SIGINT back to its default. A job a POSIX shell
+    starts in the background (``cmd &``, as some CI runners do) inherits SIGINT ignored, and Python
+    then never raises KeyboardInterrupt; a user's terminal gives the default."""
+    import signal
+    signal.signal(signal.SIGINT, signal.SIG_DFL)

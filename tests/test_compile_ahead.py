@@ -62,7 +62,7 @@ def test_the_loop_entry_types_are_those_a_run_calls_with():
 def test_a_run_asks_for_its_scheme_loop_families_start_and_solver():
     scene = sf.scenes.get("pendulum")()
     listed = [u.what for u in units(packed_scene(scene), sf.EnergyMomentum())]
-    assert listed[:2] == ["the energy-momentum step", "the time loop"]
+    assert listed[:2] == ["the energy-momentum step", "the time loop"]   # no allocating kernel here
     assert {"the gravity family", "the distance-constraint family", "the consistent start",
             "the dense linear solver", "the recorder", "the consistent start's driver"} <= set(listed)
     assert len(listed) == len(set(listed))
@@ -73,3 +73,11 @@ def test_a_wrong_process_count_is_named(monkeypatch, text):
     monkeypatch.setenv("SKFEM_FLEX_COMPILE_PROCESSES", text)
     with pytest.raises(ValueError, match=f"SKFEM_FLEX_COMPILE_PROCESSES must be 1 or 2, got '{text}'"):
         ahead.processes()
+
+
+def test_the_allocating_kernels_come_first():
+    """The floating-frame family and the band solver (numba's reference counting) compile longest: first."""
+    scene = sf.scenes.get("spin_up_beam")()
+    listed = units(packed_scene(scene), sf.EnergyMomentum())
+    assert [u.nrt for u in listed] == sorted((u.nrt for u in listed), reverse=True)
+    assert {u.what for u in listed if u.nrt} == {"the floating-frame family", "the band-with-border linear solver"}

@@ -22,7 +22,7 @@ import skfem_flex as sf
 from skfem_flex.apps.cli import main
 from skfem_flex.io.output import read_pvd
 
-from helpers import ROOT
+from helpers import ROOT, default_sigint
 
 SCENE, T_END, DT = "pendulum", 10.0, 0.01
 
@@ -40,7 +40,8 @@ def start_run(out):
                SKFEM_FLEX_COMPILED="0")
     return subprocess.Popen([sys.executable, "-m", "skfem_flex", "run", SCENE, "--t-end", str(T_END), "--dt", str(DT),
                              "--out", str(out), "--quiet", "--every", "2", "--checkpoint-every", "0.2"],
-                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            preexec_fn=default_sigint)
 
 
 def wait_for_loop(proc, out, timeout=60.0):

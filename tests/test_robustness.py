@@ -24,7 +24,7 @@ from skfem_flex.compiled import registry
 from skfem_flex.run import driver
 from skfem_flex.io.output import VTKSeries, read_pvd
 
-from helpers import ROOT
+from helpers import ROOT, default_sigint
 
 
 #: --set values of the wrong type, sign and size (sizes kept where a run is rejected or short)
@@ -351,13 +351,19 @@ def test_ctrl_c_during_a_cold_compile_stops_within_seconds(tmp_path):
     import signal
     import time
 
-    env = dict(os.environ, PYTHONPATH=str(ROOT), NUMBA_CACHE_DIR=str(tmp_path), SKFEM_FLEX_QUIET="0")
+    import psutil
+
+    # two compile processes: the helper (compiled/ahead.py) must go with the run
+    env = dict(os.environ, PYTHONPATH=str(ROOT), NUMBA_CACHE_DIR=str(tmp_path), SKFEM_FLEX_QUIET="0",
+               SKFEM_FLEX_COMPILE_PROCESSES="2")
     proc = subprocess.Popen([sys.executable, "-m", "skfem_flex.apps.cli", "run", "pendulum", "--t-end", "0.1"],
                             env=env, stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
-                            cwd=str(tmp_path))
+                            cwd=str(tmp_path), preexec_fn=default_sigint)
     first = proc.stderr.readline()
     assert first.startswith("skfem-flex: compiling "), first
     time.sleep(0.5)
+    helpers = psutil.Process(proc.pid).children(recursive=True)
+    assert any("skfem_flex.compiled.ahead" in " ".join(h.cmdline()) for h in helpers), helpers
     proc.send_signal(signal.SIGINT)
     sent = time.perf_counter()
     try:
@@ -366,6 +372,8 @@ def test_ctrl_c_during_a_cold_compile_stops_within_seconds(tmp_path):
         proc.kill()
     assert time.perf_counter() - sent <= 5.0
     assert proc.returncode == 130, (proc.returncode, err)
+    gone, alive = psutil.wait_procs(helpers, timeout=5)
+    assert not alive, alive
     assert "Traceback" not in err and "interrupted" in err, err
 
 

@@ -9,6 +9,7 @@ accepts), so that Python can halve the step or raise. It is compiled once per ma
 """
 from __future__ import annotations
 
+import functools
 from typing import NamedTuple
 
 import numba
@@ -220,6 +221,7 @@ def start_state(ctx, scheme, solver, table, t):
     return c.status == STATUS_OK
 
 
+@functools.lru_cache(maxsize=1)
 def entry_types():
     """{name: argument types} of the loop's entry points as :class:`~skfem_flex.schemes.stepper.Stepper`
     calls them. The types do not depend on the scene (sizes live in the context), so one compile of each

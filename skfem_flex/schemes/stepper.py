@@ -52,8 +52,8 @@ _SOLVERS = {"dense": solvers.dense_solver, "bordered band": solvers.bordered_ban
 
 def units(packed, scheme):
     """The compiled units (:class:`~skfem_flex.compiled.registry.Unit`) a run of the packed scene under
-    ``scheme`` needs, the largest first: the scheme's step, the time loop, the element families, the
-    consistent start, the recorder, the solver."""
+    ``scheme`` needs, roughly the largest first: the allocating kernels, then the scheme's step, the time
+    loop, the element families, the recorder, the consistent start, the solver, the start's driver."""
     from .newmark import start_kernel
     with planning() as step:
         scheme.kernel()
@@ -67,7 +67,11 @@ def units(packed, scheme):
     loop = [Unit("function", run_steps.__module__, name, what, argtypes=types[name])
             for name, what in (("run_steps", "the time loop"), ("record_at", "the recorder"),
                                ("start_state", "the consistent start's driver"))]
-    return step + loop[:1] + families + loop[1:2] + rest + loop[2:]
+    ordered = step + loop[:1] + families + loop[1:2] + rest + loop[2:]
+    # the kernels that allocate (numba's reference counting: the floating-frame and exact-beam families,
+    # the band solvers) are the largest to compile, 7-15 s each: first, so that neither process is left
+    # with one of them at the end while the other waits
+    return [u for u in ordered if u.nrt] + [u for u in ordered if not u.nrt]
 
 
 def _call(fn, what, *args):
