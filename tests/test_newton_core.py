@@ -108,3 +108,27 @@ def test_one_rule_changed_in_one_place_changes_every_scheme(tmp_path):
     assert set(before) == set(after) == {"energy-momentum", "trapezoidal", "generalized-alpha", "statics"}
     for solver in before:
         assert after[solver] < before[solver], (solver, before[solver], after[solver])
+
+
+def test_the_python_driver_compiles_the_core_through_the_registry(monkeypatch):
+    """newton_solve compiles each core function it calls from Python through the hook the compile registry
+    installs (announced and timed like every compile), once per function and process."""
+    from skfem_flex.compiled import registry
+    from skfem_flex.numerics import newton
+
+    calls = []
+
+    def hook(fn, argtypes, what):
+        calls.append(fn.__name__)
+        return registry.compiled_function(fn, argtypes, what)
+
+    monkeypatch.setattr(newton, "_READY", set())
+    newton.set_compile_hook(hook)
+    try:
+        for _ in range(2):
+            x, _, _ = newton_solve(lambda x: (x ** 3 - 2.0, np.diag(3 * x ** 2), float(abs(x[0] ** 3 - 2.0) / 1e-12)),
+                                   np.array([1.0]), NewtonSettings(), "test", "here")
+    finally:
+        newton.set_compile_hook(registry.compiled_function)
+    assert calls == ["newton_start", "newton_evaluated", "newton_solved"]
+    assert x[0] == pytest.approx(2.0 ** (1 / 3), rel=1e-12)

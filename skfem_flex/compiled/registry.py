@@ -27,6 +27,7 @@ from types import SimpleNamespace
 
 from numba.core.ccallback import CFunc
 
+from ..numerics.newton import set_compile_hook
 from .abi import KERNEL_SIGNATURE
 
 __all__ = ["compiled_kernel", "compiled_function", "compile_seconds", "compiled_names", "set_interrupt_check",
@@ -208,6 +209,9 @@ def compiled_function(dispatcher, argtypes, what):
         dispatcher.compile(tuple(argtypes))
     _FUNCTIONS[key] = True
     return dispatcher
+
+
+set_compile_hook(compiled_function)
 
 
 def _default_handler():

@@ -35,7 +35,7 @@ import numpy as np
 from ..errors import ConvergenceError
 from .linear_solver import linear_solve as default_linear_solve
 
-__all__ = ["NewtonSettings", "newton_start", "newton_reset", "newton_evaluated", "newton_solved", "newton_solve", "roundoff_floor",
+__all__ = ["NewtonSettings", "set_compile_hook", "newton_start", "newton_reset", "newton_evaluated", "newton_solved", "newton_solve", "roundoff_floor",
            "PythonSystem", "max_abs", "all_finite", "EVALUATE", "SOLVE", "CONVERGED", "NONFINITE_RESIDUAL",
            "NONFINITE_UPDATE", "SINGULAR", "NOT_CONVERGED"]
 
@@ -319,6 +319,27 @@ class PythonSystem:
             return np.zeros(np.size(self.r)), False
 
 
+_COMPILE_HOOK = [None]
+_READY = set()
+
+
+def set_compile_hook(hook):
+    """``hook(dispatcher, argtypes, what)`` compiles a core function before :func:`newton_solve` first
+    calls it from Python, so that the compile is announced and timed like every other
+    (:func:`skfem_flex.compiled.registry.compiled_function` installs itself here; without a hook numba
+    compiles on the first call, silently)."""
+    _COMPILE_HOOK[0] = hook
+
+
+def _core(fn, *args):
+    """``fn(*args)``, compiled through the hook on its first call from Python."""
+    if fn not in _READY and _COMPILE_HOOK[0] is not None:
+        _COMPILE_HOOK[0](fn, tuple(numba.typeof(a) for a in args),
+                         f"the Newton core's {fn.__name__} for Python-assembled systems")
+        _READY.add(fn)
+    return fn(*args)
+
+
 def newton_solve(fun, x0, settings, name, where, x_scale=0.0, linear_solve=None):
     """Solve fun(x) = 0 on a Python-assembled system, driving the compiled core.
 
@@ -351,15 +372,15 @@ def newton_solve(fun, x0, settings, name, where, x_scale=0.0, linear_solve=None)
         within ``settings.max_iterations``. Exceptions raised by ``fun`` pass through.
     """
     system = PythonSystem(fun, default_linear_solve if linear_solve is None else linear_solve)
-    state = newton_start(np.ascontiguousarray(x0, dtype=float), float(x_scale), int(settings.max_iterations),
-                         bool(settings.line_search))
+    state = _core(newton_start, np.ascontiguousarray(x0, dtype=float), float(x_scale), int(settings.max_iterations),
+                  bool(settings.line_search))
     action = EVALUATE
     while action < 0:                          # do what the core asks; the rules are all in the core
         if action == EVALUATE:
-            action = newton_evaluated(state, system.evaluate(state[2]))
+            action = _core(newton_evaluated, state, float(system.evaluate(state[2])))
         else:
             y, regular = system.solve()
-            action = newton_solved(state, y, regular)
+            action = _core(newton_solved, state, np.ascontiguousarray(y, dtype=float), bool(regular))
     status, x, it, err = action, state[0], int(state[4][0]), float(state[3][0])
     if status == CONVERGED:
         return x, system.r, it
