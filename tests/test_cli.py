@@ -247,3 +247,10 @@ def test_probe_plots_label_their_units():
     result = sf.simulate(scene, 0.02, 0.01)
     fig = plot_probes(result, units=probe_units(scene))
     assert fig.axes[0].get_ylabel() == "position (m)"
+
+
+def test_no_plots_writes_everything_but_the_plots(tmp_path):
+    out = tmp_path / "o"
+    assert cli.main(["run", "pendulum", "--t-end", "0.05", "--out", str(out), "--no-vtk", "--no-plots", "--quiet"]) == 0
+    assert (out / "summary.json").exists() and (out / "result.npz").exists()
+    assert not list(out.glob("*.png"))

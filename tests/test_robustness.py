@@ -59,7 +59,7 @@ def test_cli_survives_any_set_value(tmp_path, capsys, data, name):
     defaults = getattr(scenes.get(name), "defaults", {}) or {}
     dt = defaults.get("dt", 0.01)
     rc, err = run_cli(capsys, ["run", name, "--set", f"{key}={value}", "--t-end", repr(2 * dt), "--out",
-                               str(tmp_path / name), "--no-vtk", "--quiet"])
+                               str(tmp_path / name), "--no-vtk", "--no-plots", "--quiet"])
     assert rc in (0, 1, 2, 3), err
     assert "Traceback" not in err and "internal error" not in err, err
     lines = err.strip().splitlines()

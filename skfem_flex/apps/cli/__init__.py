@@ -4,7 +4,7 @@
 
     skfem-flex run [SCENE] [--set key=value ...] [--t-end T] [--dt DT]
                    [--integrator NAME] [--rho-inf R] [--out DIR] [--every N]
-                   [--no-vtk] [--quiet]
+                   [--no-vtk] [--no-plots] [--quiet]
     skfem-flex list
     skfem-flex study work-precision [CASE] [--schemes ...] [--quick] [--no-peer] [--out DIR]
                      [--workers N | --scheduler ADDRESS] [--store DIR] [--resume | --no-resume]

@@ -139,7 +139,7 @@ def _cmd_run(args):
 
     held = SignalStop(True)                   # a signal now waits until the outputs are complete
     try:
-        files = _write_run_outputs(scene, result, sinks, out)
+        files = _write_run_outputs(scene, result, sinks, out, plots=not args.no_plots)
         summary = run_summary(name, scene, effective, integrator, rho_inf, t_end, dt, result, error, files, wall)
         try:
             write_text_atomically(out / "summary.json", json.dumps(summary, indent=2) + "\n")
@@ -199,8 +199,9 @@ def _resume_file(out):
     return best
 
 
-def _write_run_outputs(scene, result, sinks, out):
-    """result.npz, probes.csv and plots (what the run reached); {key: path} of the files written."""
+def _write_run_outputs(scene, result, sinks, out, plots=True):
+    """result.npz, probes.csv and plots (unless ``plots`` is False; what the run reached); {key: path} of
+    the files written."""
     files = {}
     if sinks and sinks[0].written:
         files.update(pvd=sinks[0].pvd_path, series=sinks[0].series_path, vtu_files=len(sinks[0].written))
@@ -213,6 +214,9 @@ def _write_run_outputs(scene, result, sinks, out):
             files["probes_csv"] = result.probes_to_csv(out / "probes.csv")
     except OSError as exc:
         raise OutputWriteError(exc) from None
+    files["summary"] = out / "summary.json"
+    if not plots:
+        return files
     from ...io.plots import save_plots
     try:
         for k, p in save_plots(scene, result, out).items():
@@ -246,6 +250,7 @@ def add_run(sub):
     p.add_argument("--every", type=positive_int, default=None, metavar="N",
                    help=f"write a VTK file every N steps (default: at most about {MAX_FRAMES} files)")
     p.add_argument("--no-vtk", action="store_true", help="skip the VTK series")
+    p.add_argument("--no-plots", action="store_true", help="skip the PNG plots (about 0.2 s each)")
     p.add_argument("--quiet", action="store_true", help="no progress bar and no report")
     p.add_argument("--checkpoint-every", type=positive_number, default=CHECKPOINT_EVERY, metavar="S",
                    help=f"save the histories to {CHECKPOINT} every S seconds of wall time (default {CHECKPOINT_EVERY:g})")
