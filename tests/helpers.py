@@ -172,3 +172,13 @@ def default_sigint():
     then never raises KeyboardInterrupt; a user's terminal gives the default."""
     import signal
     signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+def random_scene_state(scene, rng):
+    """A state of ``scene`` near its initial one: q₀ + 0.02 N(0, 1) (Cayley coordinates + 0.3 N more),
+    v₀ + N(0, 1)."""
+    q0, v0 = scene.initial_state()
+    q0 = q0 + 0.02 * rng.normal(size=q0.size)
+    for c in scene.cayley_index:
+        q0[c] += 0.3 * rng.normal()
+    return q0, v0 + rng.normal(size=q0.size)

@@ -30,6 +30,7 @@ from skfem_flex.numerics.rotations import cayley_ratio
 from skfem_flex.scenes.rotating import hub_beam
 
 from family_checks import dense, fd_mismatch, loaded_stepper, rel_dev, run_both, run_new
+from helpers import random_scene_state
 
 #: the Newton matrix against central differences, relative to each row's largest entry (family_checks)
 FD_TOL = 1e-10
@@ -196,20 +197,11 @@ def stepper_at_start(sc, scheme):
     return loaded_stepper(sc, scheme, *sc.initial_state())
 
 
-def random_state(sc, rng):
-    """A state near the initial one: q₀ + 0.02 N(0, 1) (Cayley coordinates + 0.3 N), v₀ + N(0, 1)."""
-    q0, v0 = sc.initial_state()
-    q0 = q0 + 0.02 * rng.normal(size=q0.size)
-    for c in sc.cayley_index:
-        q0[c] += 0.3 * rng.normal()
-    return q0, v0 + rng.normal(size=q0.size)
-
-
 def random_step(sc, scheme, seed, h):
     """A stepper of ``sc`` loaded with a random state (and pseudo-acceleration), and random unknowns
     x = (Δq = Δt v₀ + 0.01 N, μ = N): (stepper, q₀, v₀, x); the acceleration is ``st.acc``."""
     rng = np.random.default_rng(seed)
-    q0, v0 = random_state(sc, rng)
+    q0, v0 = random_scene_state(sc, rng)
     acc = rng.normal(size=q0.size)
     st = loaded_stepper(sc, scheme, q0, v0, acc=acc)
     st.acc = acc

@@ -18,6 +18,7 @@ from skfem_flex.numerics.rotations import cayley_ratio
 from skfem_flex.scenes.rotating import hub_beam
 
 from family_checks import dense, fd_mismatch, loaded_stepper, rel_dev, run_both, run_new
+from helpers import random_scene_state
 
 #: the Newton matrix against central differences, relative to each row's largest entry (family_checks)
 FD_TOL = 1e-10
@@ -54,20 +55,12 @@ def exact_slider():
 SCENES = {"bar": bar_slider, "beam": beam_prismatic, "exact beam": exact_slider}
 
 
-def random_state(scene, rng):
-    q0, v0 = scene.initial_state()
-    q0 = q0 + 0.02 * rng.normal(size=q0.size)
-    for c in scene.cayley_index:
-        q0[c] += 0.3 * rng.normal()
-    return q0, v0 + rng.normal(size=q0.size)
-
-
 @pytest.mark.parametrize("scheme", ["energy-momentum", "trapezoidal", "generalized-alpha"])
 @pytest.mark.parametrize("kind", list(SCENES))
 def test_step_is_the_constraints_contract(kind, scheme):
     scene = SCENES[kind]()
     rng = np.random.default_rng(7)
-    q0, v0 = random_state(scene, rng)
+    q0, v0 = random_scene_state(scene, rng)
     h, m, nf = 0.02, scene.n_constraints, scene.n
     st = loaded_stepper(scene, scheme, q0, v0, acc=rng.normal(size=q0.size))
     dq = h * v0 + 1e-2 * rng.normal(size=nf)

@@ -84,15 +84,24 @@ def planning():
 
 
 def is_cached(unit):
-    """Whether ``unit`` is made already in this process or can be loaded from the cache."""
+    """Whether ``unit`` is made already in this process or in the cache; a unit found in the cache is
+    loaded now (the later :func:`compiled_kernel` or :func:`compiled_function` finds it made)."""
     if unit.kind == "kernel":
-        if (unit.module, unit.name) in _KERNELS:
-            return True
-        return _load_cached_kernel(_new_cfunc(unit.target(), unit.nrt)) is not None
-    dispatcher = unit.target()
-    if tuple(unit.argtypes) in dispatcher.overloads:
+        key = (unit.module, unit.name)
+        if key not in _KERNELS:
+            res = _new_cfunc(unit.target(), unit.nrt)
+            if _load_cached_kernel(res) is None:
+                return False
+            res.compile()                   # loads the entry just found
+            _KERNELS[key] = res
         return True
-    return _load_cached_function(dispatcher, unit.argtypes) is not None
+    dispatcher, argtypes = unit.target(), tuple(unit.argtypes)
+    if (dispatcher, argtypes) not in _FUNCTIONS and argtypes not in dispatcher.overloads:
+        if _load_cached_function(dispatcher, argtypes) is None:
+            return False
+        dispatcher.compile(argtypes)        # loads the entry just found
+        _FUNCTIONS[(dispatcher, argtypes)] = True
+    return True
 
 
 def count_compiled(names, seconds):

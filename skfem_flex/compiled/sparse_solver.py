@@ -31,9 +31,10 @@ def _callback(ctx_address, fam_address):
         nx = int(rec["nx"])
         ptr = vector_view(rec["csr_ptr"], nx + 1, np.int64)
         nnz = int(ptr[nx])
-        a = sps.csr_matrix((vector_view(rec["mat"], nnz).copy(), vector_view(rec["csr_idx"], nnz, np.int64).copy(),
-                            ptr.copy()), shape=(nx, nx))
-        vector_view(rec["y"], nx)[:] = linear_solve(a, vector_view(rec["res"], nx).copy())
+        # views, no copies: linear_solve reads the matrix (and copies it itself if it must change it)
+        a = sps.csr_matrix((vector_view(rec["mat"], nnz), vector_view(rec["csr_idx"], nnz, np.int64), ptr),
+                           shape=(nx, nx), copy=False)
+        vector_view(rec["y"], nx)[:] = linear_solve(a, vector_view(rec["res"], nx))
         rec["regular"] = 1
     except BaseException:               # singular (LinAlgError) or anything else: nothing may cross the loop
         rec["regular"] = 0

@@ -7,7 +7,7 @@ import math
 
 from .errors import UsageError
 
-__all__ = ["convert_setting", "scene_settings", "vary_values", "catalogue_scene", "DEFAULT_SCENE",
+__all__ = ["convert_setting", "split_setting", "scene_settings", "vary_values", "catalogue_scene", "DEFAULT_SCENE",
            "FALLBACK_T_END", "FALLBACK_DT"]
 
 #: scene run by ``skfem-flex run`` without a SCENE argument
@@ -76,6 +76,16 @@ def convert_setting(key, text, default, option="--set"):
     return text
 
 
+def split_setting(item, message):
+    """(key, text) of a ``KEY=TEXT`` command-line item; a UsageError with ``message`` (formatted with
+    ``item``) when it has no ``=`` or no key."""
+    key, sep, text = item.partition("=")
+    key = key.strip()
+    if not sep or not key:
+        raise UsageError(message.format(item=item))
+    return key, text
+
+
 def scene_settings(name, items):
     """{parameter: value} from ``--set`` items, converted with the defaults' types."""
     from ... import scenes
@@ -83,10 +93,7 @@ def scene_settings(name, items):
     params = {p: d for p, d, _ in scenes.parameters(name)}
     out = {}
     for item in items or ():
-        key, sep, text = item.partition("=")
-        key = key.strip()
-        if not sep or not key:
-            raise UsageError(f"--set expects key=value, got {item!r} (give the scene name before --set)")
+        key, text = split_setting(item, "--set expects key=value, got {item!r} (give the scene name before --set)")
         if key not in params:
             raise UsageError(f"scene {name!r} has no parameter {key!r}; it has: {', '.join(params) or 'none'}")
         if key in out:

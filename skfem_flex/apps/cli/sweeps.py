@@ -13,7 +13,7 @@ from pathlib import Path
 from .arguments import number, positive_int, positive_number
 from .errors import UsageError, one_line
 from .outputs import jsonable, prepare_out
-from .settings import scene_settings, vary_values
+from .settings import scene_settings, split_setting, vary_values
 
 __all__ = ["add_sweep", "add_study"]
 
@@ -52,10 +52,7 @@ def _sweep_grid(name, items):
     run_defaults = {"t_end": 0.0, "dt": 0.0, "integrator": ""}     # only their types matter
     grid = {}
     for item in items or ():
-        key, sep, text = item.partition("=")
-        key = key.strip()
-        if not sep or not key:
-            raise UsageError(f"--vary expects KEY=VALUES, got {item!r}")
+        key, text = split_setting(item, "--vary expects KEY=VALUES, got {item!r}")
         if key in grid:
             raise UsageError(f"--vary {key} is given twice")
         # unknown names pass as text: the sweep's plan reports them, in the same words as for the API
