@@ -31,7 +31,7 @@ from numba.extending import intrinsic
 from numba.np.arrayobj import make_array, populate_array
 
 __all__ = ["CONTEXT", "CONTEXT_FIELDS", "FAMILY", "FAMILY_SIZE", "KERNEL_SIGNATURE", "call", "call_pointers", "call_families", "fvec",
-           "fmat", "ivec", "i32vec", "imat", "context_of", "context_at", "record_view", "vector_view", "family_of", "family_at", "Fields", "f1", "f2", "f3",
+           "fmat", "ivec", "i32vec", "context_of", "context_at", "record_view", "vector_view", "family_of", "family_at", "Fields", "f1", "f2", "f3",
            "i1", "i2"]
 
 
@@ -188,13 +188,6 @@ def i32vec(typingctx, address, n):
     """The int32 array of length n at ``address`` (Fortran integers for LAPACK)."""
     aryty = types.Array(types.int32, 1, "C")
     return aryty(address, n), lambda c, b, s, a: _array_value(c, b, aryty, a[0], a[1:])
-
-
-@intrinsic
-def imat(typingctx, address, n, m):
-    """The (n, m) int64 array at ``address``."""
-    aryty = types.Array(types.int64, 2, "C")
-    return aryty(address, n, m), lambda c, b, s, a: _array_value(c, b, aryty, a[0], a[1:])
 
 
 def _record_intrinsic(record_type, doc):
