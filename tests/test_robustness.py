@@ -387,3 +387,43 @@ def test_divergence_is_caught_at_the_bodys_own_bound():
     tip = np.abs(res.probes["tip"][:, 1])
     assert 9.0 < res.t[np.argmax(tip > 1.0)] < 11.0 and res.t[-1] < 20.0
     assert np.abs(res.q[:-1, 3:]).max() <= 100.0 < np.abs(res.q[-1, 3:]).max()
+
+
+@pytest.mark.parametrize("scheme", ["trapezoidal", "generalized-alpha"])
+def test_an_energy_jump_is_refused_and_halved(scheme):
+    """A hardening spring m ü = −k u⁷ (energy ½ exactly, conserved) stepped at Δt = 1 s, about a fifth of its
+    period: the Newmark schemes' converged steps create energy in bulk (without the rule the trapezoidal
+    run's energy rose to 2 J, 4× the exact value, in steps that tripled it). Such a step is refused and
+    halved: the run completes with halvings and its energy stays below 2.2× the exact (1.0 J, against 2.0 J
+    without the rule); with no halving allowed it stops naming the energy jump."""
+    scene = sf.scenes.spring_mass(exponent=4.0)
+    res = sf.simulate(scene, t_end=20.0, dt=1.0, integrator=scheme)
+    assert res.completed and res.halvings >= 1
+    assert res.total_energy.max() <= 2.2 * 0.5
+    fine = sf.simulate(scene, t_end=20.0, dt=0.05, integrator=scheme)      # resolved: nothing refused
+    assert fine.halvings == 0 and abs(fine.total_energy.max() - 0.5) < 0.01
+    with pytest.raises(sf.ConvergenceError, match="energy rose by far more than the work"):
+        sf.simulate(scene, t_end=20.0, dt=1.0, integrator=scheme, max_halvings=0)
+
+
+def test_energy_jump_rule_counts_work_and_potential():
+    """The rule (skfem_flex.compiled.acceptance.energy_jump): a fall under gravity turns potential into kinetic
+    energy and a load's work into kinetic energy; neither is a jump, while kinetic energy tripled from
+    nothing is, and round-off beside a large potential is not."""
+    from skfem_flex.compiled.abi import CONTEXT
+    from skfem_flex.compiled.acceptance import energy_jump
+    from skfem_flex.compiled.tasks import REFUSAL_ENERGY, STATUS_REFUSED
+
+    def jump(t0, v0, t1, v1, w):
+        ctx = np.zeros(1, dtype=CONTEXT)
+        out = energy_jump(ctx[0], t0, v0, t1, v1, w)
+        assert out == (ctx[0]["status"] == STATUS_REFUSED) == (ctx[0]["refusal"] == REFUSAL_ENERGY)
+        return out
+
+    assert not jump(0.0, 10.0, 5.0, 5.0, 0.0)           # a fall: V → T
+    assert not jump(1.0, 0.0, 3.0, 0.0, 2.0)            # work of a load
+    assert not jump(1.0, 0.0, 0.9, 0.0, 0.0)            # dissipation
+    assert jump(1.0, 0.0, 3.1, 0.0, 0.0)                # more than tripled from nothing
+    assert not jump(1.0, 0.0, 2.9, 0.0, 0.0)            # not quite
+    assert jump(1.0, 2.0, 4.0, 2.5, 0.0)                # +3.5 J where 5.5 J moved
+    assert not jump(0.0, -1e6, 1e-10, -1e6 + 1e-9, 0.0)  # round-off at rest beside a large potential

@@ -82,8 +82,9 @@ CONTEXT_FIELDS = (
     ("out", "i"),
     # the scheme's state that the loop records: multipliers λ (m), prescribed forces (npres), work (1)
     ("lam", "i"), ("reaction", "i"), ("work", "i"),
-    # an element refused the state or a Python element raised (STATUS_*), and which family
-    ("status", "i"), ("bad_family", "i"),
+    # an element refused the state or a Python element raised (STATUS_*), and which family; why the scheme
+    # refused a step itself (REFUSAL_*, when bad_family < 0)
+    ("status", "i"), ("bad_family", "i"), ("refusal", "i"),
     # a float pool kernels may use during one call
     ("scratch", "i"), ("nscratch", "i"),
 )

@@ -16,11 +16,11 @@ import numba
 import numpy as np
 
 from ..numerics.newton import CONVERGED, EVALUATE, newton_evaluated, newton_reset, newton_solved
-from .abi import CONTEXT, FAMILY, call, call_families, fvec, ivec
+from .abi import CONTEXT, FAMILY, call, call_families, fvec
 from .points import NB, OFF, maps_view, position_into
 from .abi import family_at
-from .tasks import (PHASE_ACCEPT, PHASE_EVALUATE, PHASE_PREDICT, PHASE_START, STATUS_OK, TASK_ENERGY,
-                    TASK_MOMENTUM, TASK_ROWS)
+from .acceptance import energies
+from .tasks import PHASE_ACCEPT, PHASE_EVALUATE, PHASE_PREDICT, PHASE_START, REFUSAL_NONE, STATUS_OK, TASK_ROWS
 
 __all__ = ["Records", "NewtonArrays", "entry_types", "run_steps", "start_state", "evaluate_once", "record_at", "REFUSED", "DERIVED"]
 
@@ -68,24 +68,10 @@ class NewtonArrays(NamedTuple):
 
 
 @numba.njit(cache=True, _nrt=False)
-def _mass_times(ctx, v, p):
-    """p = M v of the scene's constant masses."""
-    n = ctx.n
-    ptr = ivec(ctx.mass_ptr, n + 1)
-    nnz = ptr[n]
-    idx, dat = ivec(ctx.mass_idx, nnz), fvec(ctx.mass_dat, nnz)
-    for i in range(n):
-        s = 0.0
-        for t in range(ptr[i], ptr[i + 1]):
-            s += dat[t] * v[idx[t]]
-        p[i] = s
-
-
-@numba.njit(cache=True, _nrt=False)
 def record_step(ctx, records, i, t):
     """Record row i at time t from the state (ctx.q1, ctx.v1, the scheme's λ, work and reactions)."""
     n, m = ctx.n, ctx.m
-    q, v, p = fvec(ctx.q1, n), fvec(ctx.v1, n), fvec(ctx.p, n)
+    q, v = fvec(ctx.q1, n), fvec(ctx.v1, n)
     out = fvec(ctx.out, 7)
     lam, reaction = fvec(ctx.lam, m), fvec(ctx.reaction, ctx.npres)
     records.t[i] = t
@@ -98,16 +84,9 @@ def record_step(ctx, records, i, t):
         records.reaction[i, j] = reaction[j]
     records.work[i] = fvec(ctx.work, 1)[0]
     records.iterations[i] = ctx.its
-    for j in range(7):
-        out[j] = 0.0
-    _mass_times(ctx, v, p)
-    call_families(ctx, TASK_MOMENTUM)
-    kin = 0.0
-    for j in range(n):
-        kin += v[j] * p[j]
-    call_families(ctx, TASK_ENERGY)
+    kin, _ = energies(ctx)
     d = records.derived[i]
-    d[0] = 0.5 * kin
+    d[0] = kin
     for j in range(7):
         d[1 + j] = out[j]
     phi_max, rate_max = 0.0, 0.0
@@ -144,7 +123,7 @@ def run_steps(ctx, scheme, solver, hs, t0, recorded, records, newton, max_iterat
         c.t = t
         c.h = hs[k]
         c.trow = table.ctypes.data + 8 * (k + 1) * c.ncol
-        c.status = STATUS_OK
+        c.status, c.bad_family, c.refusal = STATUS_OK, -1, REFUSAL_NONE
         c.phase = PHASE_PREDICT
         call(scheme[0].kernel, c.self, sch)
         newton_reset(newton, c.x_scale, max_iterations, line_search)

@@ -57,7 +57,7 @@ from __future__ import annotations
 
 __all__ = ["TASK_EVAL_LOADS", "STATUS_MISSED", "TASK_EVAL", "TASK_MOMENTUM", "TASK_ENERGY", "TASK_ROWS", "TASK_LOADS", "SCHEME_EM", "SCHEME_NEWMARK",
            "SCHEME_STATIC", "ROWS_POSITION", "ROWS_VELOCITY", "ROWS_ACCELERATION", "STATUS_OK", "STATUS_REFUSED",
-           "STATUS_PYTHON_ERROR", "PHASE_PREDICT", "PHASE_EVALUATE", "PHASE_ACCEPT", "PHASE_START"]
+           "STATUS_PYTHON_ERROR", "REFUSAL_NONE", "REFUSAL_TURN", "REFUSAL_NOT_FINITE", "REFUSAL_ENERGY", "PHASE_PREDICT", "PHASE_EVALUATE", "PHASE_ACCEPT", "PHASE_START"]
 
 TASK_EVAL, TASK_MOMENTUM, TASK_ENERGY, TASK_ROWS, TASK_LOADS, TASK_EVAL_LOADS = 0, 1, 2, 3, 4, 5
 SCHEME_EM, SCHEME_NEWMARK, SCHEME_STATIC = 0, 1, 2
@@ -66,5 +66,8 @@ ROWS_POSITION, ROWS_VELOCITY, ROWS_ACCELERATION = 0, 1, 2
 #: element raised, or a kernel wrote outside the Newton matrix's pattern; the step is abandoned and
 #: handled in Python
 STATUS_OK, STATUS_REFUSED, STATUS_PYTHON_ERROR, STATUS_MISSED = 0, 1, 2, 3
+#: ctx.refusal: why a scheme refused a converged step itself (STATUS_REFUSED with ``bad_family`` < 0):
+#: a free angle turned by MAX_INCREMENT or more, a state that is not finite, an energy jump (.acceptance)
+REFUSAL_NONE, REFUSAL_TURN, REFUSAL_NOT_FINITE, REFUSAL_ENERGY = 0, 1, 2, 3
 #: phases of a scheme's kernel (ctx.phase)
 PHASE_PREDICT, PHASE_EVALUATE, PHASE_ACCEPT, PHASE_START = 0, 1, 2, 3

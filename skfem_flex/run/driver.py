@@ -14,7 +14,7 @@ import numpy as np
 from ..compiled import registry
 from ..compiled.abi import vector_view
 from ..compiled.loop import REFUSED
-from ..compiled.tasks import STATUS_PYTHON_ERROR
+from ..compiled.tasks import REFUSAL_ENERGY, REFUSAL_TURN, STATUS_PYTHON_ERROR
 from ..errors import ConvergenceError, DivergenceError, Interrupted, OutputError, SimulationError
 from ..numerics.newton import NONFINITE_RESIDUAL, NONFINITE_UPDATE, SINGULAR
 from ..numerics.resources import check_fits
@@ -35,6 +35,12 @@ CHUNK_SECONDS = 0.1
 _FAILURES = {NONFINITE_RESIDUAL: "residual is not finite (the solution escaped or the step is far too large)",
              NONFINITE_UPDATE: "Newton update is not finite", SINGULAR: "singular Newton matrix (redundant "
              "constraints or a coordinate without inertia or stiffness)"}
+#: why a scheme refused a converged step itself (``ctx.refusal``, :mod:`skfem_flex.compiled.acceptance`)
+_SCHEME_REFUSALS = {
+    REFUSAL_TURN: f"an angle coordinate turned by {MAX_INCREMENT / np.pi:.1f}π or more in one step (too large a "
+                  f"step for the rotation)",
+    REFUSAL_ENERGY: "its energy rose by far more than the work of the loads explains (an implausible jump: too "
+                    "large a step for the motion)"}
 
 
 def _output_error(exc, t):
@@ -187,9 +193,8 @@ class Run:
         if status == REFUSED:
             c = self.stepper.ws.ctx[0]
             if not 0 <= int(c["bad_family"]) < len(self.stepper.packed.families):
-                return (f"the {self.scheme.name} step refused the step: an angle coordinate turned by "
-                        f"{MAX_INCREMENT / np.pi:.1f}π or more in one step (too large a step for the rotation), "
-                        f"or the state is not finite")
+                return f"the {self.scheme.name} step refused the step: " + _SCHEME_REFUSALS.get(
+                    int(c["refusal"]), "the state is not finite")
             exc = self._refusal()
             return f"the {self.stepper.ws.family_name(int(c['bad_family']))} refused the step (" + (
                 str(exc) if exc is not None else "an element folds inside out, turns by π or more in one step, "

@@ -29,13 +29,14 @@ import numpy as np
 
 from .base import Scheme, State
 
+from ..compiled.acceptance import refused_state
 from ..compiled.abi import Fields, call_families, context_of, f1, family_of, fvec, i1, ivec
 from ..compiled.registry import compiled_kernel
 from ..compiled.storage import add_qq, clear, scale_row, storage_of
 from ..compiled.tasks import (PHASE_ACCEPT, PHASE_EVALUATE, PHASE_PREDICT, ROWS_POSITION, SCHEME_EM, STATUS_MISSED,
-                              STATUS_OK, STATUS_REFUSED, TASK_EVAL, TASK_EVAL_LOADS, TASK_MOMENTUM)
+                              STATUS_OK, STATUS_REFUSED, REFUSAL_TURN, TASK_EVAL, TASK_EVAL_LOADS, TASK_MOMENTUM)
 from ..numerics.newton import all_finite, max_abs, predicted_increment, roundoff_floor
-from ..numerics.rotations import MAX_INCREMENT, cayley_terms, unresolved_turn
+from ..numerics.rotations import MAX_INCREMENT, cayley_terms
 
 __all__ = ["EnergyMomentum", "EnergyMomentumData"]
 
@@ -158,7 +159,7 @@ def _evaluate(ctx, s):
         z[i] = dq[i]
     for c in s.cayley:
         if not abs(dq[c]) < MAX_INCREMENT:  # 2 tan(Δψ/2) needs |Δψ| < π: the step is refused
-            ctx.status = STATUS_REFUSED
+            ctx.status, ctx.refusal = STATUS_REFUSED, REFUSAL_TURN
             return
         z[c], ratio[c], dratio[c], dz[c] = cayley_terms(dq[c])
     for i in range(n):
@@ -248,8 +249,7 @@ def _accept(ctx, s):
     pres = ivec(ctx.pres, ctx.npres)
     q1, v1, p, ext = fvec(ctx.q1, n), fvec(ctx.v1, n), fvec(ctx.p, n), fvec(ctx.ext, n)
     mu, ddphi = fvec(ctx.mu, m), fvec(ctx.ddphi, m)
-    if unresolved_turn(s.dq, s.angles) or not (all_finite(q1) and all_finite(v1)):
-        ctx.status = STATUS_REFUSED
+    if refused_state(ctx, s.dq, s.angles):
         return
     w = _dot(s.z, ext)
     for j in range(pres.size):

@@ -29,14 +29,14 @@ import numpy as np
 
 from .base import NewmarkState, Scheme
 
+from ..compiled.acceptance import energies, energy_jump, refused_state
 from ..compiled.abi import Fields, call_families, context_of, f1, family_of, fvec, i1, ivec
 from ..compiled.registry import compiled_kernel
 from ..compiled.storage import add_qq, clear, storage_of
 from ..compiled.tasks import (PHASE_ACCEPT, PHASE_EVALUATE, PHASE_PREDICT, PHASE_START, ROWS_ACCELERATION,
                               ROWS_POSITION, ROWS_VELOCITY, SCHEME_NEWMARK, STATUS_MISSED, STATUS_OK,
-                              STATUS_REFUSED, TASK_EVAL, TASK_EVAL_LOADS, TASK_LOADS, TASK_ROWS)
+                              TASK_EVAL, TASK_EVAL_LOADS, TASK_LOADS, TASK_ROWS)
 from ..numerics.newton import all_finite, max_abs
-from ..numerics.rotations import unresolved_turn
 
 __all__ = ["Newmark", "Trapezoidal", "GeneralizedAlpha", "NewmarkData", "start_kernel", "start_data"]
 
@@ -61,13 +61,15 @@ class NewmarkData(NamedTuple):
     r: np.ndarray
     a_next: np.ndarray      # the algorithmic acceleration a₁ of the evaluation
     angles: np.ndarray      # (nang,) free angle coordinates: an increment ≥ MAX_INCREMENT per step is refused
+    energy: np.ndarray      # (3,) kinetic and potential energy at the state (J), valid with work[1] = 1;
+    #                         the largest T + |V| + |W| of the run's states (J; the check waits for > 0)
 
 
 @numba.njit(cache=True, _nrt=False)
 def _view(fam):
     return NewmarkData(f1(fam, 0), f1(fam, 1), f1(fam, 2), f1(fam, 3), f1(fam, 4), f1(fam, 5), f1(fam, 6),
                        f1(fam, 7), f1(fam, 8), f1(fam, 9), i1(fam, 10), f1(fam, 11), f1(fam, 12), f1(fam, 13),
-                       i1(fam, 14))
+                       i1(fam, 14), f1(fam, 15))
 
 
 @numba.njit(cache=True, _nrt=False)
@@ -98,7 +100,8 @@ def _settings(ctx, s, c_a, c_v, rows):
 
 @numba.njit(cache=True, _nrt=False)
 def _loads_at_start(ctx, s):
-    """Loads and Φ_t at the state (the work of the first step of a chunk uses both ends)."""
+    """Loads, Φ_t and the energies at the state (the work and the energy check of the first step use both
+    ends)."""
     n, m = ctx.n, ctx.m
     q1, v1, trow, te, t1 = ctx.q1, ctx.v1, ctx.trow, ctx.te, ctx.t1
     ctx.qe, ctx.ve = s.q.ctypes.data, s.v.ctypes.data
@@ -112,6 +115,8 @@ def _loads_at_start(ctx, s):
     call_families(ctx, TASK_LOADS)
     for i in range(n):
         s.ext0[i] = ext[i]
+    s.energy[0], s.energy[1] = energies(ctx)
+    s.energy[2] = max(s.energy[2], s.energy[0] + abs(s.energy[1]) + abs(s.work[0]))
     if s.params[5] != 0.0:
         phit = fvec(ctx.phit, m)
         call_families(ctx, TASK_ROWS)
@@ -246,8 +251,7 @@ def _accept(ctx, s):
     q1, v1, a1 = fvec(ctx.q1, n), fvec(ctx.v1, n), fvec(ctx.a1, n)
     acc1 = s.a_next
     ext, mu, phit = fvec(ctx.ext, n), fvec(ctx.mu, m), fvec(ctx.phit, m)
-    if unresolved_turn(s.dq, s.angles) or not (all_finite(q1) and all_finite(v1)):
-        ctx.status = STATUS_REFUSED
+    if refused_state(ctx, s.dq, s.angles):
         return
     # work of the loads (trapezoidal in time), of the prescribed laws and of rheonomic constraints
     w = 0.0
@@ -257,14 +261,20 @@ def _accept(ctx, s):
         react = s.r[pres[j]] / h
         prev = s.reaction[j] if s.work[2] != 0.0 else react
         w += s.dq[pres[j]] * 0.5 * (prev + react)
-        s.reaction[j] = react
-    s.work[2] = 1.0
     if s.params[5] != 0.0:
         s0, s1 = 0.0, 0.0
         for i in range(m):
             s0 += s.lam[i] * s.phit0[i]
             s1 += mu[i] / h * phit[i]
         w += 0.5 * h * (s0 + s1)
+    kin, pot = energies(ctx)
+    if s.energy[2] > 0.0 and energy_jump(ctx, s.energy[0], s.energy[1], kin, pot, w):
+        return
+    s.energy[0], s.energy[1] = kin, pot
+    s.energy[2] = max(s.energy[2], kin + abs(pot) + abs(s.work[0] + w))
+    for j in range(pres.size):
+        s.reaction[j] = s.r[pres[j]] / h
+    s.work[2] = 1.0
     s.work[0] += w
     for i in range(n):
         s.q[i] = q1[i]
@@ -339,7 +349,7 @@ def _data(packed, params, q, v, acc, pseudo, lam, reaction, work):
     return Fields(NewmarkData(np.asarray(params, dtype=float), np.array(q, dtype=float), np.array(v, dtype=float),
                               np.array(acc, dtype=float), np.array(pseudo, dtype=float), np.array(lam, dtype=float),
                               np.array(reaction, dtype=float), np.asarray(work, dtype=float), z(n), z(m),
-                              packed.pres_cols, z(n), z(n), z(n), packed.angles))
+                              packed.pres_cols, z(n), z(n), z(n), packed.angles, z(3)))
 
 
 def _start_kernel(ctx_p, fam_p):

@@ -203,7 +203,7 @@ class Stepper:
         c = self.ws.ctx[0]
         c["h"], c["t"] = float(h), float(t0)
         c["trow"] = table.ctypes.data + 8 * c["ncol"]
-        c["status"], c["bad_family"] = STATUS_OK, -1
+        c["status"], c["bad_family"], c["refusal"] = STATUS_OK, -1, 0
         _call(evaluate_once, "the single evaluation", self.ws.ctx, self.record, PHASE_PREDICT)   # the step's settings
         self.newton.x_try[:] = x
         evaluate_once(self.ws.ctx, self.record, PHASE_EVALUATE)
