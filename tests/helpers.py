@@ -182,3 +182,33 @@ def random_scene_state(scene, rng):
     for c in scene.cayley_index:
         q0[c] += 0.3 * rng.normal()
     return q0, v0 + rng.normal(size=q0.size)
+
+
+def warm_compile_cache():
+    """Compile every unit the catalogue's scenes need under the three schemes (the kernels most tests run)
+    that the cache lacks, on two processes (skfem_flex.compiled.ahead); returns how many were missing."""
+    import logging
+    import os
+
+    from skfem_flex.compiled import registry
+    from skfem_flex.compiled.ahead import compile_units
+    from skfem_flex.compiled.pack import packed_scene
+    from skfem_flex.schemes.stepper import units
+
+    schemes = (sf.EnergyMomentum(), sf.Trapezoidal(), sf.GeneralizedAlpha())
+    todo = []
+    for name in sorted(sf.scenes.CATALOGUE):
+        packed = packed_scene(sf.scenes.CATALOGUE[name]())
+        todo += [u for scheme in schemes for u in units(packed, scheme)]
+    todo = list(dict.fromkeys(todo))
+    todo = [u for u in todo if u.nrt] + [u for u in todo if not u.nrt]      # the largest first
+    missing = sum(not registry.is_cached(u) for u in todo)
+    level, before = registry.LOGGER.level, os.environ.get("SKFEM_FLEX_COMPILE_PROCESSES")
+    registry.LOGGER.setLevel(logging.WARNING)
+    os.environ["SKFEM_FLEX_COMPILE_PROCESSES"] = "2"
+    try:
+        compile_units(todo)
+    finally:
+        registry.LOGGER.setLevel(level)
+        os.environ["SKFEM_FLEX_COMPILE_PROCESSES"] = before if before is not None else "1"
+    return missing
