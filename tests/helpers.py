@@ -151,6 +151,20 @@ def assert_loop_measures_are_the_scenes(scene, rel):
 
 
 # ------------------------------------------------------------------ command line and examples
+#: the folder holding the skfem_flex these tests import (the installed package under ``pytest``): first on the
+#: path of every subprocess, so that it runs the same package and finds its kernels in the same cache
+PACKAGE_PARENT = str(Path(sf.__file__).resolve().parents[1])
+
+
+def package_env(**extra):
+    """This process's environment with :data:`PACKAGE_PARENT` first on ``PYTHONPATH`` (and ``extra``)."""
+    import os
+
+    env = dict(os.environ, **extra)
+    env["PYTHONPATH"] = os.pathsep.join([PACKAGE_PARENT] + [p for p in [os.environ.get("PYTHONPATH")] if p])
+    return env
+
+
 def command():
     """The installed console script if there is one, else the module."""
     exe = shutil.which("skfem-flex")

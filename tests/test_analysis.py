@@ -1,6 +1,5 @@
 """Issue 14: statics, linearized modes and Campbell diagrams (skfem_flex.analysis)."""
 import json
-import os
 import subprocess
 import sys
 
@@ -11,6 +10,8 @@ import skfem_flex as sf
 from skfem_flex import analysis, scenes
 from skfem_flex.io.output import read_pvd
 from skfem_flex.scene import DENSE_LIMIT
+
+from helpers import package_env
 
 G = 9.81
 
@@ -385,7 +386,7 @@ def test_mode_series_animates_each_mode(tmp_path):
 
 
 def _cli(args, cwd):
-    env = dict(os.environ)
+    env = package_env()
     return subprocess.run([sys.executable, "-m", "skfem_flex.apps.cli"] + args, cwd=cwd, capture_output=True, text=True,
                           timeout=120, env=env)
 

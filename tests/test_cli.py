@@ -1,6 +1,5 @@
 """Issue 7: the skfem-flex command (run, list, bad input, failed runs)."""
 import json
-import os
 import subprocess
 
 import numpy as np
@@ -11,13 +10,13 @@ from skfem_flex.apps import cli
 from skfem_flex.io.output import read_pvd
 from skfem_flex.scenes import CATALOGUE, register
 
-from helpers import command
+from helpers import command, package_env
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
 
 def run_process(args, cwd, timeout=120):
-    env = dict(os.environ)
+    env = package_env()
     env.pop("DISPLAY", None)
     return subprocess.run(command() + args, cwd=cwd, capture_output=True, text=True, timeout=timeout, env=env)
 

@@ -12,7 +12,7 @@ from skfem_flex.bodies.exact.strain import ElementInversionError
 from skfem_flex.elements.forces import ExactDistributedLoad, NodalLoad
 from skfem_flex.scenes.exact_beams import exact_spin_up_beam, flying_beam, very_flexible_pendulum
 
-from helpers import FLYING_BEAM_SECTION as SECTION, dense
+from helpers import FLYING_BEAM_SECTION as SECTION, dense, package_env
 
 
 def random_state(body, rng, size):
@@ -452,5 +452,5 @@ def test_cayley_functions_stay_real_after_a_complex_call():
             "d = cayley_divided_difference(np.array([0.3]), np.array([0.1]))\n"
             "assert r.dtype == np.float64 and d.dtype == np.float64, (r.dtype, d.dtype)\n"
             "assert abs(r[0] - 0.3 / (2 * np.tan(0.15))) < 1e-15\n")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=package_env())
     assert out.returncode == 0, out.stderr

@@ -7,7 +7,6 @@ reference: an analytic value, a conservation law, a published value. The benchma
 scripts, which start processes and clusters of their own, run as subprocesses and must exit with 0.
 """
 import math
-import os
 import re
 import runpy
 import subprocess
@@ -16,7 +15,7 @@ import numpy as np
 import pytest
 from scipy.special import beta
 
-from helpers import ROOT
+from helpers import ROOT, package_env
 
 EXAMPLES = ROOT / "examples"
 QUICK_ENV = {"SKFEM_FLEX_EXAMPLE_QUICK": "1", "MPLBACKEND": "Agg"}
@@ -39,8 +38,7 @@ def run_example(name, monkeypatch, *args):
 def run_script(name, *args):
     """Run ``python examples/NAME.py ARGS`` in quick mode in a subprocess (this checkout's package first);
     returns its standard output after checking that it exited with 0."""
-    env = dict(os.environ, **QUICK_ENV,
-               PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    env = package_env(**QUICK_ENV)
     proc = subprocess.run([sys.executable, str(EXAMPLES / f"{name}.py"), *map(str, args)], env=env, cwd=ROOT,
                           capture_output=True, text=True, timeout=900)
     assert proc.returncode == 0, f"{name}.py exited with {proc.returncode}:\n{proc.stderr[-4000:]}"

@@ -22,7 +22,7 @@ import skfem_flex as sf
 from skfem_flex.apps.cli import main
 from skfem_flex.io.output import read_pvd
 
-from helpers import ROOT, default_sigint
+from helpers import default_sigint, package_env
 
 SCENE, T_END, DT = "pendulum", 10.0, 0.01
 
@@ -36,8 +36,7 @@ def reference():
 def start_run(out):
     # the Python path polls signals after every step; the compiled one after every chunk, and the whole
     # pendulum run is one chunk of a few milliseconds, which no signal sent "during the loop" could hit
-    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""),
-               SKFEM_FLEX_COMPILED="0")
+    env = package_env(SKFEM_FLEX_COMPILED="0")
     return subprocess.Popen([sys.executable, "-m", "skfem_flex", "run", SCENE, "--t-end", str(T_END), "--dt", str(DT),
                              "--out", str(out), "--quiet", "--every", "2", "--checkpoint-every", "0.2"],
                             env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,

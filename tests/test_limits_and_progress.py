@@ -11,7 +11,6 @@
 """
 import importlib
 import keyword
-import os
 import re
 import resource
 import subprocess
@@ -31,7 +30,7 @@ from skfem_flex.apps.studies import stability_study
 from skfem_flex.numerics.resources import InsufficientMemoryError
 from skfem_flex.io.result import Result
 
-from helpers import ROOT
+from helpers import package_env
 
 simulate_module = importlib.import_module("skfem_flex.run.driver")      # the run's clock
 budget_module = importlib.import_module("skfem_flex.apps.sweep.budget")
@@ -128,7 +127,7 @@ def test_address_space_limit_refuses_cleanly_in_a_subprocess(tmp_path):
             "from skfem_flex.apps import cli\n"
             f"sys.exit(cli.main(['run', 'spin_up_beam', '--set', 'n_elements=100000', '--out', {str(tmp_path)!r}, "
             "'--quiet', '--no-vtk']))\n")
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    env = package_env()
     proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 2, proc.stderr
     lines = proc.stderr.strip().splitlines()

@@ -15,6 +15,8 @@ import skfem_flex as sf
 from skfem_flex.io.output import VTKSeries, read_pvd
 from skfem_flex.io.plots import save_plots
 
+from helpers import package_env
+
 
 class Rod(sf.PointMass):
     """A point mass drawn as a 3-node polyline that gives only some arrays (exercises the padding)."""
@@ -117,7 +119,7 @@ KILLED_RUN = textwrap.dedent("""
 
 
 def test_killed_run_leaves_a_valid_series(tmp_path):
-    proc = subprocess.Popen([sys.executable, "-c", KILLED_RUN, str(tmp_path)])
+    proc = subprocess.Popen([sys.executable, "-c", KILLED_RUN, str(tmp_path)], env=package_env())
     pvd = tmp_path / "killed.pvd"
     try:
         deadline = time.monotonic() + 60

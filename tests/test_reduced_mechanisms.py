@@ -1,7 +1,6 @@
 """Reduced and plane-stress links in the slider–crank: every ``body=`` choice runs and holds its joints, the
 Craig–Bampton beam rod follows the full Green–Lagrange beam rod, and the command line runs the reduced strip rod."""
 import json
-import os
 import subprocess
 
 import numpy as np
@@ -10,7 +9,7 @@ import pytest
 import skfem_flex as sf
 from skfem_flex.scenes.links import LINK_KINDS
 
-from helpers import command
+from helpers import command, package_env
 
 
 @pytest.mark.parametrize("body", LINK_KINDS)
@@ -51,7 +50,7 @@ def test_reduced_beam_rod_follows_the_full_green_lagrange_beam_rod():
 def test_cli_runs_the_slider_crank_with_the_reduced_strip_rod(tmp_path):
     """``skfem-flex run slider_crank --set body=plane-stress-modal`` for five steps without the VTK series:
     exit status 0, a completed summary with the body choice and joints held."""
-    env = dict(os.environ)
+    env = package_env()
     env.pop("DISPLAY", None)
     args = ["run", "slider_crank", "--set", "body=plane-stress-modal", "--t-end", "5e-4", "--dt", "1e-4",
             "--no-vtk", "--quiet", "--out", "out"]

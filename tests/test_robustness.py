@@ -24,7 +24,7 @@ from skfem_flex.compiled import registry
 from skfem_flex.run import driver
 from skfem_flex.io.output import VTKSeries, read_pvd
 
-from helpers import ROOT, default_sigint
+from helpers import default_sigint, package_env
 
 
 #: --set values of the wrong type, sign and size (sizes kept where a run is rejected or short)
@@ -93,7 +93,7 @@ def test_bad_cli_input_is_one_line_naming_it(tmp_path, capsys, argv, needle):
 
 
 def test_list_into_a_closed_pipe_is_quiet():
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    env = package_env()
     proc = subprocess.run(f"{sys.executable} -m skfem_flex list | head -1", shell=True, env=env,
                           capture_output=True, text=True, timeout=120)
     assert proc.stdout.strip() and "Traceback" not in proc.stderr and "BrokenPipe" not in proc.stderr
@@ -354,8 +354,7 @@ def test_ctrl_c_during_a_cold_compile_stops_within_seconds(tmp_path):
     import psutil
 
     # two compile processes: the helper (compiled/ahead.py) must go with the run
-    env = dict(os.environ, PYTHONPATH=str(ROOT), NUMBA_CACHE_DIR=str(tmp_path), SKFEM_FLEX_QUIET="0",
-               SKFEM_FLEX_COMPILE_PROCESSES="2")
+    env = package_env(NUMBA_CACHE_DIR=str(tmp_path), SKFEM_FLEX_QUIET="0", SKFEM_FLEX_COMPILE_PROCESSES="2")
     proc = subprocess.Popen([sys.executable, "-m", "skfem_flex.apps.cli", "run", "pendulum", "--t-end", "0.1"],
                             env=env, stderr=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
                             cwd=str(tmp_path), preexec_fn=default_sigint)

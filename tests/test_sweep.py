@@ -19,7 +19,7 @@ import skfem_flex as sf
 from skfem_flex.schemes import NewtonSettings
 from skfem_flex.apps.sweep import local_cluster, open_sweep, plan, probe_extremes
 
-from helpers import ROOT
+from helpers import PACKAGE_PARENT, package_env
 
 GRID = {"omega": [4.0, 6.0, 8.0, 10.0], "n_elements": [2, 3, 4, 6]}
 
@@ -162,8 +162,8 @@ def test_worker_killed_mid_case_the_sweep_still_completes_every_case(client, tmp
 
 
 def _cli(*args):
-    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    return subprocess.Popen([sys.executable, "-m", "skfem_flex", "sweep", *args], env=env, cwd=ROOT,
+    env = package_env()
+    return subprocess.Popen([sys.executable, "-m", "skfem_flex", "sweep", *args], env=env, cwd=PACKAGE_PARENT,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
 
 

@@ -29,6 +29,9 @@ from .registry import LOGGER
 
 __all__ = ["compile_units", "processes", "Compiled"]
 
+#: the folder that holds this skfem_flex (the helper's working directory and first entry of its path)
+_PACKAGE_PARENT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
 
 def processes():
     """How many processes compile at once: 2 when this process may use two or more cores, else 1;
@@ -126,10 +129,13 @@ def _claimed_by(folder, i):
 
 
 def _start_helper(folder):
+    # the folder holding this package first on the helper's path: it compiles the same package into the
+    # same cache even where its working directory holds another copy (``-m`` puts that first otherwise)
     env = dict(os.environ, SKFEM_FLEX_QUIET="1", SKFEM_FLEX_COMPILE_PROCESSES="1")
+    env["PYTHONPATH"] = os.pathsep.join([_PACKAGE_PARENT] + [p for p in [env.get("PYTHONPATH")] if p])
     try:
         return subprocess.Popen([sys.executable, "-m", "skfem_flex.compiled.ahead", folder,
-                                 str(os.getpid())], env=env,
+                                 str(os.getpid())], env=env, cwd=_PACKAGE_PARENT,
                                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     except OSError as exc:
         LOGGER.warning("could not start a helper compile process (%s); compiling in this process only", exc)
