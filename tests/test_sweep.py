@@ -175,13 +175,14 @@ def _finished(store):
 def test_driver_killed_then_resume_computes_only_the_missing_cases(client, tmp_path):
     out = tmp_path / "run"
     store = out / "sweep.zarr"
-    args = ["spin_up_beam", "--vary", "omega=4,5,6,7,8,9,10,11", "--t-end", "10", "--dt", "1e-3",
+    args = ["spin_up_beam", "--vary", "omega=4,5,6,7,8,9,10,11", "--t-end", "30", "--dt", "1e-3",
             "--format", "zarr", "--out", str(out), "--quiet"]
     proc = _cli(*args, "--workers", "1")        # its own local cluster, killed with it
     opened = 0
     try:
         deadline = time.monotonic() + 90
-        # cases take about half a second each: kill as soon as two are in the store
+        # cases take about half a second each (30 000 steps; at 10 000 steps all eight were once done before
+        # this loop saw two): kill as soon as two are in the store
         while len(_finished(store)) < 2 and time.monotonic() < deadline and proc.poll() is None:
             if store.exists():
                 # the store opens with xarray at any moment while the sweep writes
@@ -198,7 +199,7 @@ def test_driver_killed_then_resume_computes_only_the_missing_cases(client, tmp_p
     # after the kill: opens with xarray, every case in it complete
     killed = open_sweep(store)
     assert set(killed.status.values) == {"completed"} and len(killed.case) == len(done)
-    assert np.all(killed.n_times.values == 10001)
+    assert np.all(killed.n_times.values == 30001)
     before = {k: (store / k).stat().st_ino for k in done}
     # the rerun goes to a running cluster by its scheduler address
     proc = _cli(*args, "--resume", "--scheduler", client.scheduler.address)
