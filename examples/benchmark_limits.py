@@ -28,6 +28,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from skfem_flex.compiled.ahead import package_environment
+
 QUICK = os.environ.get("SKFEM_FLEX_EXAMPLE_QUICK", "") not in ("", "0")
 SCENES = ("spin_up_beam", "slider_crank") if QUICK else ("spin_up_beam", "flexible_pendulum", "double_pendulum",
                                                          "slider_crank")
@@ -50,17 +52,6 @@ print(json.dumps({"n_dofs": scene.n, "dt": dt, "build_s": built - start, "startu
 """
 
 
-def _child_env():
-    """This process's environment, with the folder of the skfem_flex it imports first on the path: the child
-    runs the same package and finds its compiled kernels in the same cache."""
-    import skfem_flex
-
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join([str(Path(skfem_flex.__file__).resolve().parents[1])]
-                                        + [p for p in [env.get("PYTHONPATH")] if p])
-    return env
-
-
 def memory(sizes, scenes=SCENES):
     """[(scene, elements, coordinates, Δt s, build s, compile and start-up s, step s, peak RSS MB)], one
     subprocess each."""
@@ -68,7 +59,7 @@ def memory(sizes, scenes=SCENES):
     for name in scenes:
         for n in sizes:
             proc = subprocess.run([sys.executable, "-c", CHILD, name, str(n)], capture_output=True, text=True,
-                                  env=_child_env())
+                                  env=package_environment())
             if proc.returncode != 0:
                 why = proc.stderr.strip().splitlines() or [f"exit status {proc.returncode} (killed?)"]
                 rows.append((name, n, None, None, None, None, None, why[-1]))

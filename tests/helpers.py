@@ -14,6 +14,7 @@ import scipy.sparse as sps
 import skfem
 
 import skfem_flex as sf
+from skfem_flex.compiled import ahead
 
 #: the repository's root folder
 ROOT = Path(__file__).resolve().parents[1]
@@ -153,16 +154,9 @@ def assert_loop_measures_are_the_scenes(scene, rel):
 # ------------------------------------------------------------------ command line and examples
 #: the folder holding the skfem_flex these tests import (the installed package under ``pytest``): first on the
 #: path of every subprocess, so that it runs the same package and finds its kernels in the same cache
-PACKAGE_PARENT = str(Path(sf.__file__).resolve().parents[1])
-
-
-def package_env(**extra):
-    """This process's environment with :data:`PACKAGE_PARENT` first on ``PYTHONPATH`` (and ``extra``)."""
-    import os
-
-    env = dict(os.environ, **extra)
-    env["PYTHONPATH"] = os.pathsep.join([PACKAGE_PARENT] + [p for p in [os.environ.get("PYTHONPATH")] if p])
-    return env
+PACKAGE_PARENT = ahead.PACKAGE_PARENT
+#: this process's environment with PACKAGE_PARENT first on ``PYTHONPATH`` (and keyword settings)
+package_env = ahead.package_environment
 
 
 def command():

@@ -42,7 +42,7 @@ from .abi import call_families, fvec, ivec
 from .tasks import (REFUSAL_ENERGY, REFUSAL_NOT_FINITE, REFUSAL_TURN, STATUS_REFUSED, TASK_ENERGY,
                     TASK_MOMENTUM)
 
-__all__ = ["ENERGY_JUMP", "ENERGY_ROUNDOFF", "energies", "refused_state", "energy_jump", "mass_times"]
+__all__ = ["ENERGY_JUMP", "ENERGY_ROUNDOFF", "energies", "refused_state", "energy_jump", "mass_times", "momentum"]
 
 #: J: a rise of the energy beyond the work by more than this fraction of the energy that moved is refused
 ENERGY_JUMP = 0.5
@@ -65,18 +65,26 @@ def mass_times(ctx, v, p):
 
 
 @numba.njit(cache=True, _nrt=False)
-def energies(ctx):
-    """(T, V) at (ctx.q1, ctx.v1), J: T = ½ vᵀ M(q) v and the potential V(q).
-
-    On the way M(q) v goes into ``ctx.p`` and the linear and angular momentum about the origin into
-    ``ctx.out[1:7]`` (TASK_MOMENTUM); V is ``ctx.out[0]`` (TASK_ENERGY)."""
+def momentum(ctx):
+    """p(q, v) = M(q) v at (ctx.q1, ctx.v1) into ``ctx.p`` (the constant masses, then the families' MOMENTUM
+    task), and the linear and angular momentum about the origin into ``ctx.out[1:7]`` (``out`` zeroed)."""
     n = ctx.n
-    v, p = fvec(ctx.v1, n), fvec(ctx.p, n)
     out = fvec(ctx.out, 7)
     for j in range(7):
         out[j] = 0.0
-    mass_times(ctx, v, p)
+    mass_times(ctx, fvec(ctx.v1, n), fvec(ctx.p, n))
     call_families(ctx, TASK_MOMENTUM)
+
+
+@numba.njit(cache=True, _nrt=False)
+def energies(ctx):
+    """(T, V) at (ctx.q1, ctx.v1), J: T = ½ vᵀ M(q) v and the potential V(q).
+
+    On the way :func:`momentum` fills ``ctx.p`` and ``ctx.out[1:7]``; V is ``ctx.out[0]`` (TASK_ENERGY)."""
+    n = ctx.n
+    v, p = fvec(ctx.v1, n), fvec(ctx.p, n)
+    out = fvec(ctx.out, 7)
+    momentum(ctx)
     kin = 0.0
     for j in range(n):
         kin += v[j] * p[j]

@@ -27,10 +27,19 @@ from typing import NamedTuple
 from . import registry
 from .registry import LOGGER
 
-__all__ = ["compile_units", "processes", "Compiled"]
+__all__ = ["compile_units", "processes", "Compiled", "PACKAGE_PARENT", "package_environment"]
 
 #: the folder that holds this skfem_flex (the helper's working directory and first entry of its path)
-_PACKAGE_PARENT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+PACKAGE_PARENT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+
+def package_environment(**extra):
+    """This process's environment (with ``extra``) and :data:`PACKAGE_PARENT` first on ``PYTHONPATH``: a
+    Python process started with it runs this same package, and finds its compiled kernels in the same
+    cache, even where its working directory holds another copy (``-m`` and ``-c`` put that first)."""
+    env = dict(os.environ, **extra)
+    env["PYTHONPATH"] = os.pathsep.join([PACKAGE_PARENT] + [p for p in [os.environ.get("PYTHONPATH")] if p])
+    return env
 
 
 def processes():
@@ -129,13 +138,10 @@ def _claimed_by(folder, i):
 
 
 def _start_helper(folder):
-    # the folder holding this package first on the helper's path: it compiles the same package into the
-    # same cache even where its working directory holds another copy (``-m`` puts that first otherwise)
-    env = dict(os.environ, SKFEM_FLEX_QUIET="1", SKFEM_FLEX_COMPILE_PROCESSES="1")
-    env["PYTHONPATH"] = os.pathsep.join([_PACKAGE_PARENT] + [p for p in [env.get("PYTHONPATH")] if p])
+    env = package_environment(SKFEM_FLEX_QUIET="1", SKFEM_FLEX_COMPILE_PROCESSES="1")
     try:
         return subprocess.Popen([sys.executable, "-m", "skfem_flex.compiled.ahead", folder,
-                                 str(os.getpid())], env=env, cwd=_PACKAGE_PARENT,
+                                 str(os.getpid())], env=env, cwd=PACKAGE_PARENT,
                                 stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     except OSError as exc:
         LOGGER.warning("could not start a helper compile process (%s); compiling in this process only", exc)

@@ -29,12 +29,12 @@ import numpy as np
 
 from .base import Scheme, State
 
-from ..compiled.acceptance import refused_state
+from ..compiled.acceptance import momentum, refused_state
 from ..compiled.abi import Fields, call_families, context_of, f1, family_of, fvec, i1, ivec
 from ..compiled.registry import compiled_kernel
 from ..compiled.storage import add_qq, clear, scale_row, storage_of
 from ..compiled.tasks import (PHASE_ACCEPT, PHASE_EVALUATE, PHASE_PREDICT, ROWS_POSITION, SCHEME_EM, STATUS_MISSED,
-                              STATUS_OK, STATUS_REFUSED, REFUSAL_TURN, TASK_EVAL, TASK_EVAL_LOADS, TASK_MOMENTUM)
+                              STATUS_OK, STATUS_REFUSED, REFUSAL_TURN, TASK_EVAL, TASK_EVAL_LOADS)
 from ..numerics.newton import all_finite, max_abs, predicted_increment, roundoff_floor
 from ..numerics.rotations import MAX_INCREMENT, cayley_terms
 
@@ -78,27 +78,12 @@ def _momentum_at_start(ctx, s):
     n = ctx.n
     q1, v1 = ctx.q1, ctx.v1
     ctx.q1, ctx.v1 = s.q.ctypes.data, s.v.ctypes.data
-    _constant_momentum(ctx, s.v, fvec(ctx.p, n))
-    call_families(ctx, TASK_MOMENTUM)
+    momentum(ctx)
     p = fvec(ctx.p, n)
     for i in range(n):
         s.p0[i] = p[i]
     ctx.q1, ctx.v1 = q1, v1
     s.work[1] = 1.0
-
-
-@numba.njit(cache=True, _nrt=False)
-def _constant_momentum(ctx, v, p):
-    """p = M v of the scene's constant masses."""
-    n = ctx.n
-    ptr, idx = ivec(ctx.mass_ptr, n + 1), ivec(ctx.mass_idx, 1)
-    nnz = ptr[n]
-    idx, dat = ivec(ctx.mass_idx, nnz), fvec(ctx.mass_dat, nnz)
-    for i in range(n):
-        acc = 0.0
-        for t in range(ptr[i], ptr[i + 1]):
-            acc += dat[t] * v[idx[t]]
-        p[i] = acc
 
 
 @numba.njit(cache=True, _nrt=False)
