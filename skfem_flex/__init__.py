@@ -1,8 +1,9 @@
-"""skfem_flex: planar flexible multibody dynamics on scikit-fem.
+"""skfem_flex: flexible multibody dynamics on scikit-fem.
 
 Timoshenko beams (linear, floating frame of reference, geometrically exact),
-rigid bodies and point masses, joined by constraints and integrated in time
-by an energy-conserving scheme, the trapezoidal rule or generalized-α.
+rigid bodies and point masses in the plane, spatial rigid bodies (directors)
+and point masses, joined by constraints and integrated in time by an
+energy-conserving scheme, the trapezoidal rule or generalized-α.
 """
 from .numerics import jit_cache  # noqa: F401  (first: compiled kernels must see the package's cache rule)
 from .fem.section import Section
@@ -14,6 +15,10 @@ from .bodies.exact.strain import ElementInversionError
 from .elements.forces import DistributedLoad, ExactDistributedLoad, NodalLoad
 from .elements.constraints import Constraint, Distance, UserConstraint
 from .bodies.rigid import RigidBody
+from .bodies.spatial import SpatialPointMass, SpatialRigidBody
+from .elements.constraints.quadratic import QuadraticConstraint
+from .elements.constraints.spatial_joints import (Cylindrical, Distance3D, Prismatic3D, Revolute3D, Spherical,
+                                                  TranslationDriver, Universal, Weld3D)
 from .elements.constraints import Driver, Pin, Prismatic, Revolute, Slider, Weld
 from .elements.forces import LinearDamper, LinearSpring, PointForce, PointMoment, RotationalDamper, RotationalSpring
 from .scene_initial import (InconsistentInitialConditionsError, RedundantConstraintsError,

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sps
 
+from .elements.constraints.quadratic import Rigidity
 from .elements.forces import Gravity
 from .elements.motion import Prescribed
 
@@ -87,7 +88,7 @@ class _Accumulator:
 
 
 class Scene:
-    """A planar multibody system.
+    """A planar or spatial multibody system (every body moves in the same ``dimension``: 2 or 3).
 
     Parameters
     ----------
@@ -126,6 +127,12 @@ class Scene:
         ids = [id(b) for b in self.bodies]
         if len(set(ids)) != len(ids):
             raise ValueError("a body is listed twice in the scene")
+        dims = {getattr(b, "dimension", 2) for b in self.bodies}
+        if len(dims) != 1:
+            raise ValueError("a scene's bodies must all be planar or all spatial, got "
+                             + ", ".join(f"{b.name!r} ({getattr(b, 'dimension', 2)}D)" for b in self.bodies))
+        #: 2 (planar) or 3 (spatial)
+        self.dimension = dims.pop()
         self.name = name
         self.parameters = dict(parameters or {})
         self._offset = {}
@@ -138,7 +145,9 @@ class Scene:
 
         self.forces = tuple(f.on(self.bodies) if isinstance(f, Gravity) and f.bodies is None else f
                             for f in forces)
-        self.constraints = tuple(constraints)
+        # spatial rigid bodies are held rigid by their directors' constraints, added first
+        self.constraints = tuple(Rigidity(b) for b in self.bodies if getattr(b, "directors", None)) + tuple(
+            constraints)
         self._force_idx = [self._indices(f.bodies, f"force {getattr(f, 'name', f)!r}") for f in self.forces]
         layout, row = [], 0
         for c in self.constraints:
@@ -537,8 +546,8 @@ class Scene:
 
     # ---------------------------------------------------------------- momenta
     def linear_momentum(self, q, v):
-        """Total linear momentum (2,), or None if a body does not provide it."""
-        total = np.zeros(2)
+        """Total linear momentum (dimension,), or None if a body does not provide it."""
+        total = np.zeros(self.dimension)
         for b, i in zip(self.bodies, self._body_idx):
             p = b.linear_momentum(q[i], v[i])
             if p is None:
@@ -547,8 +556,9 @@ class Scene:
         return total
 
     def angular_momentum(self, q, v):
-        """Total angular momentum about the origin, or None if a body does not provide it."""
-        total = 0.0
+        """Total angular momentum about the origin (a float in the plane, (3,) in space), or None if a body does
+        not provide it."""
+        total = 0.0 if self.dimension == 2 else np.zeros(3)
         for b, i in zip(self.bodies, self._body_idx):
             h = b.angular_momentum(q[i], v[i])
             if h is None:
@@ -574,13 +584,13 @@ class Scene:
             for b in self.bodies:
                 try:
                     pts.append(np.asarray(b.geometry(np.asarray(b.q0, float), np.asarray(b.v0, float)).points,
-                                          dtype=float).reshape(-1, 2))
+                                          dtype=float).reshape(-1, self.dimension))
                 except (NotImplementedError, AttributeError, ValueError):
                     continue
             size = 0.0
             if pts:
                 allp = np.vstack(pts)
                 if allp.size and np.all(np.isfinite(allp)):
-                    size = float(np.hypot(*(allp.max(axis=0) - allp.min(axis=0))))
+                    size = float(np.linalg.norm(allp.max(axis=0) - allp.min(axis=0)))
             self._length_scale = size if size > 0.0 else 1.0
         return self._length_scale

@@ -215,6 +215,8 @@ class Body:
 
     #: number of generalized coordinates
     n_dofs: int = 0
+    #: 2 for planar bodies, 3 for spatial ones (positions, momenta and gravity have this many components)
+    dimension: int = 2
     #: True when M does not depend on q (the scene then skips all M(q) work)
     constant_mass: bool = True
     #: True when potential_energy is not identically zero
@@ -361,11 +363,11 @@ class Body:
 
     # -------------------------------------------------------------- momenta
     def linear_momentum(self, q, v):
-        """Total linear momentum (kg m/s), shape (2,), or None if not provided."""
+        """Total linear momentum (kg m/s), shape (dimension,), or None if not provided."""
         return None
 
     def angular_momentum(self, q, v):
-        """Angular momentum about the global origin (kg m²/s), or None."""
+        """Angular momentum about the global origin (kg m²/s): a float (planar), shape (3,) (spatial), or None."""
         return None
 
     # ---------------------------------------------------------- body points

@@ -153,11 +153,17 @@ def build_key(scene, scheme_name, python_only=False):
 
 
 def _momentum_layout(body):
-    """(l_x, l_y, i_x, i_y, X, Y, i_angle) of a constant-mass body (local indices): p_x = Σ p[l_x],
+    """(l_x, l_y, i_x, i_y, X, Y, i_angle) of a planar constant-mass body (local indices): p_x = Σ p[l_x],
     L = Σ (X + q[i_x]) p[i_y] − (Y + q[i_y]) p[i_x] + Σ p[i_angle]; from ``momentum_layout()`` or by
-    default R = q[0:2], θ = q[2] where present."""
+    default R = q[0:2], θ = q[2] where present. A spatial body: ("spatial", triples, anchor, Γ)
+    (``spatial_momentum_layout()`` and ``mass_moment()``, :mod:`.families.constant_mass`)."""
     nb = body.n_dofs
     none, zero = np.zeros(0, dtype=np.int64), np.zeros(1)
+    spatial = _call(body, "spatial_momentum_layout")
+    if spatial is not None:
+        triples, anchor = spatial
+        gam, _ = body.mass_moment()
+        return "spatial", np.asarray(triples, dtype=np.int64), np.asarray(anchor, float), np.asarray(gam, float)
     layout = _call(body, "momentum_layout")
     if layout is not None:
         ix, iy, X, Y, ia = (np.asarray(a) for a in layout)
@@ -200,9 +206,10 @@ def _pack(scene, python_only=False):
             block = sps.coo_matrix(b.mass_matrix(np.asarray(b.q0, dtype=float)))
             mass_blocks.append((block.row + off, block.col + off, block.data))
             layout = _momentum_layout(b)
-            angles.append(off + np.asarray(layout[6], dtype=np.int64))
+            if not isinstance(layout[0], str):         # planar: its angle coordinates
+                angles.append(off + np.asarray(layout[6], dtype=np.int64))
             add(family_for("constant mass"), (layout, b, off))
-            if not python_only:
+            if not python_only and getattr(b, "dimension", 2) == 2:
                 try:
                     gam, c = b.mass_moment()
                     first_moment[id(b)] = ("linear", gam, c)
@@ -223,7 +230,13 @@ def _pack(scene, python_only=False):
         mod = family_for(form[0]) if form is not None else None
         if form is not None and form[0] == "gravity":
             for b in (f.bodies if f.bodies is not None else scene.bodies):
-                if id(b) in first_moment:
+                if getattr(b, "dimension", 2) == 3:
+                    # spatial bodies are linear in q: V = −g·(Γ q + c), a constant gradient
+                    off, nb = packer.block(b)
+                    gam, c = b.mass_moment()
+                    g3 = np.asarray(form[1], dtype=float)
+                    add(family_for("linear potential"), ((-(g3 @ gam), -float(g3 @ c)), b, np.arange(off, off + nb)))
+                elif id(b) in first_moment:
                     add(mod, ((first_moment[id(b)], np.asarray(form[1], dtype=float)), b, packer.block(b)))
                 else:
                     off, nb = packer.block(b)

@@ -29,8 +29,8 @@ class Recorder:
         Space dimension of positions and momenta (2: planar).
     """
 
-    def __init__(self, scene, packed, dim=2):
-        self.scene, self.packed, self.dim = scene, packed, dim
+    def __init__(self, scene, packed):
+        self.scene, self.packed, self.dim = scene, packed, getattr(scene, "dimension", 2)
         self.rows = {k: [] for k in _KEYS}
         self.probes = {k: [] for k in scene.probes}
         self.with_momentum = None

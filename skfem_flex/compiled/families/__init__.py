@@ -38,6 +38,8 @@ FAMILY_MODULES = (
     "floating_frame",
     "exact_beam",
     "rotated_rows",
+    "quadratic_rows",
+    "linear_potentials",
 )
 
 

@@ -18,8 +18,9 @@ class Gravity(ForceElement):
 
     Parameters
     ----------
-    g : array_like, shape (2,)
-        Acceleration of gravity in m/s², default (0, −9.81) (y up).
+    g : array_like, shape (2,) or (3,)
+        Acceleration of gravity in m/s², default (0, −9.81) (y up); spatial bodies need three
+        components, e.g. (0, 0, −9.81) (z up).
     bodies : sequence of Body, optional
         Bodies it acts on; ``None`` (default) means every body of the scene.
 
@@ -34,10 +35,17 @@ class Gravity(ForceElement):
     name = "gravity"
 
     def __init__(self, g=(0.0, -9.81), bodies=None):
-        self.g = check_finite_vector("g", g, 2)
+        self.g = check_finite_vector("g", g)
+        if self.g.size not in (2, 3):
+            raise ValueError(f"g must have 2 (planar) or 3 (spatial) entries, got {self.g.size}: {g!r}")
         self.bodies = None if bodies is None else tuple(bodies)
         if self.bodies is None:
             return
+        for b in self.bodies:
+            dim = getattr(b, "dimension", 2)
+            if dim != self.g.size:
+                raise ValueError(f"gravity g = {tuple(self.g)} has {self.g.size} entries but body {b.name!r} "
+                                 f"moves in {dim} dimensions: give g with {dim} entries")
         self._slices, self._const_grad, start = [], [], 0
         for b in self.bodies:
             self._slices.append(slice(start, start + b.n_dofs))

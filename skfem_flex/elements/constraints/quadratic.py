@@ -1,0 +1,191 @@
+r"""Constraints quadratic in q: the rigidity of spatial bodies and every spatial joint.
+
+Each equation k is a polynomial of degree two in the constraint's local coordinates q,
+
+.. math::  Φ_k(q, t) = \tfrac12\, q^T H_k\, q + b_k \cdot q + c_k - s_k(t),
+
+with a symmetric H_k and an optional motion law s_k(t). Then Φ_q = H q + b, the Hessian product is
+Σ μ_k H_k, and the mid-point Jacobian D = H (q₀ + q₁)/2 + b is an *exact* discrete gradient:
+D (q₁ − q₀) = Φ(q₁) − Φ(q₀) for any step. The energy–momentum scheme therefore lets no spatial joint do
+work, and since every equation here is invariant under a common rotation of all position vectors
+(dot products and differences of points and directors), its mid-point gradient conserves the angular
+momentum too.
+
+Equations are built from *affine vectors* u(q) = A q + a (:class:`Affine`: a body point, a body-fixed
+direction, a ground point or direction): ``u.equals(w)`` gives three linear equations,
+``u.dot(w, value)`` the quadratic u·w − value.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..motion import MotionLaw
+from ..point_terms import PointLayout
+from .base import Constraint
+
+__all__ = ["Affine", "QuadraticConstraint", "Rigidity", "spatial_reaction"]
+
+
+class Affine:
+    """u(q) = A q + a, a 3-vector affine in the local coordinates (A (3, n), a (3,))."""
+
+    def __init__(self, A, a):
+        self.A = np.asarray(A, dtype=float)
+        self.a = np.asarray(a, dtype=float).reshape(3)
+
+    @classmethod
+    def constant(cls, vec, n):
+        """A ground point or a fixed direction in space."""
+        return cls(np.zeros((3, n)), vec)
+
+    @classmethod
+    def of(cls, body_affine, where, n):
+        """A body point's or axis' (A_b, a_b) (``.affine()``, body-local) placed at ``where`` of n columns."""
+        A_b, a_b = body_affine.affine()
+        A = np.zeros((3, n))
+        A[:, where] = A_b
+        return cls(A, a_b)
+
+    def __sub__(self, other):
+        return Affine(self.A - other.A, self.a - other.a)
+
+    def value(self, q):
+        return self.A @ q + self.a
+
+    def equals(self, other):
+        """Three linear equations u − w = 0: (H, b, c) stacks."""
+        d = self - other
+        n = d.A.shape[1]
+        return np.zeros((3, n, n)), d.A.copy(), d.a.copy()
+
+    def dot(self, other, value=0.0):
+        """One equation u·w − value = 0 as (H, b, c) with one row."""
+        H = self.A.T @ other.A + other.A.T @ self.A
+        b = self.a @ other.A + other.a @ self.A
+        return H[None], b[None], np.array([self.a @ other.a - float(value)])
+
+
+def stack(parts):
+    """Concatenate (H, b, c) parts into one set of equations."""
+    return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
+            np.concatenate([p[2] for p in parts]))
+
+
+def _law(law, name):
+    if law is None or isinstance(law, MotionLaw):
+        return law
+    raise ValueError(f"{name} must be a MotionLaw (x(t), ẋ(t), ẍ(t)) or None, got {law!r}")
+
+
+class QuadraticConstraint(Constraint):
+    """Equations Φ_k = ½ qᵀ H_k q + b_k·q + c_k − s_k(t) (module docstring).
+
+    Parameters
+    ----------
+    bodies : sequence of Body
+        The bodies whose concatenated coordinate blocks are the local q.
+    H : array_like (m, n, n)
+        Symmetric second derivatives (made symmetric here).
+    b : array_like (m, n)
+    c : array_like (m,)
+    laws : sequence of MotionLaw or None, optional
+        s_k(t) per equation (None: no time term).
+    name : str
+    """
+
+    quadratic = True
+
+    def __init__(self, bodies, H, b, c, laws=None, name="quadratic constraint"):
+        self.layout = PointLayout.of_bodies(bodies)
+        self.bodies = self.layout.bodies
+        H = np.asarray(H, dtype=float)
+        self.H = 0.5 * (H + np.transpose(H, (0, 2, 1)))
+        self.b = np.asarray(b, dtype=float)
+        self.c = np.asarray(c, dtype=float).ravel()
+        m, n = self.b.shape
+        if self.H.shape != (m, n, n) or self.c.shape != (m,) or n != self.layout.n:
+            raise ValueError(f"quadratic constraint {name!r}: H {self.H.shape}, b {self.b.shape}, c {self.c.shape} "
+                             f"do not match {m} equations on {self.layout.n} coordinates")
+        if not (np.all(np.isfinite(self.H)) and np.all(np.isfinite(self.b)) and np.all(np.isfinite(self.c))):
+            raise ValueError(f"quadratic constraint {name!r} has non-finite coefficients")
+        self.laws = [None] * m if laws is None else [_law(law, f"{name}: laws[{k}]") for k, law in enumerate(laws)]
+        if len(self.laws) != m:
+            raise ValueError(f"quadratic constraint {name!r}: {len(self.laws)} laws for {m} equations")
+        self.rheonomic = any(law is not None for law in self.laws)
+        self.n_equations = m
+        self.name = name
+        self._quadratic_rows = np.flatnonzero(np.abs(self.H).reshape(m, -1).max(axis=1) > 0.0)
+
+    def _law_values(self, t, k):
+        return np.array([0.0 if law is None else float(law(t)[k]) for law in self.laws])
+
+    def value(self, q, t):
+        q = np.asarray(q, dtype=float)
+        return 0.5 * np.einsum("kij,i,j->k", self.H, q, q) + self.b @ q + self.c - (
+            self._law_values(t, 0) if self.rheonomic else 0.0)
+
+    def jacobian(self, q, t):
+        return self.H @ np.asarray(q, dtype=float) + self.b
+
+    def hessian_product(self, q, mu, t):
+        return np.tensordot(np.asarray(mu, dtype=float), self.H, axes=1)
+
+    def velocity_jacobian(self, q, v, t):
+        return self.H @ np.asarray(v, dtype=float)
+
+    def time_derivative(self, q, t):
+        return -self._law_values(t, 1) if self.rheonomic else np.zeros(self.n_equations)
+
+    def time_terms(self, q, v, t):
+        return -self._law_values(t, 2) if self.rheonomic else np.zeros(self.n_equations)
+
+    def discrete_gradient(self, q0, q1, t):
+        return self.jacobian(0.5 * (np.asarray(q0, dtype=float) + np.asarray(q1, dtype=float)), t)
+
+    def discrete_gradient_jacobian(self, q0, q1, mu, t):
+        return 0.5 * self.hessian_product(None, mu, t)
+
+    def compiled_form(self):
+        """``("quadratic", H, b, c, laws)``: the quadratic-rows family packs it."""
+        if type(self).value is not QuadraticConstraint.value:
+            return None
+        return "quadratic", self.H, self.b, self.c, tuple(self.laws)
+
+
+def spatial_reaction(constraint, body, where, point, q, lam):
+    """Force (3,) N and moment (3,) N m about ``point`` (a body-local affine point) that ``constraint``
+    exerts on ``body`` (its block at ``where`` of the local q): F = −(Φ_qᵀλ)ₓ and
+    M = Σ d_i × f_{d_i} + (x − r) × F with f = −Φ_qᵀλ on the directors (d_i) and the centre of mass x."""
+    q = np.asarray(q, dtype=float)
+    f = -(np.asarray(lam, dtype=float) @ constraint.jacobian(q, 0.0))[where]
+    qb = q[where]
+    F = f[:3]
+    M = np.zeros(3)
+    for o in getattr(body, "directors", ()):
+        M += np.cross(qb[o:o + 3], f[o:o + 3])
+    r = point.position(qb)
+    M += np.cross(qb[:3] - r, F)
+    return np.concatenate([F, M])
+
+
+class Rigidity(QuadraticConstraint):
+    """The six rigidity equations of a body's directors: ½(d_i·d_i − 1) = 0, d_i·d_j = 0 (i < j).
+
+    The scene adds one for every body that names its ``directors`` (local offsets of d₁, d₂, d₃).
+    """
+
+    reaction_labels = ("N11", "N22", "N33", "N12", "N13", "N23")
+
+    def __init__(self, body):
+        offs = tuple(body.directors)
+        n = body.n_dofs
+        H, c = np.zeros((6, n, n)), np.zeros(6)
+        pairs = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
+        for k, (i, j) in enumerate(pairs):
+            for a in range(3):
+                H[k, offs[i] + a, offs[j] + a] += 1.0
+                H[k, offs[j] + a, offs[i] + a] += 1.0
+            if i == j:
+                H[k] *= 0.5
+                c[k] = -0.5
+        super().__init__([body], H, np.zeros((6, n)), c, name=f"{body.name}: rigidity")
