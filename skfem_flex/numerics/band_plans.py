@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sps
 
-__all__ = ["MAX_BANDWIDTH", "MAX_BORDER", "MIN_DENSE_BORDERED", "DENSE_BORDERED_GAIN", "MAX_THRESHOLDS",
+__all__ = ["plan_work", "MAX_BANDWIDTH", "MAX_BORDER", "MIN_DENSE_BORDERED", "DENSE_BORDERED_GAIN", "MAX_THRESHOLDS",
            "choose_border", "interior_band", "dense_bordered_plan", "reordered_band_plan"]
 
 
@@ -93,6 +93,13 @@ def _bordered_band_work(ni, k, lo, up):
     """
     return (ni * lo * (lo + up) + (k + 1) * ni * (2 * lo + up) + k * (k + 1) * ni + k ** 3 / 3.0
             + ni * k)
+
+
+def plan_work(plan):
+    """Modeled multiply-adds of the bordered band solve with ``plan`` = (interior, border, lo, up) (the
+    work model :func:`dense_bordered_plan` chooses by); lets a caller compare two plans of one matrix."""
+    interior, border, lo, up = plan
+    return _bordered_band_work(len(interior), len(border), lo, up)
 
 
 #: most thresholds :func:`dense_bordered_plan` tries (each costs a pass over the pattern)
@@ -184,7 +191,7 @@ def dense_bordered_plan(pattern, far=None, max_border=None):
     return best
 
 
-def reordered_band_plan(pattern, max_border=MAX_BORDER):
+def reordered_band_plan(pattern, max_border=MAX_BORDER, max_bandwidth=MAX_BANDWIDTH):
     """Plan of :func:`~skfem_flex.numerics.band_kernels.bordered_band_solve` that reorders the coordinates,
     or None: the dense rows and columns (a floating frame's coordinates: more than 8 times the median
     number of entries, at least 16) form the border, and the rest, Lagrange multipliers included, is
@@ -202,13 +209,15 @@ def reordered_band_plan(pattern, max_border=MAX_BORDER):
         The structural nonzeros.
     max_border : int
         Most coordinates in the border.
+    max_bandwidth : int
+        Widest band lo + up accepted.
 
     Returns
     -------
     tuple or None
         ``(interior, border, lo, up)`` as :func:`dense_bordered_plan` returns it (the interior in the
         band's order, not ascending), or None if the border would be larger than ``max_border`` or
-        the band wider than :data:`MAX_BANDWIDTH`.
+        the band wider than ``max_bandwidth``.
     """
     from scipy.sparse.csgraph import reverse_cuthill_mckee
 
@@ -229,6 +238,6 @@ def reordered_band_plan(pattern, max_border=MAX_BORDER):
     inner = ~border[rows] & ~border[cols]
     off = pos[cols[inner]] - pos[rows[inner]]
     lo, up = int(max(0, -off.min(initial=0))), int(max(0, off.max(initial=0)))
-    if lo + up > MAX_BANDWIDTH:
+    if lo + up > max_bandwidth:
         return None
     return interior.astype(np.int64), np.flatnonzero(border).astype(np.int64), lo, up

@@ -9,7 +9,7 @@ from ..elements.constraints.spatial_joints import Revolute3D
 from ..elements.forces import Gravity
 from ..numerics.quaternions import rotation_vector_matrix
 from ..scene import Scene
-from ._registry import positive_count, positive_value, register
+from ._registry import positive_count, register
 
 __all__ = ["heavy_top", "rigid_chain", "BRULS_REFERENCE"]
 
@@ -53,34 +53,38 @@ def heavy_top(variant="simo-wong"):
                  probes={"com": PointProbe(top.point(top.center))}, parameters=dict(variant=variant))
 
 
-@register(t_end=2.0, dt=0.005, n_bodies="-", length="m", mass="kg", g="m/s^2")
-def rigid_chain(n_bodies=10, length=1.0, mass=1.0, g=9.81):
-    """A chain of slender rigid bars under gravity, joined by hinges whose axes alternate (y, z, y, …).
+@register(t_end=1.0, dt=1e-3, n_bodies="-")
+def rigid_chain(n_bodies=10):
+    """A spatial chain of rigid bars on hinges under gravity: the layout of exudyn's 3D rigid-body
+    performance test (``perf3DRigidBodies``, 400 bars there).
 
-    Bar k (length ``length``, mass ``mass``, a 0.05 m square section) starts along +x from x = k l; the
-    first is hinged to the ground at the origin about y, each next to the end of the one before about z
-    or y in turn, so the chain swings and folds in space; gravity along −z. Probes: ``"tip"`` (the free end
-    of the last bar, m).
+    Bars of 0.4 m × 0.1 m × 0.1 m, density 1000 kg/m³ (m = 4 kg, the cuboid's inertia), placed end to end:
+    bar k + 1 is turned against bar k by R_x(δ) R_z(2δ), δ = 0.01π, so the chain starts as a helix-like
+    curve; each bar is hinged at its start about its own third axis, the first to the ground at the
+    origin; gravity 9.81 m/s² along −z; released at rest. Probes: ``"tip"`` (the free end of the last
+    bar, m).
     """
     n = positive_count("n_bodies", n_bodies)
-    length = positive_value("length", length)
-    mass = positive_value("mass", mass)
-    a = 0.05
-    jx = mass * 2 * a * a / 12.0
-    jt = mass * (length ** 2 + a * a) / 12.0
+    length, width, density = 0.4, 0.1, 1000.0
+    mass = density * length * width * width
+    inertia = [mass * 2 * width ** 2 / 12.0] + [mass * (length ** 2 + width ** 2) / 12.0] * 2
+    delta = 0.01 * np.pi
+    turn = rotation_vector_matrix([delta, 0.0, 0.0]) @ rotation_vector_matrix([0.0, 0.0, 2 * delta])
+    R, start = np.eye(3), np.zeros(3)
     bodies, joints = [], []
     for k in range(n):
-        bar = SpatialRigidBody(mass, [jx, jt, jt], position=[(k + 0.5) * length, 0.0, 0.0], size=[length, a, a],
-                               name=f"bar {k + 1}")
-        start = bar.point([-0.5 * length, 0.0, 0.0])
-        axis = (0.0, 1.0, 0.0) if k % 2 == 0 else (0.0, 0.0, 1.0)
-        if k == 0:
-            joints.append(Revolute3D(start, None, axis=axis, name="hinge 1"))
+        bar = SpatialRigidBody(mass, inertia, position=start + R @ [0.5 * length, 0.0, 0.0], orientation=R,
+                               size=[length, width, width], name=f"bar {k + 1}")
+        near = bar.point([-0.5 * length, 0.0, 0.0])
+        previous = None if k == 0 else bodies[-1].point([0.5 * length, 0.0, 0.0])
+        # the hinge: the end of the bar before (or the ground) and this bar's start, about this bar's e₃
+        if previous is None:
+            joints.append(Revolute3D(near, None, axis=R[:, 2], name="hinge 1"))
         else:
-            joints.append(Revolute3D(bodies[-1].point([0.5 * length, 0.0, 0.0]), start, axis=axis,
-                                     name=f"hinge {k + 1}"))
+            joints.append(Revolute3D(previous, near, axis=R[:, 2], name=f"hinge {k + 1}"))
         bodies.append(bar)
-    return Scene(bodies, joints, [Gravity((0.0, 0.0, -float(g)))], name="rigid_chain",
+        start = start + R @ [length, 0.0, 0.0]
+        R = R @ turn
+    return Scene(bodies, joints, [Gravity((0.0, 0.0, -9.81))], name="rigid_chain",
                  probes={"tip": PointProbe(bodies[-1].point([0.5 * length, 0.0, 0.0]))},
-                 parameters=dict(n_bodies=n, length=length, mass=mass, g=g))
-
+                 parameters=dict(n_bodies=n))

@@ -152,20 +152,37 @@ class QuadraticConstraint(Constraint):
         return "quadratic", self.H, self.b, self.c, tuple(self.laws)
 
 
+def _cross(a, b):
+    """Row-wise a × b of (N, 3) arrays (np.cross is slow on small arrays: it moves axes per call)."""
+    return np.stack([a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1], a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2],
+                     a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]], axis=1)
+
+
 def spatial_reaction(constraint, body, where, point, q, lam):
-    """Force (3,) N and moment (3,) N m about ``point`` (a body-local affine point) that ``constraint``
-    exerts on ``body`` (its block at ``where`` of the local q): F = −(Φ_qᵀλ)ₓ and
-    M = Σ d_i × f_{d_i} + (x − r) × F with f = −Φ_qᵀλ on the directors (d_i) and the centre of mass x."""
-    q = np.asarray(q, dtype=float)
-    f = -(np.asarray(lam, dtype=float) @ constraint.jacobian(q, 0.0))[where]
-    qb = q[where]
-    F = f[:3]
-    M = np.zeros(3)
-    for o in getattr(body, "directors", ()):
-        M += np.cross(qb[o:o + 3], f[o:o + 3])
-    r = point.position(qb)
-    M += np.cross(qb[:3] - r, F)
-    return np.concatenate([F, M])
+    """Force (3,) N and moment (3,) N m that ``constraint`` exerts on ``body`` (its block at ``where`` of the
+    local q), from f = −Φ_qᵀλ on the body's coordinates: F = f_x (the centre of mass' block) and the moment
+    about ``point`` (a body point at r), M = Σ d_i × f_{d_i} + (x − r) × F. A body turning about a pivot has
+    no x: the pivot takes the force, F is reported 0 and M is the moment about the pivot.
+
+    ``q`` (N, n) and ``lam`` (N, m) give (N, 6), one row per state; ``q`` (n,) and ``lam`` (m,) give (6,).
+    """
+    q, lam = np.asarray(q, dtype=float), np.asarray(lam, dtype=float)
+    one = q.ndim == 1
+    q, lam = np.atleast_2d(q), np.atleast_2d(lam)
+    jac = np.einsum("kij,Nj->Nki", constraint.H, q) + constraint.b          # Φ_q at each state
+    f = -np.einsum("Nk,Nki->Ni", lam, jac)[:, where]
+    qb = q[:, where]
+    directors = tuple(getattr(body, "directors", ()))
+    M = np.zeros((q.shape[0], 3))
+    for o in directors:
+        M += _cross(qb[:, o:o + 3], f[:, o:o + 3])
+    if directors and directors[0] == 0:
+        F = np.zeros((q.shape[0], 3))
+    else:
+        F = f[:, :3]
+        M += _cross(qb[:, :3] - (qb @ point.G.T + point.a), F)
+    out = np.concatenate([F, M], axis=1)
+    return out[0] if one else out
 
 
 class Rigidity(QuadraticConstraint):

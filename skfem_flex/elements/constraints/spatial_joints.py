@@ -127,8 +127,10 @@ class _Joint(QuadraticConstraint):
         return e, n1, n2, [self._direction("a", n1).dot(eb), self._direction("a", n2).dot(eb)]
 
     def reaction(self, q, lam):
-        sl = self._layout.slices[0]
-        return spatial_reaction(self, self.point_a.body, sl, self.point_a, q, lam)
+        return spatial_reaction(self, self.point_a.body, self._layout.slices[0], self.point_a, q, lam)
+
+    def reaction_history(self, q, lam):
+        return spatial_reaction(self, self.point_a.body, self._layout.slices[0], self.point_a, q, lam)
 
 
 class Spherical(_Joint):
@@ -242,6 +244,9 @@ class Distance3D(_Joint):
     def reaction(self, q, lam):
         """The tension N (positive pulls the points together)."""
         return np.atleast_1d(-self.length * np.asarray(lam, dtype=float))
+
+    def reaction_history(self, q, lam):
+        return -self.length * np.asarray(lam, dtype=float).reshape(-1, 1)
 
 
 class TranslationDriver(_Joint):
