@@ -19,11 +19,29 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...bodies.base import check_finite_vector
 from ..motion import MotionLaw
 from ..point_terms import PointLayout
 from .base import Constraint
 
-__all__ = ["Affine", "QuadraticConstraint", "Rigidity", "spatial_reaction"]
+__all__ = ["Affine", "QuadraticConstraint", "Rigidity", "spatial_reaction", "unit_vector", "perpendiculars", "stack"]
+
+
+def unit_vector(name, vec):
+    """``vec`` (3,) scaled to unit length, or ``ValueError`` for a zero or non-finite one."""
+    vec = check_finite_vector(name, vec, 3)
+    nrm = float(np.linalg.norm(vec))
+    if nrm < 1e-300:
+        raise ValueError(f"{name} must not have zero length, got {vec!r}")
+    return vec / nrm
+
+
+def perpendiculars(e):
+    """Two unit vectors that make (e, n₁, n₂) a right-handed orthonormal triad (e a unit vector)."""
+    k = int(np.argmin(np.abs(e)))
+    n1 = np.cross(e, np.eye(3)[k])
+    n1 /= np.linalg.norm(n1)
+    return n1, np.cross(e, n1)
 
 
 class Affine:

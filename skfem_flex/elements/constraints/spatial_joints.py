@@ -30,28 +30,12 @@ import numpy as np
 
 from ...bodies.base import BodyPoint, check_finite_vector
 from ..point_terms import PointLayout
-from .quadratic import Affine, QuadraticConstraint, spatial_reaction, stack
+from .quadratic import Affine, QuadraticConstraint, perpendiculars, spatial_reaction, stack, unit_vector
 
 __all__ = ["Spherical", "Revolute3D", "Universal", "Cylindrical", "Prismatic3D", "Weld3D", "Distance3D",
            "TranslationDriver"]
 
 _LABELS = ("Fx", "Fy", "Fz", "Mx", "My", "Mz")
-
-
-def _unit(name, vec):
-    vec = check_finite_vector(name, vec, 3)
-    nrm = float(np.linalg.norm(vec))
-    if nrm < 1e-300:
-        raise ValueError(f"{name} must not have zero length, got {vec!r}")
-    return vec / nrm
-
-
-def _perpendiculars(e):
-    """Two unit vectors that make (e, n₁, n₂) a right-handed orthonormal triad."""
-    k = int(np.argmin(np.abs(e)))
-    n1 = np.cross(e, np.eye(3)[k])
-    n1 /= np.linalg.norm(n1)
-    return n1, np.cross(e, n1)
 
 
 def _spatial_point(name, point):
@@ -121,8 +105,8 @@ class _Joint(QuadraticConstraint):
         return [a[0].dot(e[1]), a[0].dot(e[2]), a[1].dot(e[2])]
 
     def _axis_alignment(self, axis):
-        e = _unit("axis", axis)
-        n1, n2 = _perpendiculars(e)
+        e = unit_vector("axis", axis)
+        n1, n2 = perpendiculars(e)
         eb = self._direction("b", e)
         return e, n1, n2, [self._direction("a", n1).dot(eb), self._direction("a", n2).dot(eb)]
 
@@ -166,7 +150,7 @@ class Revolute3D(_Joint):
 
     def __init__(self, point_a, point_b=None, axis=(0.0, 0.0, 1.0), anchor=None, name="revolute"):
         self._setup(point_a, point_b, anchor)
-        self.axis = _unit("axis", axis)
+        self.axis = unit_vector("axis", axis)
         _, _, _, align = self._axis_alignment(self.axis)
         self._finish([self.ra.equals(self.rb)] + align, name)
         self._check_initial()
@@ -179,7 +163,7 @@ class Universal(_Joint):
     def __init__(self, point_a, point_b=None, axis_a=(1.0, 0.0, 0.0), axis_b=(0.0, 1.0, 0.0), anchor=None,
                  name="universal"):
         self._setup(point_a, point_b, anchor)
-        ea, eb = _unit("axis_a", axis_a), _unit("axis_b", axis_b)
+        ea, eb = unit_vector("axis_a", axis_a), unit_vector("axis_b", axis_b)
         if abs(float(ea @ eb)) > 1e-9:
             raise ValueError(f"universal joint {name!r}: axis_a and axis_b must be perpendicular, "
                              f"their cosine is {float(ea @ eb):.3g}")
@@ -203,8 +187,8 @@ class Prismatic3D(_Joint):
 
     def __init__(self, point_a, point_b=None, axis=(1.0, 0.0, 0.0), anchor=None, name="prismatic"):
         self._setup(point_a, point_b, anchor)
-        self.axis = e = _unit("axis", axis)
-        n1, n2 = _perpendiculars(e)
+        self.axis = e = unit_vector("axis", axis)
+        n1, n2 = perpendiculars(e)
         d = self.rb - self.ra
         lock = self._lock() if self.point_b is not None else self._ground_lock()
         self._finish(lock + [d.dot(self._direction("a", n1)), d.dot(self._direction("a", n2))], name)
@@ -266,7 +250,7 @@ class TranslationDriver(_Joint):
         self._setup(point_a, point_b, anchor)
         if law is None:
             raise ValueError("a translation driver needs a law (MotionLaw)")
-        e = _unit("axis", axis)
+        e = unit_vector("axis", axis)
         d = self.ra - self.rb
         row = d.dot(self._direction("a", e))
         s0 = float(row[2][0] + row[1][0] @ self._layout.initial()

@@ -10,6 +10,9 @@
                            :func:`half_sine_pulse`
 ``floating_beam_loads.py`` :class:`DistributedLoad` on a floating-frame beam (eq. 43)
 ``exact_beam_loads.py``    :class:`NodalLoad`, :class:`ExactDistributedLoad` on an exact beam
+``spatial.py``             on spatial bodies: :class:`SpatialSpring`, :class:`SpatialDamper`,
+                           :class:`SpatialTorsionalSpring`, :class:`SpatialTorsionalDamper`,
+                           :class:`SpatialPointForce`, :class:`SpatialMoment`
 =========================  =========================================================================
 
 Every name is importable from here (``skfem_flex.elements.forces.PointForce``).
@@ -20,9 +23,13 @@ from .exact_beam_loads import ExactDistributedLoad, NodalLoad
 from .floating_beam_loads import DistributedLoad
 from .gravity import Gravity
 from .point_loads import PointForce, PointMoment, half_sine_pulse, time_function
+from .spatial import (SpatialDamper, SpatialMoment, SpatialPointForce, SpatialSpring, SpatialTorsionalDamper,
+                      SpatialTorsionalSpring)
 from .torsion import RotationalDamper, RotationalSpring
 from .two_point import LinearDamper, LinearSpring
 
 __all__ = ["ForceElement", "Gravity", "NonlinearSpring", "split_blocks", "LinearSpring", "LinearDamper",
            "RotationalSpring", "RotationalDamper", "PointForce", "PointMoment", "time_function", "half_sine_pulse",
-           "DistributedLoad", "NodalLoad", "ExactDistributedLoad", "CONSERVATIVE", "MAX_SPRING_EXPONENT"]
+           "DistributedLoad", "NodalLoad", "ExactDistributedLoad", "CONSERVATIVE", "MAX_SPRING_EXPONENT",
+           "SpatialSpring", "SpatialDamper", "SpatialTorsionalSpring", "SpatialTorsionalDamper", "SpatialPointForce",
+           "SpatialMoment"]

@@ -1,0 +1,273 @@
+"""Spatial peer models: our spatial catalogue scenes built in exudyn, for side-by-side timing and accuracy.
+
+The spatial counterpart of :mod:`skfem_flex.apps.peer` (same conventions; exudyn is optional and imported
+only when a model is run, :func:`peer_available` says whether it can be). Each builder makes the problem
+as an exudyn user would and returns a callable ``run() -> (t, probe, seconds)``: the recorded times (s),
+the probe in the same form as our scene's probe (m) and the wall-clock time of exudyn's solve (s). Every
+step is recorded on the exudyn side (sensors with ``storeInternal=True``). After a run, ``run.stats``
+holds the steps exudyn took (``steps``; its adaptive step control, on by default, may take more than
+requested), its Newton iterations (``newton``) and Jacobian evaluations (``jacobians``), the CPU time
+of the solve (``cpu_seconds``, :func:`time.process_time` around ``SolveSystem``, s) and, for the heavy
+top, the body's Euler parameters (e₀, e₁, e₂, e₃) at every recorded time (``euler_parameters``).
+
+Rigid bodies are exudyn's ``ObjectRigidBody`` on Euler-parameter nodes (``NodeRigidBodyEP``: seven
+coordinates and one normalisation constraint per body), made with ``mbs.CreateRigidBody``; joints are
+``mbs.CreateSphericalJoint`` / ``mbs.CreateRevoluteJoint`` (``ObjectJointGeneric``).
+
+* :func:`heavy_top`: the heavy tops of :func:`skfem_flex.scenes.spatial.heavy_top` (Simo–Wong, Brüls).
+  Probe: the centre of mass, m.
+* :func:`rigid_chain`: the chain of hinged bars of :func:`skfem_flex.scenes.spatial.rigid_chain` (the
+  layout of exudyn's ``perf3DRigidBodies``). Probe: the free end of the last bar, m.
+* :func:`bricard`: the IFToMM benchmark A04, Bricard's mechanism (square-section rods), whose closing
+  joint is redundant. Probe: the point P3 (= joint C), m.
+
+Schemes: exudyn's generalized-α with spectral radius ρ∞ (``rho_inf``; 0.9 is its default), or its
+Newmark/trapezoidal rule with index-2 constraints (``scheme="trapezoidal"``: ``useNewmark``,
+``useIndex2Constraints``, ρ∞ = 1). Newton is exudyn's default (modified Newton, relative tolerance 1e-8,
+absolute tolerance 1e-10) unless a builder says otherwise.
+"""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..numerics.quaternions import rotation_vector_matrix
+from .peer import peer_available, version
+
+__all__ = ["peer_available", "version", "heavy_top", "rigid_chain", "bricard"]
+
+_TOP_VARIANTS = ("simo-wong", "bruls")
+
+
+def _exudyn():
+    """(exudyn, exudyn.itemInterface); ImportError with the install hint when exudyn is missing."""
+    try:
+        import exudyn as exu
+        from exudyn import itemInterface as ei
+    except ImportError as exc:
+        raise ImportError('the peer models need exudyn: pip install ".[bench]"') from exc
+    return exu, ei
+
+
+def _settings(t_end, dt, scheme, rho_inf, linear_solver="EXUdense", ignore_singular=False):
+    """exudyn's simulation settings: ``round(t_end / dt)`` steps, no solution file, sensors every step,
+    the scheme, the linear solver (a ``LinearSolverType`` name), one thread."""
+    exu, _ = _exudyn()
+    s = exu.SimulationSettings()
+    s.timeIntegration.numberOfSteps = int(round(t_end / dt))
+    s.timeIntegration.endTime = t_end
+    s.timeIntegration.verboseMode = 0
+    s.parallel.numberOfThreads = 1
+    solver_type = getattr(exu.LinearSolverType, linear_solver)
+    if hasattr(s, "linearSolver"):      # exudyn ≥ 1.13 names; the old ones warn there
+        s.linearSolver.solverType = solver_type
+        s.linearSolver.ignoreSingularJacobian = ignore_singular
+    else:
+        s.linearSolverType = solver_type
+        s.linearSolverSettings.ignoreSingularJacobian = ignore_singular
+    if hasattr(s, "solution"):          # exudyn ≥ 1.10 names
+        s.solution.file.write = False
+        s.solution.sensors.writePeriod = dt
+    else:
+        s.solutionSettings.writeSolutionToFile = False
+        s.solutionSettings.sensorsWritePeriod = dt
+    ga = s.timeIntegration.generalizedAlpha
+    if scheme == "trapezoidal":
+        ga.useNewmark = True
+        ga.useIndex2Constraints = True
+        ga.spectralRadius = 1.0
+    elif scheme == "generalized-alpha":
+        ga.spectralRadius = rho_inf
+    else:
+        raise ValueError(f"scheme must be 'generalized-alpha' or 'trapezoidal', got {scheme!r}")
+    return s
+
+
+def _solve(mbs, sensors, settings, stats):
+    """Assemble and solve with exudyn's implicit second-order solver; returns (t, [recorded values of each
+    sensor], wall seconds). ``stats`` (a dict) receives ``steps``, ``newton``, ``jacobians`` and
+    ``cpu_seconds``."""
+    exu, _ = _exudyn()
+    mbs.Assemble()
+    solver = exu.MainSolverImplicitSecondOrder()
+    cpu, wall = time.process_time(), time.perf_counter()
+    ok = solver.SolveSystem(mbs, settings)
+    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+    if not ok:
+        raise RuntimeError("exudyn's solver did not reach the end time")
+    data = [np.asarray(mbs.GetSensorStoredData(s)) for s in sensors]
+    it = solver.it
+    stats.update(steps=max(int(it.currentStepIndex) - 1, 0), newton=int(it.newtonStepsCount),  # index 0: t = 0
+                 jacobians=int(it.newtonJacobiCount), cpu_seconds=cpu)
+    return data[0][:, 0], [d[:, 1:] for d in data], wall
+
+
+def _sensor(mbs, output, body=None, local=None, node=None):
+    """A sensor recording ``output`` (an ``OutputVariableType`` name) of a body point or of a node."""
+    exu, ei = _exudyn()
+    kind = getattr(exu.OutputVariableType, output)
+    if node is not None:
+        return mbs.AddSensor(ei.SensorNode(nodeNumber=node, storeInternal=True, outputVariableType=kind))
+    return mbs.AddSensor(ei.SensorBody(bodyNumber=body, localPosition=[float(x) for x in local],
+                                       storeInternal=True, outputVariableType=kind))
+
+
+def heavy_top(variant="simo-wong", dt=0.009, t_end=10.0, scheme="generalized-alpha", rho_inf=0.9):
+    """A heavy top about a fixed point in exudyn; returns run() -> (t, centre of mass, seconds).
+
+    Parameters
+    ----------
+    variant : {"simo-wong", "bruls"}
+        The data of :func:`skfem_flex.scenes.spatial.heavy_top`. ``"simo-wong"``: inertia about the
+        pivot diag(5, 5, 1) kg m², m = 20 kg, centre of mass at 1 m on body axis 3, g = 1 m/s² along −z,
+        initial rotation exp(skew(0.05, 0, 0)), body angular velocity (0, 0, 50) rad/s. ``"bruls"``:
+        m = 15 kg, inertia about the centre of mass diag(0.234375, 0.46875, 0.234375) kg m², centre of
+        mass at (0, 1, 0) m from the pivot, initial rotation the identity, body angular velocity
+        (0, 150, −4.61538) rad/s, g = 9.81 m/s² along −z.
+    dt, t_end : float
+        Time step and end time, s.
+    scheme : {"generalized-alpha", "trapezoidal"}
+    rho_inf : float
+        Spectral radius of generalized-α (ignored by the trapezoidal rule).
+
+    Notes
+    -----
+    Modelled like exudyn's ``TestModels/heavyTop.py``: the body's node sits at the pivot (the origin), its
+    inertia is the inertia about the pivot (for Brüls J_C + m(|c|² I − c cᵀ)), a spherical joint holds it
+    to the ground, and the weight m g acts as a fixed-direction force at the centre of mass c. (The
+    Simo–Wong data are no body about its centre of mass, J_O,11 = 5 kg m² < m l² = 20 kg m², but about the
+    fixed point only J_O matters.) Settings: exudyn's dense solver (``EXUdense``), default Newton
+    (modified, tolerances 1e-8 relative / 1e-10 absolute), adaptive step on, one thread. exudyn takes the
+    initial angular velocity in global axes, R₀ ω_body. ``run.stats["euler_parameters"]``: the node's
+    Euler parameters (e₀ the scalar part) at every recorded time.
+    """
+    if variant not in _TOP_VARIANTS:
+        raise ValueError(f"heavy_top: variant must be one of {_TOP_VARIANTS}, got {variant!r}")
+    if variant == "simo-wong":
+        mass, c, g = 20.0, np.array([0.0, 0.0, 1.0]), np.array([0.0, 0.0, -1.0])
+        inertia = np.diag([5.0, 5.0, 1.0])
+        R0, omega = rotation_vector_matrix([0.05, 0.0, 0.0]), np.array([0.0, 0.0, 50.0])
+    else:
+        mass, c, g = 15.0, np.array([0.0, 1.0, 0.0]), np.array([0.0, 0.0, -9.81])
+        inertia = np.diag([0.234375, 0.46875, 0.234375]) + mass * (c @ c * np.eye(3) - np.outer(c, c))
+        R0, omega = np.eye(3), np.array([0.0, 150.0, -4.61538])
+
+    def run():
+        exu, ei = _exudyn()
+        from exudyn.utilities import RigidBodyInertia
+        mbs = exu.SystemContainer().AddSystem()
+        ground = mbs.CreateGround()
+        top = mbs.CreateRigidBody(inertia=RigidBodyInertia(mass=mass, inertiaTensor=inertia),
+                                  referencePosition=[0.0, 0.0, 0.0], referenceRotationMatrix=R0,
+                                  initialAngularVelocity=list(R0 @ omega))
+        weight = mbs.AddMarker(ei.MarkerBodyPosition(bodyNumber=top, localPosition=list(c)))
+        mbs.AddLoad(ei.LoadForceVector(markerNumber=weight, loadVector=list(mass * g)))
+        mbs.CreateSphericalJoint(itemNumbers=[ground, top], position=[0.0, 0.0, 0.0])
+        sensors = [_sensor(mbs, "Position", body=top, local=c),
+                   _sensor(mbs, "CoordinatesTotal", node=mbs.GetObject(top)["nodeNumber"])]
+        t, (com, q), seconds = _solve(mbs, sensors, _settings(t_end, dt, scheme, rho_inf), run.stats)
+        run.stats["euler_parameters"] = q[:, 3:7]
+        return t, com, seconds
+    run.stats = {}
+    return run
+
+
+def rigid_chain(n_bodies=10, dt=1e-3, t_end=1.0, scheme="generalized-alpha", rho_inf=0.9):
+    """The spatial chain of hinged rigid bars in exudyn; returns run() -> (t, free end, seconds).
+
+    Parameters
+    ----------
+    n_bodies : int
+        Number of bars (exudyn's ``perf3DRigidBodies`` uses 400).
+    dt, t_end : float
+        Time step and end time, s.
+    scheme : {"generalized-alpha", "trapezoidal"}
+    rho_inf : float
+        Spectral radius of generalized-α.
+
+    Notes
+    -----
+    The layout of :func:`skfem_flex.scenes.spatial.rigid_chain`: bars of 0.4 m × 0.1 m × 0.1 m, density
+    1000 kg/m³ (``InertiaCuboid``, m = 4 kg), end to end from the origin; bar k + 1 is turned against bar k
+    by R_x(δ) R_z(2δ), δ = 0.01π; each bar is hinged at its start about its own local z (a revolute joint
+    in global axes), the first to the ground at the origin; gravity 9.81 m/s² along −z (``CreateRigidBody``'s
+    ``gravity``); released at rest. Settings: ``EigenSparse``, one thread, exudyn's default Newton
+    (modified, tolerances 1e-8 relative / 1e-10 absolute), adaptive step on. The probe is the free end of
+    the last bar (local (0.2, 0, 0) m from its centre of mass).
+    """
+    n = int(n_bodies)
+    if n < 1:
+        raise ValueError(f"rigid_chain: n_bodies must be a positive integer, got {n_bodies!r}")
+    length, width, density = 0.4, 0.1, 1000.0
+    delta = 0.01 * np.pi
+    turn = rotation_vector_matrix([delta, 0.0, 0.0]) @ rotation_vector_matrix([0.0, 0.0, 2 * delta])
+
+    def run():
+        exu, _ = _exudyn()
+        from exudyn.utilities import InertiaCuboid
+        mbs = exu.SystemContainer().AddSystem()
+        inertia = InertiaCuboid(density=density, sideLengths=[length, width, width])
+        previous = mbs.CreateGround()
+        R, start = np.eye(3), np.zeros(3)
+        for _ in range(n):
+            bar = mbs.CreateRigidBody(inertia=inertia, referencePosition=list(start + R @ [0.5 * length, 0, 0]),
+                                      referenceRotationMatrix=R, gravity=[0.0, 0.0, -9.81])
+            mbs.CreateRevoluteJoint(itemNumbers=[previous, bar], position=list(start), axis=list(R[:, 2]),
+                                    useGlobalFrame=True)
+            previous, start, R = bar, start + R @ [length, 0.0, 0.0], R @ turn
+        sensors = [_sensor(mbs, "Position", body=previous, local=[0.5 * length, 0.0, 0.0])]
+        t, (tip,), seconds = _solve(mbs, sensors, _settings(t_end, dt, scheme, rho_inf, "EigenSparse"), run.stats)
+        return t, tip, seconds
+    run.stats = {}
+    return run
+
+
+def bricard(dt=1e-3, t_end=10.0, scheme="generalized-alpha", rho_inf=0.9):
+    """Bricard's mechanism (IFToMM benchmark A04, square-section rods) in exudyn; returns
+    run() -> (t, P3, seconds).
+
+    Parameters
+    ----------
+    dt, t_end : float
+        Time step and end time, s (the benchmark runs 10 s).
+    scheme : {"generalized-alpha", "trapezoidal"}
+    rho_inf : float
+        Spectral radius of generalized-α.
+
+    Notes
+    -----
+    Five rods of 1 m and 1 kg, each a cuboid 1 m × 0.1 m × 0.1 m (``InertiaCuboid``, density 100 kg/m³)
+    with its local x along the rod, between the joints A (0, 0, 0) axis y, B (1, 0, 0) axis z,
+    C (1, −1, 0) axis x, D (1, −1, 1) axis y, E (0, −1, 1) axis z, F (0, 0, 1) axis x (m, global axes);
+    A and F join the first and the last rod to the ground. Six revolute joints; gravity 9.81 m/s² along
+    −y; released at rest. The closed loop has one degree of freedom although its constraints count none:
+    one constraint is redundant and the constraint Jacobian is singular. Settings: exudyn's dense LU
+    (``EigenDense``) with ``ignoreSingularJacobian = True``, default Newton (modified, tolerances 1e-8
+    relative / 1e-10 absolute), adaptive step on, one thread. Probe: P3 = C, the end of the second rod.
+    """
+    joints = np.array([[0, 0, 0], [1, 0, 0], [1, -1, 0], [1, -1, 1], [0, -1, 1], [0, 0, 1]], dtype=float)
+    axes = np.eye(3)[[1, 2, 0, 1, 2, 0]]
+
+    def run():
+        exu, _ = _exudyn()
+        from exudyn.utilities import InertiaCuboid
+        mbs = exu.SystemContainer().AddSystem()
+        ground = mbs.CreateGround()
+        inertia = InertiaCuboid(density=100.0, sideLengths=[1.0, 0.1, 0.1])
+        rods = []
+        for a, b in zip(joints[:-1], joints[1:]):
+            ex = b - a                                     # unit length
+            ey = np.cross([0.0, 0.0, 1.0] if abs(ex[2]) < 0.9 else [1.0, 0.0, 0.0], ex)
+            frame = np.column_stack([ex, ey, np.cross(ex, ey)])
+            rods.append(mbs.CreateRigidBody(inertia=inertia, referencePosition=list(0.5 * (a + b)),
+                                            referenceRotationMatrix=frame, gravity=[0.0, -9.81, 0.0]))
+        for pair, point, axis in zip(zip([ground] + rods, rods + [ground]), joints, axes):
+            mbs.CreateRevoluteJoint(itemNumbers=list(pair), position=list(point), axis=list(axis),
+                                    useGlobalFrame=True)
+        sensors = [_sensor(mbs, "Position", body=rods[1], local=[0.5, 0.0, 0.0])]
+        settings = _settings(t_end, dt, scheme, rho_inf, "EigenDense", ignore_singular=True)
+        t, (p3,), seconds = _solve(mbs, sensors, settings, run.stats)
+        return t, p3, seconds
+    run.stats = {}
+    return run

@@ -1,0 +1,388 @@
+r"""Force elements on spatial bodies: springs and dampers between two points, torsional springs and dampers
+about a hinge axis, point forces and moments (fixed in space or following the body), with time functions.
+
+Positions and body directions of spatial bodies are affine in q (:class:`~..constraints.quadratic.Affine`):
+r = A q + a, so the squared length s = d·d of a spring is quadratic and its mid-point gradient is an exact
+discrete gradient. The spring's potential V(s) = ½ k (√s − l₀)² then has the exact discrete gradient
+(V₁ − V₀)/(s₁ − s₀) ∇s(q_m) = ½ k (1 − 2 l₀/(l₀ + l₁)) ∇s(q_m) (free of cancellation). A torsional spring's
+angle θ = atan2(u·n₂, u·n₁) is not a polynomial; its discrete gradient is Gonzalez's mid-point gradient
+with the correction along Δq, exact, and equivariant under rotations of the whole system (so it conserves
+angular momentum too).
+
+A moment M on a director body acts through the generalized forces f_{d_i} = ½ M × d_i on its directors
+(their virtual work Σ f_{d_i}·(δφ × d_i) = M·δφ for orthonormal directors).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ...bodies.base import BodyPoint, check_finite_vector
+from ..constraints.quadratic import Affine, perpendiculars, unit_vector
+from ..point_terms import PointLayout
+from .base import ForceElement, check_nonnegative
+from .point_loads import time_function
+
+__all__ = ["SpatialSpring", "SpatialDamper", "SpatialTorsionalSpring", "SpatialTorsionalDamper", "SpatialPointForce",
+           "SpatialMoment"]
+
+
+def _spatial_point(name, point):
+    if not isinstance(point, BodyPoint) or getattr(point, "dimension", 2) != 3:
+        raise ValueError(f"{name} must be a point of a spatial body (body.point(...)), got {point!r}")
+    return point
+
+
+class _Line(ForceElement):
+    """d = r_a − r_b between two points or a point and a ground point: the layout and the affine d."""
+
+    def _setup(self, point_a, point_b, what):
+        pa = _spatial_point(f"{what}: point_a", point_a)
+        if point_b is None or isinstance(point_b, BodyPoint):
+            pb = None if point_b is None else _spatial_point(f"{what}: point_b", point_b)
+            anchor = pa.position(np.asarray(pa.body.q0, dtype=float)) if pb is None else None
+        else:
+            pb, anchor = None, check_finite_vector(f"{what}: ground point", point_b, 3)
+        self.layout = PointLayout([pa] if pb is None else [pa, pb])
+        self.bodies = self.layout.bodies
+        n = self.layout.n
+        ra = Affine.of(pa, self.layout.slices[0], n)
+        rb = Affine.constant(anchor, n) if pb is None else Affine.of(pb, self.layout.slices[1], n)
+        self.d = ra - rb
+        self.points, self.anchor = (pa, pb), anchor
+
+    def vector(self, q):
+        """d = r_a − r_b, m."""
+        return self.d.value(q)
+
+    def length(self, q):
+        """l = ‖r_a − r_b‖, m."""
+        return float(np.linalg.norm(self.d.value(q)))
+
+
+class SpatialSpring(_Line):
+    """Linear spring between two points of spatial bodies, or a point and a ground point: V = ½ k (l − l₀)².
+
+    Parameters
+    ----------
+    point_a : SpatialPoint
+    point_b : SpatialPoint, array_like (3,) or None
+        A body point, a ground point (m), or None for the ground point where ``point_a`` starts.
+    stiffness : float
+        k, N/m (> 0).
+    rest_length : float, optional
+        l₀, m (≥ 0); default the initial length.
+    name : str
+    """
+
+    conservative = True
+
+    def __init__(self, point_a, point_b, stiffness, rest_length=None, name="spring"):
+        self._setup(point_a, point_b, "SpatialSpring")
+        self.k = float(stiffness)
+        if not np.isfinite(self.k) or self.k <= 0.0:
+            raise ValueError(f"stiffness must be finite and positive, got {stiffness!r} N/m")
+        length = self.length(self.layout.initial())
+        self.rest_length = length if rest_length is None else check_nonnegative("rest_length", rest_length)
+        self.name = name
+
+    def _ds(self, q):
+        """∇s (n,) with s = d·d: 2 Aᵀ d."""
+        return 2.0 * self.d.A.T @ self.d.value(q)
+
+    def potential_energy(self, q):
+        return 0.5 * self.k * (self.length(q) - self.rest_length) ** 2
+
+    def potential_gradient(self, q):
+        ln = self.length(q)
+        if ln == 0.0 and self.rest_length > 0.0:
+            raise ValueError(f"spring {self.name!r}: its two points coincide, the direction is undefined")
+        return 0.5 * self.k * (1.0 - self.rest_length / ln if self.rest_length else 1.0) * self._ds(q)
+
+    def potential_hessian(self, q):
+        ln, lr = self.length(q), self.rest_length
+        ds = self._ds(q)
+        coef = 0.5 * self.k * (1.0 - lr / ln if lr else 1.0)
+        h = coef * 2.0 * self.d.A.T @ self.d.A
+        if lr:
+            h = h + 0.25 * self.k * lr / ln ** 3 * np.outer(ds, ds)
+        return h
+
+    def potential_discrete_gradient(self, q0, q1):
+        l0, l1, lr = self.length(q0), self.length(q1), self.rest_length
+        total = l0 + l1
+        if lr and total == 0.0:
+            raise ValueError(f"spring {self.name!r}: its two points coincide, the direction is undefined")
+        kappa = 0.5 * self.k * (1.0 - 2.0 * lr / total) if lr else 0.5 * self.k
+        ds = self._ds(0.5 * (q0 + q1))
+        h = kappa * self.d.A.T @ self.d.A
+        if lr:
+            h = h + (self.k * lr / (2.0 * l1 * total ** 2)) * np.outer(ds, self._ds(q1) / 2.0)
+        return kappa * ds, h
+
+    def tension(self, q):
+        """k (l − l₀), N (positive when stretched)."""
+        return self.k * (self.length(q) - self.rest_length)
+
+
+class SpatialDamper(_Line):
+    """Linear damper along the line of two points (or a point and the ground): F_a = −c (u·(ṙ_a − ṙ_b)) u.
+
+    Parameters
+    ----------
+    point_a, point_b : as for :class:`SpatialSpring`.
+    damping : float
+        c, N s/m (≥ 0).
+    name : str
+    """
+
+    conservative = False
+
+    def __init__(self, point_a, point_b, damping, name="damper"):
+        self._setup(point_a, point_b, "SpatialDamper")
+        self.c = check_nonnegative("damping", damping)
+        self.name = name
+
+    def generalized_force(self, q, v, t):
+        d, A = self.d.value(q), self.d.A
+        ln = float(np.linalg.norm(d))
+        if ln == 0.0:
+            raise ValueError(f"damper {self.name!r}: its two points coincide, the direction is undefined")
+        u = d / ln
+        w = A @ v
+        rate = float(u @ w)
+        jtu = A.T @ u
+        du = (np.eye(3) - np.outer(u, u)) @ A / ln                # ∂u/∂q
+        f = -self.c * rate * jtu
+        fq = -self.c * (np.outer(jtu, w @ du) + rate * A.T @ du)
+        fv = -self.c * np.outer(jtu, jtu)
+        return f, fq, fv
+
+
+class _HingeAngle(ForceElement):
+    """θ = atan2(u·n₂, u·n₁) between two spatial rigid bodies about a hinge axis (or a body and the ground):
+    u a direction of body b perpendicular to the axis e, n₁, n₂ directions of body a perpendicular to e, all
+    fixed in the bodies at the start (θ = 0 there). Beside a :class:`~skfem_flex.Revolute3D` about the same
+    axis θ is the hinge angle (|θ| < π)."""
+
+    def _setup(self, body_a, body_b, axis):
+        for nm, b in (("body_a", body_a), ("body_b", body_b)):
+            if b is not None and not hasattr(b, "axis"):
+                raise ValueError(f"{nm} must be a spatial rigid body (with directors), got {b!r}")
+        e = unit_vector("axis", axis)
+        n1, n2 = perpendiculars(e)
+        self.layout = PointLayout.of_bodies([body_a] if body_b is None else [body_a, body_b])
+        self.bodies = self.layout.bodies
+        n = self.layout.n
+
+        def direction(body, k, vec):
+            return Affine.of(body.axis(body.body_direction(vec)), self.layout.slices[k], n)
+
+        if body_b is None:
+            # body a turns against fixed n₁, n₂: its own direction is u, and θ of b against a is −θ of a
+            self.u, self.n1, self.n2 = direction(body_a, 0, n1), Affine.constant(n1, n), Affine.constant(n2, n)
+            self.sign = -1.0
+        else:
+            self.u, self.n1, self.n2 = direction(body_b, 1, n1), direction(body_a, 0, n1), direction(body_a, 0, n2)
+            self.sign = 1.0
+
+    def angle(self, q):
+        """θ, rad (in (−π, π])."""
+        x, y = self._xy(q)
+        return self.sign * float(np.arctan2(y, x))
+
+    def _xy(self, q):
+        u = self.u.value(q)
+        return float(u @ self.n1.value(q)), float(u @ self.n2.value(q))
+
+    def _invariant_gradients(self, q):
+        """∇x, ∇y (n,) of x = u·n₁, y = u·n₂."""
+        u = self.u.value(q)
+        return (self.u.A.T @ self.n1.value(q) + self.n1.A.T @ u, self.u.A.T @ self.n2.value(q) + self.n2.A.T @ u)
+
+    def angle_gradient(self, q):
+        """∇θ (n,) and ∇²θ (n, n) from x = u·n₁, y = u·n₂ (θ = atan2(y, x))."""
+        u, a1, a2 = self.u.value(q), self.n1.value(q), self.n2.value(q)
+        x, y = float(u @ a1), float(u @ a2)
+        r2 = x * x + y * y
+        if r2 == 0.0:
+            raise ValueError(f"{self.name!r}: body b's direction lies along the axis, the angle is undefined")
+        gx = self.u.A.T @ a1 + self.n1.A.T @ u
+        gy = self.u.A.T @ a2 + self.n2.A.T @ u
+        hx = self.u.A.T @ self.n1.A + self.n1.A.T @ self.u.A
+        hy = self.u.A.T @ self.n2.A + self.n2.A.T @ self.u.A
+        g = (x * gy - y * gx) / r2
+        dg = (np.outer(gy, gx) - np.outer(gx, gy)) / r2 + (x * hy - y * hx) / r2 \
+            - 2.0 * np.outer(x * gy - y * gx, x * gx + y * gy) / r2 ** 2
+        return self.sign * g, self.sign * dg
+
+
+class SpatialTorsionalSpring(_HingeAngle):
+    """Torsional spring about a hinge axis: V = ½ k (θ − θ₀)² (θ: :class:`_HingeAngle`).
+
+    Parameters
+    ----------
+    body_a : SpatialRigidBody
+    body_b : SpatialRigidBody or None
+        None: the ground.
+    axis : array_like (3,)
+        The hinge axis in space axes at the initial state.
+    stiffness : float
+        k, N m/rad (> 0).
+    angle : float
+        θ₀, rad.
+    name : str
+    """
+
+    conservative = True
+
+    def __init__(self, body_a, body_b, axis, stiffness, angle=0.0, name="torsional spring"):
+        self._setup(body_a, body_b, axis)
+        self.k = float(stiffness)
+        if not np.isfinite(self.k) or self.k <= 0.0:
+            raise ValueError(f"stiffness must be finite and positive, got {stiffness!r} N m/rad")
+        self.rest = float(angle)
+        self.name = name
+
+    def potential_energy(self, q):
+        return 0.5 * self.k * (self.angle(q) - self.rest) ** 2
+
+    def potential_gradient(self, q):
+        return self.k * (self.angle(q) - self.rest) * self.angle_gradient(q)[0]
+
+    def potential_hessian(self, q):
+        g, dg = self.angle_gradient(q)
+        return self.k * (np.outer(g, g) + (self.angle(q) - self.rest) * dg)
+
+    def potential_discrete_gradient(self, q0, q1):
+        """Through the invariants x = u·n₁, y = u·n₂ (quadratic: their mid-point gradients are exact): Gonzalez's
+        discrete gradient of Ṽ(x, y) in the plane of (x, y), times ∇x(q_m), ∇y(q_m). Exact, and equivariant:
+        x and y do not change when the whole system turns, so the spring exerts no net moment."""
+        qm = 0.5 * (q0 + q1)
+        z0, z1, zm = (np.array(self._xy(q)) for q in (q0, q1, qm))
+        zm = 0.5 * (z0 + z1)
+        dz = z1 - z0
+
+        def v_of(z):
+            return 0.5 * self.k * (self.sign * np.arctan2(z[1], z[0]) - self.rest) ** 2
+
+        r2 = float(zm @ zm)
+        theta = self.sign * np.arctan2(zm[1], zm[0])
+        grad_z = self.k * (theta - self.rest) * self.sign * np.array([-zm[1], zm[0]]) / r2
+        nrm2 = float(dz @ dz)
+        if nrm2 > 0.0:
+            grad_z = grad_z + (v_of(z1) - v_of(z0) - grad_z @ dz) / nrm2 * dz
+        gx, gy = self._invariant_gradients(qm)
+        return grad_z[0] * gx + grad_z[1] * gy, 0.5 * self.potential_hessian(qm)
+
+
+class SpatialTorsionalDamper(_HingeAngle):
+    """Torsional damper about a hinge axis: the moment −c θ̇ about it (θ: :class:`_HingeAngle`).
+
+    Parameters
+    ----------
+    body_a, body_b, axis : as for :class:`SpatialTorsionalSpring`.
+    damping : float
+        c, N m s/rad (≥ 0).
+    name : str
+    """
+
+    conservative = False
+
+    def __init__(self, body_a, body_b, axis, damping, name="torsional damper"):
+        self._setup(body_a, body_b, axis)
+        self.c = check_nonnegative("damping", damping)
+        self.name = name
+
+    def generalized_force(self, q, v, t):
+        g, dg = self.angle_gradient(q)
+        rate = float(g @ v)
+        return -self.c * rate * g, -self.c * (np.outer(g, dg @ v) + rate * dg), -self.c * np.outer(g, g)
+
+
+class SpatialPointForce(ForceElement):
+    """A force F(t) at a point of a spatial body, in space axes or following the body (body axes).
+
+    Parameters
+    ----------
+    point : SpatialPoint
+    force : array_like (3,) or callable t -> (3,)
+        N. In space axes, or with ``following=True`` in the body's axes (F = R F_body).
+    following : bool
+        The force turns with the body (a rigid body only).
+    name : str
+    """
+
+    conservative = False
+
+    def __init__(self, point, force, following=False, name="point force"):
+        self.point = _spatial_point("point", point)
+        body = point.body
+        if following and not hasattr(body, "axis"):
+            raise ValueError("a following force needs a body with an orientation (a spatial rigid body)")
+        self.force = time_function(force, 3, "force")
+        self.following = bool(following)
+        self.bodies = (body,)
+        n = body.n_dofs
+        self.G = point.G
+        self._axes = [Affine.of(body.axis(e), slice(0, n), n).A for e in np.eye(3)] if following else None
+        self.name = name
+
+    def generalized_force(self, q, v, t):
+        F = self.force(t)
+        n = self.G.shape[1]
+        if not self.following:
+            return self.G.T @ F, np.zeros((n, n)), np.zeros((n, n))
+        # F = Σ F_i d_i = Σ F_i A_i q: Q = Gᵀ Σ F_i A_i q
+        B = sum(Fi * Ai for Fi, Ai in zip(F, self._axes))
+        return self.G.T @ (B @ q), self.G.T @ B, np.zeros((n, n))
+
+
+class SpatialMoment(ForceElement):
+    """A moment M(t) on a spatial rigid body, in space axes or following the body (body axes).
+
+    Generalized forces on the directors f_{d_i} = W × d_i with S W = M, S = Σ_i (|d_i|² I − d_i d_iᵀ) (= 2 I
+    for orthonormal directors): their moment Σ d_i × f_{d_i} = S W is M exactly at any state, so the
+    angular momentum gains exactly ∫ M dt also at the mid-point of a step, where the directors are not
+    quite orthonormal.
+
+    Parameters
+    ----------
+    body : SpatialRigidBody
+    moment : array_like (3,) or callable t -> (3,)
+        N m.
+    following : bool
+        M given in body axes (M = Σ M_j d_j turns with the body).
+    name : str
+    """
+
+    conservative = False
+
+    def __init__(self, body, moment, following=False, name="moment"):
+        if not hasattr(body, "axis"):
+            raise ValueError(f"a moment needs a spatial rigid body (with directors), got {body!r}")
+        self.moment = time_function(moment, 3, "moment")
+        self.following = bool(following)
+        self.bodies = (body,)
+        self.body = body
+        self.name = name
+
+    def generalized_force(self, q, v, t):
+        n = self.body.n_dofs
+        M = self.moment(t)
+        offs = self.body.directors
+        d = [np.asarray(q[o:o + 3], dtype=float) for o in offs]
+        S = sum((di @ di) * np.eye(3) - np.outer(di, di) for di in d)
+        Mw = sum(Mj * dj for Mj, dj in zip(M, d)) if self.following else M
+        W = np.linalg.solve(S, Mw)
+        f, fq = np.zeros(n), np.zeros((n, n))
+        for o, di in zip(offs, d):
+            f[o:o + 3] = np.cross(W, di)
+        for j, oj in enumerate(offs):          # ∂/∂(d_j)_c
+            for c in range(3):
+                e = np.eye(3)[c]
+                dS = 2.0 * d[j][c] * np.eye(3) - np.outer(e, d[j]) - np.outer(d[j], e)
+                dW = np.linalg.solve(S, (M[j] * e if self.following else 0.0) - dS @ W)
+                for i, oi in enumerate(offs):
+                    col = np.cross(dW, d[i]) + (np.cross(W, e) if i == j else 0.0)
+                    fq[oi:oi + 3, oj + c] = col
+        return f, fq, np.zeros((n, n))
