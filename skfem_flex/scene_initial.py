@@ -22,7 +22,7 @@ import numpy as np
 
 from .bodies.base import to_dense
 
-__all__ = ["RedundantConstraintsError", "InconsistentInitialConditionsError", "constraint_rows",
+__all__ = ["drop_redundant_constraints", "RedundantConstraintsError", "InconsistentInitialConditionsError", "constraint_rows",
            "find_redundant", "consistent_initial_state"]
 
 
@@ -250,3 +250,76 @@ def _check_only(scene, q, v, t, rows, tol=1e-8):
             raise InconsistentInitialConditionsError(
                 f"inconsistent initial velocities: constraint {name!r} has |Φ_q v + Φ_t| = "
                 f"{np.max(np.abs(vel[r])):.3g} at t = {t:g} s (simulate with project=True to project v0)", [name])
+
+
+def drop_redundant_constraints(scene, q=None, t=0.0, rtol=1e-9):
+    """The scene without its redundant constraint equations, and what was dropped (said once, as a warning).
+
+    A mechanism whose joints are dependent everywhere along its motion (Bricard's six-hinge loop: 60
+    equations of rank 59 in director coordinates) has undetermined multipliers and a singular Newton
+    matrix. Its motion is fixed by any maximal independent subset of the equations: the others then hold by
+    themselves. The rows are taken in the scene's order (the bodies' rigidity first, then the joints as
+    given) and a row is kept when it is independent of those kept before it (scaled to unit length, a
+    residual above ``rtol``), so the last dependent rows go: the closing joint loses an equation. Only
+    equations of :class:`~skfem_flex.elements.constraints.quadratic.QuadraticConstraint` (the spatial joints)
+    can be dropped.
+
+    Parameters
+    ----------
+    scene : Scene
+    q : ndarray, optional
+        Where to test (default the initial state).
+    t : float
+        Time, s.
+    rtol : float
+
+    Returns
+    -------
+    Scene, list of (str, int)
+        The same scene when nothing is redundant; else a new one, and (constraint name, equation index)
+        of each dropped equation.
+
+    Raises
+    ------
+    RedundantConstraintsError
+        When a dependent equation belongs to a constraint that cannot drop rows.
+    """
+    import warnings
+
+    from .elements.constraints.quadratic import QuadraticConstraint, Rigidity
+    from .scene import Scene
+
+    q = scene.initial_state()[0] if q is None else np.asarray(q, dtype=float)
+    rank, names = find_redundant(scene, q, t, rtol)
+    if not names:
+        return scene, []
+    cq = to_dense(scene.constraint_jacobian(q, t))[:, scene.free_index]
+    basis, drop = [], np.zeros(scene.n_constraints, dtype=bool)
+    for i, row in enumerate(cq):
+        nrm = float(np.linalg.norm(row))
+        r = row / nrm if nrm > 0.0 else row
+        for b in basis:
+            r = r - (b @ r) * b
+        res = float(np.linalg.norm(r))
+        if res > rtol ** 0.5:
+            basis.append(r / res)
+        else:
+            drop[i] = True
+    dropped, constraints = [], []
+    for c, (name, rows) in zip(scene.constraints, constraint_rows(scene)):
+        gone = np.flatnonzero(drop[rows])
+        if gone.size and (not isinstance(c, QuadraticConstraint) or isinstance(c, Rigidity)):
+            raise RedundantConstraintsError(
+                f"redundant constraints: equation(s) {gone.tolist()} of {name!r} depend on the others, and "
+                f"only spatial joints can drop equations; remove or replace the duplicated conditions", [name],
+                rank, scene.n_constraints)
+        dropped += [(name, int(k)) for k in gone]
+        if not isinstance(c, Rigidity):
+            constraints.append(c.without_equations(gone) if gone.size else c)
+    warnings.warn(f"scene {scene.name!r}: {len(dropped)} redundant constraint equation(s) dropped ("
+                  + ", ".join(f"equation {k} of {n!r}" for n, k in dropped)
+                  + f"); the constraint Jacobian has rank {rank} for {scene.n_constraints} equations, and the "
+                  "motion is fixed by the others", stacklevel=2)
+    new = Scene(scene.bodies, constraints, scene.forces, scene.prescribed, scene.probes, scene.name,
+                dict(scene.parameters))
+    return new, dropped

@@ -9,9 +9,9 @@ from .particles import pendulum, spring_mass
 from .exact_beams import exact_spin_up_beam, flying_beam, very_flexible_pendulum
 from .mechanisms import double_pendulum, flexible_pendulum, free_beam, slider_crank, spin_up_pinned
 from .rotating import hub_beam, rotating_beam, rotating_beam_frequencies, spin_up_beam
-from .spatial import heavy_top, rigid_chain
+from .spatial import bricard, heavy_top, rigid_chain, spatial_slider_crank
 
 __all__ = ["CATALOGUE", "get", "parameters", "register", "pendulum", "spring_mass", "exact_spin_up_beam",
            "flying_beam", "very_flexible_pendulum", "double_pendulum", "flexible_pendulum", "free_beam",
            "slider_crank", "spin_up_pinned", "hub_beam", "rotating_beam", "rotating_beam_frequencies",
-           "spin_up_beam", "heavy_top", "rigid_chain"]
+           "spin_up_beam", "heavy_top", "rigid_chain", "bricard", "spatial_slider_crank"]

@@ -1,4 +1,5 @@
-"""Spatial catalogue scenes: heavy tops and a chain of rigid bars (docs/spatial.md)."""
+"""Spatial catalogue scenes: heavy tops, a chain of rigid bars, Bricard's mechanism and the spatial slider–crank
+(docs/spatial.md)."""
 from __future__ import annotations
 
 import numpy as np
@@ -11,7 +12,8 @@ from ..numerics.quaternions import rotation_vector_matrix
 from ..scene import Scene
 from ._registry import positive_count, register
 
-__all__ = ["heavy_top", "rigid_chain", "BRULS_REFERENCE"]
+__all__ = ["heavy_top", "rigid_chain", "bricard", "spatial_slider_crank", "BRULS_REFERENCE", "BRICARD_REFERENCE",
+           "SLIDER_CRANK_REFERENCE"]
 
 #: Euler parameters of the Brüls top at t = 0.2 s (published RK4 reference at Δt = 1e-4 s)
 BRULS_REFERENCE = np.array([-0.708279152974, 0.438781088127, 0.545728396145, 0.089399752824])
@@ -88,3 +90,93 @@ def rigid_chain(n_bodies=10):
     return Scene(bodies, joints, [Gravity((0.0, 0.0, -9.81))], name="rigid_chain",
                  probes={"tip": PointProbe(bodies[-1].point([0.5 * length, 0.0, 0.0]))},
                  parameters=dict(n_bodies=n))
+
+
+#: P3 of the Bricard mechanism (square-section rods) at t = 0.5, 1, 2, 10 s, m: a reduced (one-coordinate)
+#: Lagrange model integrated by DOP853 (rtol 1e-11), which exudyn's converged run matches to 3.4e-7 m
+BRICARD_REFERENCE = {0.5: (0.774718, -0.979815, -0.199906), 1.0: (0.274481, -0.886708, -0.462330),
+                     2.0: (-0.778135, -0.980353, -0.197253), 10.0: (0.999731, -1.000000, -0.000269)}
+
+
+@register(t_end=10.0, dt=1e-3)
+def bricard():
+    """Bricard's mechanism (IFToMM multibody benchmark A04): five rods of 1 m and 1 kg (square section
+    0.1 m), six hinges in a closed loop at A (0, 0, 0) about y, B (1, 0, 0) about z, C (1, −1, 0) about x,
+    D (1, −1, 1) about y, E (0, −1, 1) about z and F (0, 0, 1) about x, the loop closed through the ground
+    from F to A; gravity 9.81 m/s² along −y; released at rest, 10 s.
+
+    Grübler's count gives no mobility, but the loop moves with one degree of freedom: its 30 hinge equations
+    have rank 29 everywhere along the motion. The scene drops the dependent one
+    (:func:`~skfem_flex.scene_initial.drop_redundant_constraints`, a warning says which: the 5th equation of
+    hinge F). Probe ``"P3"``: the point C, m (:data:`BRICARD_REFERENCE`).
+    """
+    from ..scene_initial import drop_redundant_constraints
+
+    points = np.array([[0, 0, 0], [1, 0, 0], [1, -1, 0], [1, -1, 1], [0, -1, 1], [0, 0, 1.0]])
+    axes = np.eye(3)[[1, 2, 0, 1, 2, 0]]
+    mass, side = 1.0, 0.1
+    axial, transverse = mass * 2 * side ** 2 / 12.0, mass * (1.0 + side ** 2) / 12.0
+    links = []
+    for k in range(5):
+        e = points[k + 1] - points[k]
+        inertia = transverse * np.eye(3) + (axial - transverse) * np.outer(e, e)
+        links.append(SpatialRigidBody(mass, inertia, position=0.5 * (points[k] + points[k + 1]),
+                                      size=np.abs(e) + side * (1 - np.abs(e)), name=f"link {k + 1}"))
+
+    def at(body, k):
+        return body.point(body.body_coordinates(points[k]))
+
+    hinges = [Revolute3D(at(links[0], 0), None, axis=axes[0], name="A")]
+    hinges += [Revolute3D(at(links[k - 1], k), at(links[k], k), axis=axes[k], name="BCDE"[k - 1]) for k in range(1, 5)]
+    hinges.append(Revolute3D(at(links[4], 5), None, axis=axes[5], name="F"))
+    scene = Scene(links, hinges, [Gravity((0.0, -9.81, 0.0))], name="bricard",
+                  probes={"P3": PointProbe(at(links[1], 2))})
+    return drop_redundant_constraints(scene)[0]
+
+
+#: the IFToMM spatial slider–crank (crank's centre of mass at mid-crank, the cross of the universal joint
+#: along x on the slider): (slider position x_C m, crank angle θ rad unwrapped) at t = 0.1, 0.5, 1, 2, 3 s
+#: from a reduced one-coordinate Lagrange model integrated by DOP853 (rtol 1e-12)
+SLIDER_CRANK_REFERENCE = {0.1: (0.226787189, 0.560031482), 0.5: (0.184952630, 5.583762553),
+                          1.0: (0.211721661, 10.913590729), 2.0: (0.289085197, 21.072744514),
+                          3.0: (0.228484813, 32.008327751)}
+
+
+@register(t_end=5.0, dt=1e-3)
+def spatial_slider_crank():
+    """The IFToMM benchmark "spatial rigid slider–crank mechanism": a crank (0.08 m, 0.12 kg) hinged about x
+    at A = (0, 0.1, 0.12) m, a rod (0.3 m, 0.5 kg) on a ball joint at the crank's end B and a cross (universal)
+    joint at C on a slider (2 kg) that slides along the x axis; gravity 9.81 m/s² along −z; the crank starts
+    upright turning at 6 rad/s about +x (the other velocities consistent), 5 s.
+
+    Inertias about the centres of mass: crank 1e-4 kg m² about x and about y, 1e-5 about its axis; rod 4e-4
+    about its axis and 4e-3 across; slider 1e-4. The crank's centre of mass is at mid-crank and the cross's
+    slider arm is along x (the rod's arm perpendicular to the rod and to x): the published data leave these
+    two choices open. Probes: ``"slider"`` (x_C, m) and ``"crank angle"`` (θ, rad, in (−π, π]);
+    :data:`SLIDER_CRANK_REFERENCE`.
+    """
+    from ..elements.constraints.spatial_joints import Prismatic3D, Spherical, Universal
+
+    A, B, C = np.array([0.0, 0.1, 0.12]), np.array([0.0, 0.1, 0.2]), np.array([0.2, 0.0, 0.0])
+    omega = np.array([6.0, 0.0, 0.0])
+    crank = SpatialRigidBody(0.12, [1e-4, 1e-4, 1e-5], position=0.5 * (A + B), velocity=np.cross(omega, 0.5 * (B - A)),
+                             angular_velocity=omega, size=[0.01, 0.01, 0.08], name="crank")
+    e = (C - B) / np.linalg.norm(C - B)
+    rod = SpatialRigidBody(0.5, 4e-3 * np.eye(3) + (4e-4 - 4e-3) * np.outer(e, e), position=0.5 * (B + C),
+                           velocity=[0.12, -0.24, 0.0], angular_velocity=[1.92, -0.96, 0.48], name="rod")
+    slider = SpatialRigidBody(2.0, [1e-4, 1e-4, 1e-4], position=C, velocity=[0.24, 0.0, 0.0], size=[0.05] * 3,
+                              name="slider")
+    cross = np.cross(e, [1.0, 0.0, 0.0])
+    joints = [Revolute3D(crank.point(crank.body_coordinates(A)), None, axis=(1.0, 0.0, 0.0), name="crank hinge"),
+              Spherical(crank.point(crank.body_coordinates(B)), rod.point(rod.body_coordinates(B)), name="ball"),
+              Universal(rod.point(rod.body_coordinates(C)), slider.point(), axis_a=cross, axis_b=(1.0, 0.0, 0.0),
+                        name="cross"),
+              Prismatic3D(slider.point(), None, axis=(1.0, 0.0, 0.0), name="guide")]
+
+    def crank_angle(scene, t, q, v):
+        d3 = scene.coordinates(crank, q)[9:12]
+        return float(np.arctan2(-d3[1], d3[2]))
+
+    return Scene([crank, rod, slider], joints, [Gravity((0.0, 0.0, -9.81))], name="spatial_slider_crank",
+                 probes={"slider": lambda scene, t, q, v: float(scene.coordinates(slider, q)[0]),
+                         "crank angle": crank_angle})

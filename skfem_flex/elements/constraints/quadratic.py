@@ -163,6 +163,21 @@ class QuadraticConstraint(Constraint):
     def discrete_gradient_jacobian(self, q0, q1, mu, t):
         return 0.5 * self.hessian_product(None, mu, t)
 
+    def without_equations(self, rows):
+        """A copy without the equations ``rows`` (indices), e.g. redundant ones
+        (:func:`~skfem_flex.scene_initial.drop_redundant_constraints`); same name and reaction."""
+        import copy
+
+        keep = np.setdiff1d(np.arange(self.n_equations), np.asarray(rows, dtype=int))
+        new = copy.copy(self)
+        new.H, new.b, new.c = self.H[keep], self.b[keep], self.c[keep]
+        new.laws = [self.laws[k] for k in keep]
+        new.rheonomic = any(law is not None for law in new.laws)
+        new.n_equations = int(keep.size)
+        new._quadratic_rows = np.flatnonzero(np.abs(new.H).reshape(keep.size, -1).max(axis=1) > 0.0) \
+            if keep.size else np.zeros(0, dtype=int)
+        return new
+
     def compiled_form(self):
         """``("quadratic", H, b, c, laws)``: the quadratic-rows family packs it."""
         if type(self).value is not QuadraticConstraint.value:
