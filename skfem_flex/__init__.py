@@ -17,8 +17,8 @@ from .elements.constraints import Constraint, Distance, UserConstraint
 from .bodies.rigid import RigidBody
 from .bodies.spatial import SpatialPointMass, SpatialRigidBody
 from .elements.constraints.quadratic import QuadraticConstraint
-from .elements.constraints.spatial_joints import (Cylindrical, Distance3D, Prismatic3D, Revolute3D, Spherical,
-                                                  TranslationDriver, Universal, Weld3D)
+from .elements.constraints.spatial_joints import (Cylindrical, Distance3D, Prismatic3D, Revolute3D, RotationDriver,
+                                                  Spherical, TranslationDriver, Universal, Weld3D)
 from .elements.constraints import Driver, Pin, Prismatic, Revolute, Slider, Weld
 from .elements.forces import LinearDamper, LinearSpring, PointForce, PointMoment, RotationalDamper, RotationalSpring
 from .scene_initial import (InconsistentInitialConditionsError, RedundantConstraintsError,

@@ -358,8 +358,9 @@ def _plan(packed, scene, packs):
         if nx > DENSE_STORAGE_LIMIT:
             # a chain of bodies: its multipliers in the border make a Schur complement as large as the
             # chain, reordered into the band they cost little (the spatial rigid chain: 110 of 230); a chain
-            # of spatial bodies has a band of about 2 × 40 (12 directors, 6 rigidity and 5 hinge rows a body)
-            reordered = reordered_band_plan(pattern, max_bandwidth=2 * MAX_BANDWIDTH)
+            # of spatial bodies has a band of about 2 × 33 (12 directors, 6 rigidity and 5 hinge rows a body);
+            # a band of half the matrix or more is no band
+            reordered = reordered_band_plan(pattern, max_bandwidth=min(2 * MAX_BANDWIDTH, nx // 2))
             if reordered is not None and (plan is None or plan_work(reordered) < plan_work(plan)):
                 plan = reordered
     if nx <= DENSE_STORAGE_LIMIT or (plan is None and nx <= COMPILED_SIZE_LIMIT):

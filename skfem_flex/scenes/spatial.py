@@ -10,7 +10,7 @@ from ..elements.constraints.spatial_joints import Revolute3D
 from ..elements.forces import Gravity
 from ..numerics.quaternions import rotation_vector_matrix
 from ..scene import Scene
-from ._registry import positive_count, register
+from ._registry import positive_count, positive_value, register
 
 __all__ = ["heavy_top", "rigid_chain", "bricard", "spatial_slider_crank", "BRULS_REFERENCE", "BRICARD_REFERENCE",
            "SLIDER_CRANK_REFERENCE"]
@@ -98,23 +98,26 @@ BRICARD_REFERENCE = {0.5: (0.774718, -0.979815, -0.199906), 1.0: (0.274481, -0.8
                      2.0: (-0.778135, -0.980353, -0.197253), 10.0: (0.999731, -1.000000, -0.000269)}
 
 
-@register(t_end=10.0, dt=1e-3)
-def bricard():
-    """Bricard's mechanism (IFToMM multibody benchmark A04): five rods of 1 m and 1 kg (square section
-    0.1 m), six hinges in a closed loop at A (0, 0, 0) about y, B (1, 0, 0) about z, C (1, −1, 0) about x,
+@register(t_end=10.0, dt=1e-3, side="m")
+def bricard(side=0.1):
+    """Bricard's mechanism (IFToMM multibody benchmark A04): five rods of 1 m and 1 kg (square section of
+    ``side`` = 0.1 m, the inertia of that cuboid), six hinges in a closed loop at A (0, 0, 0) about y, B (1, 0, 0) about z, C (1, −1, 0) about x,
     D (1, −1, 1) about y, E (0, −1, 1) about z and F (0, 0, 1) about x, the loop closed through the ground
     from F to A; gravity 9.81 m/s² along −y; released at rest, 10 s.
 
     Grübler's count gives no mobility, but the loop moves with one degree of freedom: its 30 hinge equations
     have rank 29 everywhere along the motion. The scene drops the dependent one
     (:func:`~skfem_flex.scene_initial.drop_redundant_constraints`, a warning says which: the 5th equation of
-    hinge F). Probe ``"P3"``: the point C, m (:data:`BRICARD_REFERENCE`).
+    hinge F). Probe ``"P3"``: the point C, m (:data:`BRICARD_REFERENCE`, for side = 0.1 m).
     """
     from ..scene_initial import drop_redundant_constraints
 
+    side = positive_value("side", side)
+    if side >= 1.0:
+        raise ValueError(f"side must be below the rods' length 1 m, got {side!r} m")
     points = np.array([[0, 0, 0], [1, 0, 0], [1, -1, 0], [1, -1, 1], [0, -1, 1], [0, 0, 1.0]])
     axes = np.eye(3)[[1, 2, 0, 1, 2, 0]]
-    mass, side = 1.0, 0.1
+    mass = 1.0
     axial, transverse = mass * 2 * side ** 2 / 12.0, mass * (1.0 + side ** 2) / 12.0
     links = []
     for k in range(5):
@@ -130,7 +133,7 @@ def bricard():
     hinges += [Revolute3D(at(links[k - 1], k), at(links[k], k), axis=axes[k], name="BCDE"[k - 1]) for k in range(1, 5)]
     hinges.append(Revolute3D(at(links[4], 5), None, axis=axes[5], name="F"))
     scene = Scene(links, hinges, [Gravity((0.0, -9.81, 0.0))], name="bricard",
-                  probes={"P3": PointProbe(at(links[1], 2))})
+                  probes={"P3": PointProbe(at(links[1], 2))}, parameters=dict(side=side))
     return drop_redundant_constraints(scene)[0]
 
 
@@ -142,29 +145,34 @@ SLIDER_CRANK_REFERENCE = {0.1: (0.226787189, 0.560031482), 0.5: (0.184952630, 5.
                           3.0: (0.228484813, 32.008327751)}
 
 
-@register(t_end=5.0, dt=1e-3)
-def spatial_slider_crank():
+@register(t_end=5.0, dt=1e-3, omega="rad/s")
+def spatial_slider_crank(omega=6.0):
     """The IFToMM benchmark "spatial rigid slider–crank mechanism": a crank (0.08 m, 0.12 kg) hinged about x
     at A = (0, 0.1, 0.12) m, a rod (0.3 m, 0.5 kg) on a ball joint at the crank's end B and a cross (universal)
     joint at C on a slider (2 kg) that slides along the x axis; gravity 9.81 m/s² along −z; the crank starts
-    upright turning at 6 rad/s about +x (the other velocities consistent), 5 s.
+    upright turning at ``omega`` = 6 rad/s about +x (the other velocities consistent), 5 s.
 
     Inertias about the centres of mass: crank 1e-4 kg m² about x and about y, 1e-5 about its axis; rod 4e-4
     about its axis and 4e-3 across; slider 1e-4. The crank's centre of mass is at mid-crank and the cross's
     slider arm is along x (the rod's arm perpendicular to the rod and to x): the published data leave these
     two choices open. Probes: ``"slider"`` (x_C, m) and ``"crank angle"`` (θ, rad, in (−π, π]);
-    :data:`SLIDER_CRANK_REFERENCE`.
+    :data:`SLIDER_CRANK_REFERENCE` (for omega = 6 rad/s).
     """
     from ..elements.constraints.spatial_joints import Prismatic3D, Spherical, Universal
 
+    rate = float(omega)
+    if not np.isfinite(rate) or abs(rate) > 1e4:
+        raise ValueError(f"omega must be finite and at most 1e4 rad/s in size, got {omega!r}")
+    scale = rate / 6.0            # one degree of freedom: every velocity is proportional to the crank's
     A, B, C = np.array([0.0, 0.1, 0.12]), np.array([0.0, 0.1, 0.2]), np.array([0.2, 0.0, 0.0])
-    omega = np.array([6.0, 0.0, 0.0])
+    omega = np.array([rate, 0.0, 0.0])
     crank = SpatialRigidBody(0.12, [1e-4, 1e-4, 1e-5], position=0.5 * (A + B), velocity=np.cross(omega, 0.5 * (B - A)),
                              angular_velocity=omega, size=[0.01, 0.01, 0.08], name="crank")
     e = (C - B) / np.linalg.norm(C - B)
     rod = SpatialRigidBody(0.5, 4e-3 * np.eye(3) + (4e-4 - 4e-3) * np.outer(e, e), position=0.5 * (B + C),
-                           velocity=[0.12, -0.24, 0.0], angular_velocity=[1.92, -0.96, 0.48], name="rod")
-    slider = SpatialRigidBody(2.0, [1e-4, 1e-4, 1e-4], position=C, velocity=[0.24, 0.0, 0.0], size=[0.05] * 3,
+                           velocity=scale * np.array([0.12, -0.24, 0.0]),
+                           angular_velocity=scale * np.array([1.92, -0.96, 0.48]), name="rod")
+    slider = SpatialRigidBody(2.0, [1e-4, 1e-4, 1e-4], position=C, velocity=[0.24 * scale, 0.0, 0.0], size=[0.05] * 3,
                               name="slider")
     cross = np.cross(e, [1.0, 0.0, 0.0])
     joints = [Revolute3D(crank.point(crank.body_coordinates(A)), None, axis=(1.0, 0.0, 0.0), name="crank hinge"),
@@ -179,4 +187,4 @@ def spatial_slider_crank():
 
     return Scene([crank, rod, slider], joints, [Gravity((0.0, 0.0, -9.81))], name="spatial_slider_crank",
                  probes={"slider": lambda scene, t, q, v: float(scene.coordinates(slider, q)[0]),
-                         "crank angle": crank_angle})
+                         "crank angle": crank_angle}, parameters=dict(omega=rate))

@@ -17,6 +17,7 @@ joint                      equations                                          eq
 :class:`Weld3D`            spherical; orientation lock (3)                    6
 :class:`Distance3D`        ½(|r_a − r_b|² − l²) = 0                           1
 :class:`TranslationDriver` (r_a − r_b)·e_a − s₀ − s(t) = 0                    1
+:class:`RotationDriver`    cos θ(t) (u·n₂) − sin θ(t) (u·n₁) = 0              1
 =========================  =================================================  ==========
 
 e is the joint axis, n₁, n₂ two directions perpendicular to it (fixed in body a, or in space for the
@@ -30,10 +31,12 @@ import numpy as np
 
 from ...bodies.base import BodyPoint, check_finite_vector
 from ..point_terms import PointLayout
+from ..motion import MotionLaw
+from .base import Constraint
 from .quadratic import Affine, QuadraticConstraint, perpendiculars, spatial_reaction, stack, unit_vector
 
 __all__ = ["Spherical", "Revolute3D", "Universal", "Cylindrical", "Prismatic3D", "Weld3D", "Distance3D",
-           "TranslationDriver"]
+           "TranslationDriver", "RotationDriver"]
 
 _LABELS = ("Fx", "Fy", "Fz", "Mx", "My", "Mz")
 
@@ -256,3 +259,98 @@ class TranslationDriver(_Joint):
         s0 = float(row[2][0] + row[1][0] @ self._layout.initial()
                    + 0.5 * self._layout.initial() @ row[0][0] @ self._layout.initial())
         self._finish([(row[0], row[1], row[2] - s0)], name, laws=[law])
+
+
+class RotationDriver(Constraint):
+    """The angle of a hinge follows a law: θ(t) about ``axis`` between body b and body a (or body a and the
+    ground), one equation
+
+    Φ = cos θ(t) (u·n₂) − sin θ(t) (u·n₁) = 0,
+
+    with n₁, n₂ directions of body a (or of space) perpendicular to the axis and u the direction of the
+    turning body that coincides with n₁ at the start: u = cos θ n₁ + sin θ n₂ satisfies it. Use it beside a
+    :class:`Revolute3D` about the same axis. At fixed t it is quadratic in q (an exact mid-point gradient);
+    Φ_t = −θ̇ (sin θ (u·n₂) + cos θ (u·n₁)).
+
+    Parameters
+    ----------
+    body_a : SpatialRigidBody
+    body_b : SpatialRigidBody or None
+        The body that turns against a; None: body a turns against the ground.
+    axis : array_like (3,)
+        In space axes at the initial state.
+    law : MotionLaw
+        θ(t), θ̇(t), θ̈(t) in rad (θ(0) = 0 at the start).
+    name : str
+
+    Notes
+    -----
+    Reaction: the moment (N m) about the axis that drives the turning body.
+    """
+
+    quadratic = True
+    rheonomic = True
+    reaction_labels = ("moment",)
+
+    def __init__(self, body_a, body_b, axis, law, name="rotation driver"):
+        for nm, b in (("body_a", body_a), ("body_b", body_b)):
+            if b is not None and not hasattr(b, "axis"):
+                raise ValueError(f"{nm} must be a spatial rigid body (with directors), got {b!r}")
+        if not isinstance(law, MotionLaw):
+            raise ValueError(f"a rotation driver needs a MotionLaw θ(t), got {law!r}")
+        e = unit_vector("axis", axis)
+        n1, n2 = perpendiculars(e)
+        self.layout = PointLayout.of_bodies([body_a] if body_b is None else [body_a, body_b])
+        self.bodies = self.layout.bodies
+        n = self.layout.n
+
+        def direction(body, k, vec):
+            return Affine.of(body.axis(body.body_direction(vec)), self.layout.slices[k], n)
+
+        if body_b is None:
+            u, a1, a2 = direction(body_a, 0, n1), Affine.constant(n1, n), Affine.constant(n2, n)
+        else:
+            u, a1, a2 = direction(body_b, 1, n1), direction(body_a, 0, n1), direction(body_a, 0, n2)
+        (self.Hx, self.bx, self.cx), (self.Hy, self.by, self.cy) = ([p[0][0], p[1][0], float(p[2][0])]
+                                                                      for p in (u.dot(a1), u.dot(a2)))
+        self.law = law
+        self.n_equations = 1
+        self.name = name
+
+    def _xy(self, q):
+        x = 0.5 * q @ self.Hx @ q + self.bx @ q + self.cx
+        y = 0.5 * q @ self.Hy @ q + self.by @ q + self.cy
+        return x, y, self.Hx @ q + self.bx, self.Hy @ q + self.by
+
+    def value(self, q, t):
+        th = self.law(t)[0]
+        x, y, _, _ = self._xy(q)
+        return np.array([np.cos(th) * y - np.sin(th) * x])
+
+    def jacobian(self, q, t):
+        th = self.law(t)[0]
+        _, _, gx, gy = self._xy(q)
+        return (np.cos(th) * gy - np.sin(th) * gx)[None, :]
+
+    def hessian_product(self, q, mu, t):
+        th = self.law(t)[0]
+        return float(np.asarray(mu).ravel()[0]) * (np.cos(th) * self.Hy - np.sin(th) * self.Hx)
+
+    def time_derivative(self, q, t):
+        th, w, _ = self.law(t)
+        x, y, _, _ = self._xy(q)
+        return np.array([-w * (np.sin(th) * y + np.cos(th) * x)])
+
+    def time_terms(self, q, v, t):
+        th, w, acc = self.law(t)
+        x, y, gx, gy = self._xy(q)
+        s, c = np.sin(th), np.cos(th)
+        phi_qt_v = -w * (s * (gy @ v) + c * (gx @ v))
+        phi_tt = -acc * (s * y + c * x) - w * w * (c * y - s * x)
+        return np.array([2.0 * phi_qt_v + phi_tt])
+
+    def reaction(self, q, lam):
+        return np.atleast_1d(np.asarray(lam, dtype=float)).copy()
+
+    def reaction_history(self, q, lam):
+        return np.asarray(lam, dtype=float).reshape(-1, 1).copy()
