@@ -176,6 +176,16 @@ def test_heavy_top(monkeypatch, tmp_path):
     assert (tmp_path / "heavy_top_convergence.png").exists()
 
 
+def test_spatial_mechanisms(monkeypatch, tmp_path):
+    """Bricard and the spatial slider–crank meet the library's high-precision level (1e-3) under
+    energy-momentum, which conserves their energy."""
+    example = run_example("spatial_mechanisms", monkeypatch)
+    err, energy, _ = example["bricard"]["energy-momentum"]
+    assert err < 1e-4 and energy < 1e-9
+    ex, eth, energy, _ = example["crank"]["energy-momentum"]
+    assert ex < 1e-3 and eth < 1e-3 and energy < 1e-10
+
+
 def test_meshed_rod(monkeypatch, tmp_path):
     """The coarse rod's slider–crank: joints hold and the energy balance closes; finite stresses are written."""
     example = run_example("meshed_rod", monkeypatch, tmp_path)

@@ -282,3 +282,18 @@ def test_rotation_driver_turns_the_bar_by_its_law(scheme):
         E, W = r.total_energy, r.external_work
         assert np.abs(E - E[0] - W).max() < 1e-9 * np.abs(E).max()
         assert r.reactions["rotation driver"].shape == (len(r.t), 1)
+
+
+def test_statics_and_modes_of_a_spatial_pendulum():
+    """A bar on a hinge about y, started 1.2 rad below horizontal: it rests hanging straight down, and its one
+    mode is the compound pendulum's, ω = √(m g l / J_O)."""
+    R = rotation_vector_matrix([0.0, 1.2, 0.0])
+    bar = sf.SpatialRigidBody(1.0, [0.001, 0.08, 0.08], position=R @ [0.5, 0, 0], orientation=R)
+    hinge = sf.Revolute3D(bar.point([-0.5, 0, 0]), None, axis=(0, 1, 0))
+    scene = sf.Scene([bar], [hinge], [sf.Gravity((0, 0, -9.81))])
+    eq = sf.static_equilibrium(scene)
+    assert np.allclose(eq.q[:3], [0.0, 0.0, -0.5], atol=1e-10)
+    omega = np.abs(sf.modes(scene).eigenvalues)
+    assert omega.size == 1 and omega[0] == pytest.approx(np.sqrt(9.81 * 0.5 / (0.08 + 0.25)), rel=1e-8)
+    with pytest.raises(ValueError, match="no rest state"):
+        sf.static_equilibrium(sf.Scene([sf.SpatialRigidBody(1.0, [1, 1, 1])], forces=[sf.Gravity((0, 0, -9.81))]))

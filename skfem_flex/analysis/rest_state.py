@@ -19,13 +19,13 @@ __all__ = ["check_held", "check_steady"]
 
 
 def _translation_fields(scene, q):
-    """W (2, n) with rows the generalized rigid translations t_x, t_y of the whole scene, or None.
+    """W (dim, n) with rows the generalized rigid translations t_x, t_y (, t_z) of the whole scene, or None.
 
     For bodies whose linear momentum is p = G v with M t = Gᵀ (every body of the package: a
     rigid translation moves every mass element by the same vector), W = G M⁻¹, and W f is the
     resultant (N) of a generalized force f. None when a body gives no momentum or M is singular.
     """
-    g = np.zeros((2, scene.n))
+    g = np.zeros((getattr(scene, "dimension", 2), scene.n))
     for b in scene.bodies:
         sl = scene.slice(b)
         qb, e = q[sl], np.zeros(b.n_dofs)
@@ -69,10 +69,11 @@ def check_held(scene, q, v, a, t):
     size = np.linalg.norm(np.hstack(cols[1::2]), axis=0)
     norm = np.linalg.norm(held, axis=0)
     keep = norm > 1e-8 * np.maximum(size, TINY)       # forces a support exerts on a rigid translation
-    free = np.eye(2)
+    dim = w.shape[0]
+    free = np.eye(dim)
     if np.any(keep):
         u, sv, _ = np.linalg.svd(held[:, keep] / norm[keep], full_matrices=True)
-        free = u[:, sv.size:] if sv.size < 2 else u[:, sv <= 1e-6 * sv[0]]
+        free = np.hstack([u[:, :sv.size][:, sv <= 1e-6 * sv[0]], u[:, sv.size:]])
     size = max(float(np.linalg.norm(absw @ np.abs(force))), TINY)
     free = free[:, [_translates_freely(scene, q, v, a, t, w, force, d, size) for d in free.T]]
     if free.shape[1] == 0:
@@ -81,13 +82,13 @@ def check_held(scene, q, v, a, t):
     along = free.T @ resultant
     if np.linalg.norm(along) <= 1e-8 * size:
         return
-    what = ("in any direction" if free.shape[1] == 2 else
-            f"along ({free[0, 0]:.3g}, {free[1, 0]:.3g})")
+    what = ("in any direction" if free.shape[1] == dim else
+            "along (" + ", ".join(f"{x:.3g}" for x in free[:, 0]) + ")")
     raise ValueError(f"scene {scene.name!r} has no rest state: nothing holds it {what} (no support, prescribed "
                      f"coordinate or stiffness to the ground), and its loads at t = {t:g} s have a resultant "
-                     f"force ({resultant[0]:.4g}, {resultant[1]:.4g}) N, so it accelerates (a free-flying body "
-                     f"under loads, or a body falling freely); linearize it about its initial state "
-                     f"(about='initial') or about a state of a run instead")
+                     f"force (" + ", ".join(f"{x:.4g}" for x in resultant) + ") N, so it accelerates (a free-flying body "
+                     "under loads, or a body falling freely); linearize it about its initial state "
+                     "(about='initial') or about a state of a run instead")
 
 
 def _translates_freely(scene, q, v, a, t, w, force, d, size):

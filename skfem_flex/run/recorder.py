@@ -36,6 +36,9 @@ class Recorder:
         self.with_momentum = None
         self.reaction_rows = {name: [] for name in scene.reaction_names}
         self.count = 0
+        #: records whose reactions are in reaction_rows: they are computed in batches when a result is
+        #: made (a chain of 400 joints: 400 vectorized calls per batch, not per chunk of one step)
+        self.reactions_done = 0
 
     def prefill(self, prior):
         """Start from the histories of an earlier run (``simulate(..., resume=...)``)."""
@@ -52,6 +55,7 @@ class Recorder:
         for k in self.reaction_rows:
             if k in prior.reactions:
                 self.reaction_rows[k] = [np.asarray(prior.reactions[k])]
+        self.reactions_done = self.count
 
     def first(self, key):
         """The first record of history ``key``."""
@@ -96,9 +100,18 @@ class Recorder:
             else:
                 self.probes[k].append(np.array([np.asarray(fn(s, t, qi, vi), dtype=float)
                                                 for t, qi, vi in zip(records.t[sl], q, v)]))
+        self.count += stop - start
+
+    def _catch_up_reactions(self):
+        """Compute the reactions of the records since the last batch, from their q and λ."""
+        if self.reactions_done >= self.count:
+            return
+        s = self.scene
+        q = self.history("q")[self.reactions_done - self.count:]
+        lam = self.history("lam")[self.reactions_done - self.count:]
         for name, c, (idx, rows) in zip(s.reaction_names, s.constraints, s.constraint_layout):
             self.reaction_rows[name].append(np.asarray(c.reaction_history(q[:, idx], lam[:, rows]), dtype=float))
-        self.count += stop - start
+        self.reactions_done = self.count
 
     def last_energy(self):
         """(kinetic energy, potential energy, work done) of the last record, J."""
@@ -111,6 +124,7 @@ class Recorder:
         if not self.with_momentum:
             r["linear_momentum"] = None
             r["angular_momentum"] = None
+        self._catch_up_reactions()
         reactions = {k: np.asarray(np.concatenate(val) if val else np.zeros(0), dtype=float)
                      for k, val in self.reaction_rows.items()}
         probes = {k: np.concatenate(val) if val else np.zeros(0) for k, val in self.probes.items()}
