@@ -134,7 +134,7 @@ def heavy_top(variant="simo-wong", dt=0.009, t_end=10.0, scheme="generalized-alp
     Notes
     -----
     Modelled like exudyn's ``TestModels/heavyTop.py``: the body's node sits at the pivot (the origin), its
-    inertia is the inertia about the pivot (for Brüls J_C + m(|c|² I − c cᵀ)), a spherical joint holds it
+    inertia is the inertia about the pivot (for Brüls J_C + m(‖c‖² I − c cᵀ)), a spherical joint holds it
     to the ground, and the weight m g acts as a fixed-direction force at the centre of mass c. (The
     Simo–Wong data are no body about its centre of mass, J_O,11 = 5 kg m² < m l² = 20 kg m², but about the
     fixed point only J_O matters.) Settings: exudyn's dense solver (``EXUdense``), default Newton

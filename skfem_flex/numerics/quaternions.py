@@ -104,7 +104,7 @@ def matrix_quaternion(R, reference=None):
 
 
 def rotation_vector_matrix(phi):
-    """exp(skew(φ)): the turn by |φ| about φ/|φ| (Rodrigues' formula), φ in rad."""
+    """exp(skew(φ)): the turn by ‖φ‖ about φ/‖φ‖ (Rodrigues' formula), φ in rad."""
     phi = np.asarray(phi, dtype=float).reshape(3)
     ang = float(np.linalg.norm(phi))
     K = skew(phi)

@@ -15,7 +15,7 @@ joint                      equations                                          eq
 :class:`Cylindrical`       n₁ᵃ·e_b = n₂ᵃ·e_b = 0; (r_b − r_a)·n_iᵃ = 0        4
 :class:`Prismatic3D`       orientation lock (3); (r_b − r_a)·n_iᵃ = 0         5
 :class:`Weld3D`            spherical; orientation lock (3)                    6
-:class:`Distance3D`        ½(|r_a − r_b|² − l²) = 0                           1
+:class:`Distance3D`        ½(‖r_a − r_b‖² − l²) = 0                           1
 :class:`TranslationDriver` (r_a − r_b)·e_a − s₀ − s(t) = 0                    1
 :class:`RotationDriver`    cos θ(t) (u·n₂) − sin θ(t) (u·n₁) = 0              1
 =========================  =================================================  ==========
@@ -210,7 +210,7 @@ class Weld3D(_Joint):
 
 
 class Distance3D(_Joint):
-    """Two points (or a point and a ground point) at a fixed distance: ½(|r_a − r_b|² − l²) = 0.
+    """Two points (or a point and a ground point) at a fixed distance: ½(‖r_a − r_b‖² − l²) = 0.
 
     ``length`` defaults to the initial distance, which must not be zero (a direction is needed)."""
 

@@ -162,7 +162,7 @@ class _HingeAngle(ForceElement):
     """θ = atan2(u·n₂, u·n₁) between two spatial rigid bodies about a hinge axis (or a body and the ground):
     u a direction of body b perpendicular to the axis e, n₁, n₂ directions of body a perpendicular to e, all
     fixed in the bodies at the start (θ = 0 there). Beside a :class:`~skfem_flex.Revolute3D` about the same
-    axis θ is the hinge angle (|θ| < π)."""
+    axis θ is the hinge angle (abs(θ) < π)."""
 
     def _setup(self, body_a, body_b, axis):
         for nm, b in (("body_a", body_a), ("body_b", body_b)):
@@ -340,7 +340,7 @@ class SpatialPointForce(ForceElement):
 class SpatialMoment(ForceElement):
     """A moment M(t) on a spatial rigid body, in space axes or following the body (body axes).
 
-    Generalized forces on the directors f_{d_i} = W × d_i with S W = M, S = Σ_i (|d_i|² I − d_i d_iᵀ) (= 2 I
+    Generalized forces on the directors f_{d_i} = W × d_i with S W = M, S = Σ_i (‖d_i‖² I − d_i d_iᵀ) (= 2 I
     for orthonormal directors): their moment Σ d_i × f_{d_i} = S W is M exactly at any state, so the
     angular momentum gains exactly ∫ M dt also at the mid-point of a step, where the directors are not
     quite orthonormal.
