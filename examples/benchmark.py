@@ -46,7 +46,8 @@ Two more tables:
   5e-7 m at equal mesh). Spatial rows (:mod:`skfem_flex.apps.peer_spatial`: exudyn's Euler-parameter
   rigid bodies against our director bodies): the Brüls top (0.2 s, exudyn's generalized-α at Δt = 1e-4),
   the Simo–Wong top (2 s, exudyn's trapezoidal rule at 1e-3), the rigid chain of 10 and 400 bodies (0.2 s,
-  1e-3) and Bricard's mechanism (2 s, 1e-3), each against our energy-momentum run at a step 20× smaller,
+  1e-3), Bricard's mechanism (2 s, 1e-3) and the spatial slider–crank (5 s, 1e-3; the slider's position),
+  each against our energy-momentum run at a step 20× smaller,
   ours at exudyn's step and at the larger step where our error matches exudyn's. Without exudyn our side
   still runs.
 
@@ -403,8 +404,10 @@ def compositions_table(rows):
 
 # ------------------------------------------------------------------ side by side with exudyn
 def _max_distance(t, probe, reference):
-    """Largest |probe(t) − reference(t)| over the run, m; ``reference`` is callable t -> (n, 2)."""
-    return float(np.max(np.linalg.norm(np.asarray(probe) - reference(np.asarray(t)), axis=1)))
+    """Largest |probe(t) − reference(t)| over the run, m; ``reference`` is callable t -> (n, k) or (n,)."""
+    t = np.asarray(t)
+    diff = np.asarray(probe).reshape(t.size, -1) - np.asarray(reference(t)).reshape(t.size, -1)
+    return float(np.max(np.linalg.norm(diff, axis=1)))
 
 
 def _spline(t, values):
@@ -468,8 +471,8 @@ def peer_problems(out):
     return rows + spatial_peer_problems(out, suffix)
 
 
-#: simulated seconds of the spatial side-by-side problems: Brüls top, Simo–Wong top, chains, Bricard
-SPATIAL_T = (0.02, 0.05, 0.01, 0.05) if QUICK else (0.2, 2.0, 0.2, 2.0)
+#: simulated seconds of the spatial side-by-side problems: Brüls top, Simo–Wong top, chains, Bricard, slider–crank
+SPATIAL_T = (0.02, 0.05, 0.01, 0.05, 0.05) if QUICK else (0.2, 2.0, 0.2, 2.0, 5.0)
 
 
 def spatial_peer_problems(out, suffix):
@@ -480,7 +483,7 @@ def spatial_peer_problems(out, suffix):
     points, the directors' is the smaller)."""
     from skfem_flex.apps import peer_spatial
 
-    bruls_t, top_t, chain_t, bricard_t = SPATIAL_T
+    bruls_t, top_t, chain_t, bricard_t, crank_t = SPATIAL_T
 
     def converged(name, factory, dt, t_end, probe):
         def compute():
@@ -508,6 +511,15 @@ def spatial_peer_problems(out, suffix):
     for dt in (1e-3, 1.25e-3):
         rows.append(("Bricard", sf.scenes.bricard, "energy-momentum", dt, bricard_t, "P3",
                      peer_spatial.bricard(1e-3, bricard_t), "generalized-alpha 0.9, Δt = 1e-3", brick))
+    crank = converged("spatial_slider_crank", sf.scenes.spatial_slider_crank, 1e-3, crank_t, "slider")
+    exudyn_crank = peer_spatial.spatial_slider_crank(1e-3, crank_t)
+
+    def slider_only():                      # exudyn's probe is (x_C, θ): the slider's position is compared
+        t, p, seconds = exudyn_crank()
+        return t, np.asarray(p)[:, 0], seconds
+    for dt in (1e-3, 2e-3):
+        rows.append(("spatial slider–crank (slider position)", sf.scenes.spatial_slider_crank, "energy-momentum", dt,
+                     crank_t, "slider", slider_only, "generalized-alpha 0.9, Δt = 1e-3", crank))
     return rows
 
 

@@ -66,3 +66,18 @@ def test_unknown_variant_and_scheme_are_refused():
         peer_spatial.heavy_top("lagrange")
     with pytest.raises(ValueError, match="scheme"):
         peer_spatial.bricard(t_end=0.01, scheme="euler")()
+
+
+def test_spatial_slider_crank_matches_the_reference_over_1_s():
+    # the reference (x_C m, θ rad) at t = 0.1, 0.5, 1 s is our scene's SLIDER_CRANK_REFERENCE
+    from skfem_flex.scenes.spatial import SLIDER_CRANK_REFERENCE
+    run = peer_spatial.spatial_slider_crank(dt=1e-3, t_end=1.0)
+    t, probe, _ = run()
+    assert t.shape == (1001,) and probe.shape == (1001, 2) and run.stats["steps"] >= 1000
+    assert np.allclose(probe[0], [0.2, 0.0], atol=1e-12)                 # upright crank, C = (0.2, 0, 0)
+    assert np.all(np.diff(probe[:, 1]) > 0.0)                              # the crank turns one way (+x)
+    for time, expected in SLIDER_CRANK_REFERENCE.items():
+        if time <= 1.0:
+            k = int(np.argmin(np.abs(t - time)))
+            assert abs(t[k] - time) < 1e-9
+            assert np.abs(probe[k] - expected).max() < 1e-3

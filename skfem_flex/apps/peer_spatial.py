@@ -12,7 +12,9 @@ top, the body's Euler parameters (e₀, e₁, e₂, e₃) at every recorded time
 
 Rigid bodies are exudyn's ``ObjectRigidBody`` on Euler-parameter nodes (``NodeRigidBodyEP``: seven
 coordinates and one normalisation constraint per body), made with ``mbs.CreateRigidBody``; joints are
-``mbs.CreateSphericalJoint`` / ``mbs.CreateRevoluteJoint`` (``ObjectJointGeneric``).
+``mbs.CreateSphericalJoint`` / ``mbs.CreateRevoluteJoint`` (``ObjectJointGeneric``), ``mbs.CreatePrismaticJoint``
+(``ObjectJointPrismaticX``) and ``mbs.CreateGenericJoint`` (a universal joint: ``ObjectJointGeneric`` with
+the three translations and one relative rotation locked).
 
 * :func:`heavy_top`: the heavy tops of :func:`skfem_flex.scenes.spatial.heavy_top` (Simo–Wong, Brüls).
   Probe: the centre of mass, m.
@@ -20,6 +22,9 @@ coordinates and one normalisation constraint per body), made with ``mbs.CreateRi
   layout of exudyn's ``perf3DRigidBodies``). Probe: the free end of the last bar, m.
 * :func:`bricard`: the IFToMM benchmark A04, Bricard's mechanism (square-section rods), whose closing
   joint is redundant. Probe: the point P3 (= joint C), m.
+* :func:`spatial_slider_crank`: the IFToMM spatial slider–crank of
+  :func:`skfem_flex.scenes.spatial.spatial_slider_crank` (revolute, spherical, universal and prismatic
+  joints). Probe: (slider position x_C m, crank angle θ rad unwrapped).
 
 Schemes: exudyn's generalized-α with spectral radius ρ∞ (``rho_inf``; 0.9 is its default), or its
 Newmark/trapezoidal rule with index-2 constraints (``scheme="trapezoidal"``: ``useNewmark``,
@@ -35,7 +40,7 @@ import numpy as np
 from ..numerics.quaternions import rotation_vector_matrix
 from .peer import peer_available, version
 
-__all__ = ["peer_available", "version", "heavy_top", "rigid_chain", "bricard"]
+__all__ = ["peer_available", "version", "heavy_top", "rigid_chain", "bricard", "spatial_slider_crank"]
 
 _TOP_VARIANTS = ("simo-wong", "bruls")
 
@@ -272,5 +277,69 @@ def bricard(dt=1e-3, t_end=10.0, scheme="generalized-alpha", rho_inf=0.9):
         settings = _settings(t_end, dt, scheme, rho_inf, "EigenDense", ignore_singular=True)
         t, (p3,), seconds = _solve(mbs, sensors, settings, run.stats)
         return t, p3, seconds
+    run.stats = {}
+    return run
+
+
+def spatial_slider_crank(dt=1e-3, t_end=5.0, scheme="generalized-alpha", rho_inf=0.9):
+    """The IFToMM spatial rigid slider–crank in exudyn; returns run() -> (t, (x_C, θ), seconds).
+
+    Parameters
+    ----------
+    dt, t_end : float
+        Time step and end time, s (the benchmark runs 5 s).
+    scheme : {"generalized-alpha", "trapezoidal"}
+    rho_inf : float
+        Spectral radius of generalized-α.
+
+    Notes
+    -----
+    The model of :func:`skfem_flex.scenes.spatial.spatial_slider_crank` (ω = 6 rad/s). Crank (0.08 m,
+    0.12 kg, inertia about its centre of mass diag(1e-4, 1e-4, 1e-5) kg m², body axis 3 along the crank,
+    centre of mass at mid-crank) on a revolute joint about global x at A = (0, 0.1, 0.12) m, upright at
+    t = 0 (B = (0, 0.1, 0.2) m); rod (0.3 m, 0.5 kg, centre of mass at its midpoint, inertia 4e-4 kg m²
+    about its axis and 4e-3 across) on a spherical joint at B; a universal joint at C = (0.2, 0, 0) m
+    between the slider (marker 0) and the rod (marker 1): ``mbs.CreateGenericJoint`` with
+    ``constrainedAxes = [1, 1, 1, 0, 0, 1]`` in the joint frame (x, a, x × a), a = e × x / ‖e × x‖ with e
+    the unit vector from B to C, which keeps the slider's arm (its x) perpendicular to the rod's arm (a,
+    fixed in the rod); slider (2 kg, inertia diag(1e-4) kg m²) on a prismatic joint along global x with
+    the ground (``ObjectJointPrismaticX``: no rotation). Gravity 9.81 m/s² along −z (``CreateRigidBody``'s
+    ``gravity``). Initial velocities: crank ω = (6, 0, 0) rad/s and its centre of mass ω × (B − A)/2; rod
+    centre of mass (0.12, −0.24, 0) m/s and ω = (1.92, −0.96, 0.48) rad/s; slider (0.24, 0, 0) m/s.
+    Settings: ``EXUdense``, default Newton (modified, tolerances 1e-8 relative / 1e-10 absolute),
+    adaptive step on, one thread. Probe: x_C (the slider's position) and the crank angle
+    θ = atan2(−d₃,y, d₃,z) of the crank's body axis 3, unwrapped (``np.unwrap``).
+    """
+    A, B, C = np.array([0.0, 0.1, 0.12]), np.array([0.0, 0.1, 0.2]), np.array([0.2, 0.0, 0.0])
+    x, omega, gravity = np.array([1.0, 0.0, 0.0]), np.array([6.0, 0.0, 0.0]), [0.0, 0.0, -9.81]
+    e = (C - B) / np.linalg.norm(C - B)
+    arm = np.cross(e, x) / np.linalg.norm(np.cross(e, x))
+    cross_frame = np.column_stack([x, arm, np.cross(x, arm)])     # joint x: slider arm, joint y: rod arm
+
+    def run():
+        exu, _ = _exudyn()
+        from exudyn.utilities import RigidBodyInertia
+        mbs = exu.SystemContainer().AddSystem()
+        ground = mbs.CreateGround()
+        crank = mbs.CreateRigidBody(inertia=RigidBodyInertia(0.12, np.diag([1e-4, 1e-4, 1e-5])),
+                                    referencePosition=list(0.5 * (A + B)), gravity=gravity,
+                                    initialVelocity=list(np.cross(omega, 0.5 * (B - A))),
+                                    initialAngularVelocity=list(omega))
+        rod_inertia = 4e-3 * np.eye(3) + (4e-4 - 4e-3) * np.outer(e, e)
+        rod = mbs.CreateRigidBody(inertia=RigidBodyInertia(0.5, rod_inertia), referencePosition=list(0.5 * (B + C)),
+                                  gravity=gravity, initialVelocity=[0.12, -0.24, 0.0],
+                                  initialAngularVelocity=[1.92, -0.96, 0.48])
+        slider = mbs.CreateRigidBody(inertia=RigidBodyInertia(2.0, 1e-4 * np.eye(3)), referencePosition=list(C),
+                                     gravity=gravity, initialVelocity=[0.24, 0.0, 0.0])
+        mbs.CreateRevoluteJoint(itemNumbers=[ground, crank], position=list(A), axis=list(x), useGlobalFrame=True)
+        mbs.CreateSphericalJoint(itemNumbers=[crank, rod], position=list(B))
+        mbs.CreateGenericJoint(itemNumbers=[slider, rod], position=list(C), rotationMatrixAxes=cross_frame,
+                               constrainedAxes=[1, 1, 1, 0, 0, 1], useGlobalFrame=True)
+        mbs.CreatePrismaticJoint(itemNumbers=[ground, slider], position=list(C), axis=list(x), useGlobalFrame=True)
+        sensors = [_sensor(mbs, "Position", body=slider, local=[0.0, 0.0, 0.0]),
+                   _sensor(mbs, "RotationMatrix", body=crank, local=[0.0, 0.0, 0.0])]
+        t, (position, rotation), seconds = _solve(mbs, sensors, _settings(t_end, dt, scheme, rho_inf), run.stats)
+        theta = np.unwrap(np.arctan2(-rotation[:, 5], rotation[:, 8]))     # row-major: d3 = entries 2, 5, 8
+        return t, np.column_stack([position[:, 0], theta]), seconds
     run.stats = {}
     return run
