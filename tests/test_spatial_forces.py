@@ -41,9 +41,12 @@ def test_potential_derivatives_and_exact_discrete_gradient(k):
     q0, q1 = q + 0.2 * rng.normal(size=q.size), q + 0.2 * rng.normal(size=q.size)
     assert np.abs(el.potential_gradient(q0) - _fd_gradient(el.potential_energy, q0)).max() < 1e-6
     assert np.abs(el.potential_hessian(q0) - _fd_gradient(el.potential_gradient, q0)).max() < 1e-5
-    g, _ = el.potential_discrete_gradient(q0, q1)
+    g, dg = el.potential_discrete_gradient(q0, q1)
     jump = el.potential_energy(q1) - el.potential_energy(q0)
     assert abs(g @ (q1 - q0) - jump) <= 1e-12 * max(1.0, abs(jump))
+    if k < 2:       # the springs' ∂g/∂q₁ is exact (the torsional spring's leaves out its correction's part)
+        fd = _fd_gradient(lambda x: el.potential_discrete_gradient(q0, x)[0], q1).T
+        assert np.abs(dg - fd).max() < 1e-6 * max(1.0, np.abs(fd).max())
 
 
 def test_torsional_spring_angle_is_the_hinge_angle():

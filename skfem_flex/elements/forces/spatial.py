@@ -116,7 +116,7 @@ class SpatialSpring(_Line):
         ds = self._ds(0.5 * (q0 + q1))
         h = kappa * self.d.A.T @ self.d.A
         if lr:
-            h = h + (self.k * lr / (2.0 * l1 * total ** 2)) * np.outer(ds, self._ds(q1) / 2.0)
+            h = h + (self.k * lr / (2.0 * l1 * total ** 2)) * np.outer(ds, self._ds(q1))
         return kappa * ds, h
 
     def tension(self, q):
