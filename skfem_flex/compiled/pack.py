@@ -25,7 +25,7 @@ import numpy as np
 import scipy.sparse as sps
 
 from ..bodies.base import COMPILED_SIZE_LIMIT, DENSE_LIMIT
-from ..numerics.band_plans import MAX_BANDWIDTH, MAX_BORDER, MIN_DENSE_BORDERED, dense_bordered_plan, plan_work, reordered_band_plan
+from ..numerics.band_plans import DENSE_BORDERED_GAIN, MAX_BANDWIDTH, MAX_BORDER, MIN_DENSE_BORDERED, dense_bordered_plan, plan_work, reordered_band_plan
 from .abi import Fields
 from .families import family_for
 from .points import MapStore
@@ -355,6 +355,13 @@ def _plan(packed, scene, packs):
     plan = None
     if nx >= MIN_DENSE_BORDERED:
         plan = dense_bordered_plan(pattern, max_border=MAX_BORDER if nx > DENSE_STORAGE_LIMIT else None)
+        if plan is None and nx <= DENSE_STORAGE_LIMIT:
+            # a closed loop of spatial bodies (Bricard: 119 unknowns, 308 entries) has no band in its own order
+            # and no small border, but one after reordering: taken when it models under dense LU's work
+            reordered = reordered_band_plan(pattern, max_bandwidth=nx // 2)
+            if reordered is not None and DENSE_BORDERED_GAIN * (plan_work(reordered) + 2.0 * nx * nx) \
+                    <= nx ** 3 / 3.0 + nx * nx:
+                plan = reordered
         if nx > DENSE_STORAGE_LIMIT:
             # a chain of bodies: its multipliers in the border make a Schur complement as large as the
             # chain, reordered into the band they cost little (the spatial rigid chain: 110 of 230); a chain
