@@ -41,10 +41,11 @@ import numpy as np
 
 from ..elements.motion import spin_up_law
 
-__all__ = ["peer_available", "version", "spin_up", "flexible_pendulum", "pendulum"]
+__all__ = ["peer_available", "version", "exudyn_modules", "simulation_settings", "spin_up", "flexible_pendulum",
+           "pendulum"]
 
 
-def _exudyn():
+def exudyn_modules():
     """(exudyn, exudyn.itemInterface); ImportError with the install hint when exudyn is missing."""
     try:
         import exudyn as exu
@@ -57,7 +58,7 @@ def _exudyn():
 def peer_available():
     """True when exudyn can be imported (then the peer models can run)."""
     try:
-        _exudyn()
+        exudyn_modules()
     except ImportError:
         return False
     return True
@@ -66,19 +67,34 @@ def peer_available():
 def version():
     """exudyn's version, or ``"not installed"``."""
     try:
-        return _exudyn()[0].__version__
+        return exudyn_modules()[0].__version__
     except ImportError:
         return "not installed"
 
 
-def _settings(t_end, dt, scheme, rho_inf, absolute_tolerance=None):
-    exu, _ = _exudyn()
+def simulation_settings(t_end, dt, scheme, rho_inf, absolute_tolerance=None, linear_solver=None,
+                        ignore_singular=False, threads=None):
+    """exudyn's simulation settings of every peer model: ``round(t_end / dt)`` steps, no solution file,
+    sensors every step, the scheme (``"generalized-alpha"`` with ``rho_inf``, or ``"trapezoidal"``: its
+    Newmark rule with index-2 constraints), and optionally the Newton absolute tolerance, the linear solver
+    (a ``LinearSolverType`` name), whether a singular Jacobian is ignored, and the number of threads."""
+    exu, _ = exudyn_modules()
     s = exu.SimulationSettings()
     if absolute_tolerance is not None:
         s.timeIntegration.newton.absoluteTolerance = absolute_tolerance
     s.timeIntegration.numberOfSteps = int(round(t_end / dt))
     s.timeIntegration.endTime = t_end
     s.timeIntegration.verboseMode = 0
+    if threads is not None:
+        s.parallel.numberOfThreads = threads
+    if linear_solver is not None:
+        solver_type = getattr(exu.LinearSolverType, linear_solver)
+        if hasattr(s, "linearSolver"):      # exudyn ≥ 1.13 names; the old ones warn there
+            s.linearSolver.solverType = solver_type
+            s.linearSolver.ignoreSingularJacobian = ignore_singular
+        else:
+            s.linearSolverType = solver_type
+            s.linearSolverSettings.ignoreSingularJacobian = ignore_singular
     if hasattr(s, "solution"):          # exudyn ≥ 1.10 names; the old ones warn there
         s.solution.file.write = False
         s.solution.sensors.writePeriod = dt
@@ -99,7 +115,7 @@ def _settings(t_end, dt, scheme, rho_inf, absolute_tolerance=None):
 
 def _beam(mbs, length, n_elements, EA, EI, GA, rhoA, rhoI):
     """Nodes along +x from the origin and the beam elements between them; returns the node numbers."""
-    _, ei = _exudyn()
+    _, ei = exudyn_modules()
     nodes = [mbs.AddNode(ei.NodeRigidBody2D(referenceCoordinates=[length * i / n_elements, 0.0, 0.0]))
              for i in range(n_elements + 1)]
     elements = [mbs.AddObject(ei.ObjectBeamGeometricallyExact2D(
@@ -111,7 +127,7 @@ def _beam(mbs, length, n_elements, EA, EI, GA, rhoA, rhoI):
 
 def _hold(mbs, node, coordinates):
     """Coordinate constraints node[c] = 0 for c in ``coordinates``; returns the constraint objects."""
-    _, ei = _exudyn()
+    _, ei = exudyn_modules()
     ground = mbs.AddMarker(ei.MarkerNodeCoordinate(nodeNumber=mbs.AddNode(ei.NodePointGround()), coordinate=0))
     return [mbs.AddObject(ei.CoordinateConstraint(markerNumbers=[
         ground, mbs.AddMarker(ei.MarkerNodeCoordinate(nodeNumber=node, coordinate=c))]))
@@ -122,7 +138,7 @@ def _solve(mbs, node, output, settings, stats=None):
     """Record ``output`` ("Position", "Displacement") of ``node``, assemble and solve; returns (t,
     recorded values, seconds). ``stats`` (a dict) receives the steps exudyn took (``steps``: its
     adaptive step control may cut Δt below the requested one) and its Newton iterations (``newton``)."""
-    exu, ei = _exudyn()
+    exu, ei = exudyn_modules()
     sensor = mbs.AddSensor(ei.SensorNode(nodeNumber=node, storeInternal=True,
                                          outputVariableType=getattr(exu.OutputVariableType, output)))
     mbs.Assemble()
@@ -150,7 +166,7 @@ def spin_up(n_elements=8, dt=1e-3, t_end=30.0, omega=4.0, T=15.0, scheme="genera
     law = spin_up_law(omega, T)
 
     def run():
-        exu, ei = _exudyn()
+        exu, ei = exudyn_modules()
         sc = exu.SystemContainer()
         mbs = sc.AddSystem()
         nodes, _ = _beam(mbs, length, n_elements, 2.8e7, 1.4e4, 1e7, 1.2, 6e-4)
@@ -161,7 +177,7 @@ def spin_up(n_elements=8, dt=1e-3, t_end=30.0, omega=4.0, T=15.0, scheme="genera
             return True
         mbs.SetPreStepUserFunction(prescribe)
         t, disp, seconds = _solve(mbs, nodes[-1], "Displacement",
-                                  _settings(t_end, dt, scheme, rho_inf, absolute_tolerance), run.stats)
+                                  simulation_settings(t_end, dt, scheme, rho_inf, absolute_tolerance), run.stats)
         theta = np.array([law.position(x) for x in t])
         x, y = length + disp[:, 0], disp[:, 1]
         c, s = np.cos(theta), np.sin(theta)
@@ -175,7 +191,7 @@ def flexible_pendulum(n_elements=16, dt=1e-3, t_end=2.0, EI=1e2, scheme="general
     length, g = 1.0, 9.81
 
     def run():
-        exu, ei = _exudyn()
+        exu, ei = exudyn_modules()
         sc = exu.SystemContainer()
         mbs = sc.AddSystem()
         nodes, elements = _beam(mbs, length, n_elements, 1e6, EI, 3.205e5, 1.0, 1e-4)
@@ -183,7 +199,7 @@ def flexible_pendulum(n_elements=16, dt=1e-3, t_end=2.0, EI=1e2, scheme="general
         for e in elements:
             mbs.AddLoad(ei.LoadMassProportional(markerNumber=mbs.AddMarker(ei.MarkerBodyMass(bodyNumber=e)),
                                                 loadVector=[0.0, -g, 0.0]))
-        t, pos, seconds = _solve(mbs, nodes[-1], "Position", _settings(t_end, dt, scheme, rho_inf), run.stats)
+        t, pos, seconds = _solve(mbs, nodes[-1], "Position", simulation_settings(t_end, dt, scheme, rho_inf), run.stats)
         return t, pos[:, :2], seconds
     run.stats = {}
     return run
@@ -192,7 +208,7 @@ def flexible_pendulum(n_elements=16, dt=1e-3, t_end=2.0, EI=1e2, scheme="general
 def pendulum(dt=1e-2, t_end=10.0, length=0.5, v0=1.695, g=9.81, scheme="trapezoidal", rho_inf=0.9):
     """The rigid pendulum (point mass on a rod) in exudyn; returns run() -> (t, position, seconds)."""
     def run():
-        exu, ei = _exudyn()
+        exu, ei = exudyn_modules()
         sc = exu.SystemContainer()
         mbs = sc.AddSystem()
         ground = mbs.AddObject(ei.ObjectGround())
@@ -203,7 +219,7 @@ def pendulum(dt=1e-2, t_end=10.0, length=0.5, v0=1.695, g=9.81, scheme="trapezoi
         mbs.AddObject(ei.DistanceConstraint(markerNumbers=[anchor, bob], distance=length))
         mbs.AddLoad(ei.LoadCoordinate(markerNumber=mbs.AddMarker(ei.MarkerNodeCoordinate(nodeNumber=node,
                                                                                          coordinate=1)), load=-g))
-        t, pos, seconds = _solve(mbs, node, "Position", _settings(t_end, dt, scheme, rho_inf), run.stats)
+        t, pos, seconds = _solve(mbs, node, "Position", simulation_settings(t_end, dt, scheme, rho_inf), run.stats)
         return t, pos[:, :2], seconds
     run.stats = {}
     return run

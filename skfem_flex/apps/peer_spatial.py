@@ -38,62 +38,18 @@ import time
 import numpy as np
 
 from ..numerics.quaternions import rotation_vector_matrix
-from .peer import peer_available, version
+from .peer import exudyn_modules, peer_available, simulation_settings, version
 
 __all__ = ["peer_available", "version", "heavy_top", "rigid_chain", "bricard", "spatial_slider_crank"]
 
 _TOP_VARIANTS = ("simo-wong", "bruls")
 
 
-def _exudyn():
-    """(exudyn, exudyn.itemInterface); ImportError with the install hint when exudyn is missing."""
-    try:
-        import exudyn as exu
-        from exudyn import itemInterface as ei
-    except ImportError as exc:
-        raise ImportError('the peer models need exudyn: pip install ".[bench]"') from exc
-    return exu, ei
-
-
-def _settings(t_end, dt, scheme, rho_inf, linear_solver="EXUdense", ignore_singular=False):
-    """exudyn's simulation settings: ``round(t_end / dt)`` steps, no solution file, sensors every step,
-    the scheme, the linear solver (a ``LinearSolverType`` name), one thread."""
-    exu, _ = _exudyn()
-    s = exu.SimulationSettings()
-    s.timeIntegration.numberOfSteps = int(round(t_end / dt))
-    s.timeIntegration.endTime = t_end
-    s.timeIntegration.verboseMode = 0
-    s.parallel.numberOfThreads = 1
-    solver_type = getattr(exu.LinearSolverType, linear_solver)
-    if hasattr(s, "linearSolver"):      # exudyn ≥ 1.13 names; the old ones warn there
-        s.linearSolver.solverType = solver_type
-        s.linearSolver.ignoreSingularJacobian = ignore_singular
-    else:
-        s.linearSolverType = solver_type
-        s.linearSolverSettings.ignoreSingularJacobian = ignore_singular
-    if hasattr(s, "solution"):          # exudyn ≥ 1.10 names
-        s.solution.file.write = False
-        s.solution.sensors.writePeriod = dt
-    else:
-        s.solutionSettings.writeSolutionToFile = False
-        s.solutionSettings.sensorsWritePeriod = dt
-    ga = s.timeIntegration.generalizedAlpha
-    if scheme == "trapezoidal":
-        ga.useNewmark = True
-        ga.useIndex2Constraints = True
-        ga.spectralRadius = 1.0
-    elif scheme == "generalized-alpha":
-        ga.spectralRadius = rho_inf
-    else:
-        raise ValueError(f"scheme must be 'generalized-alpha' or 'trapezoidal', got {scheme!r}")
-    return s
-
-
 def _solve(mbs, sensors, settings, stats):
     """Assemble and solve with exudyn's implicit second-order solver; returns (t, [recorded values of each
     sensor], wall seconds). ``stats`` (a dict) receives ``steps``, ``newton``, ``jacobians`` and
     ``cpu_seconds``."""
-    exu, _ = _exudyn()
+    exu, _ = exudyn_modules()
     mbs.Assemble()
     solver = exu.MainSolverImplicitSecondOrder()
     cpu, wall = time.process_time(), time.perf_counter()
@@ -110,7 +66,7 @@ def _solve(mbs, sensors, settings, stats):
 
 def _sensor(mbs, output, body=None, local=None, node=None):
     """A sensor recording ``output`` (an ``OutputVariableType`` name) of a body point or of a node."""
-    exu, ei = _exudyn()
+    exu, ei = exudyn_modules()
     kind = getattr(exu.OutputVariableType, output)
     if node is not None:
         return mbs.AddSensor(ei.SensorNode(nodeNumber=node, storeInternal=True, outputVariableType=kind))
@@ -159,7 +115,7 @@ def heavy_top(variant="simo-wong", dt=0.009, t_end=10.0, scheme="generalized-alp
         R0, omega = np.eye(3), np.array([0.0, 150.0, -4.61538])
 
     def run():
-        exu, ei = _exudyn()
+        exu, ei = exudyn_modules()
         from exudyn.utilities import RigidBodyInertia
         mbs = exu.SystemContainer().AddSystem()
         ground = mbs.CreateGround()
@@ -171,7 +127,8 @@ def heavy_top(variant="simo-wong", dt=0.009, t_end=10.0, scheme="generalized-alp
         mbs.CreateSphericalJoint(itemNumbers=[ground, top], position=[0.0, 0.0, 0.0])
         sensors = [_sensor(mbs, "Position", body=top, local=c),
                    _sensor(mbs, "CoordinatesTotal", node=mbs.GetObject(top)["nodeNumber"])]
-        t, (com, q), seconds = _solve(mbs, sensors, _settings(t_end, dt, scheme, rho_inf), run.stats)
+        settings = simulation_settings(t_end, dt, scheme, rho_inf, linear_solver="EXUdense", threads=1)
+        t, (com, q), seconds = _solve(mbs, sensors, settings, run.stats)
         run.stats["euler_parameters"] = q[:, 3:7]
         return t, com, seconds
     run.stats = {}
@@ -209,7 +166,7 @@ def rigid_chain(n_bodies=10, dt=1e-3, t_end=1.0, scheme="generalized-alpha", rho
     turn = rotation_vector_matrix([delta, 0.0, 0.0]) @ rotation_vector_matrix([0.0, 0.0, 2 * delta])
 
     def run():
-        exu, _ = _exudyn()
+        exu, _ = exudyn_modules()
         from exudyn.utilities import InertiaCuboid
         mbs = exu.SystemContainer().AddSystem()
         inertia = InertiaCuboid(density=density, sideLengths=[length, width, width])
@@ -222,7 +179,8 @@ def rigid_chain(n_bodies=10, dt=1e-3, t_end=1.0, scheme="generalized-alpha", rho
                                     useGlobalFrame=True)
             previous, start, R = bar, start + R @ [length, 0.0, 0.0], R @ turn
         sensors = [_sensor(mbs, "Position", body=previous, local=[0.5 * length, 0.0, 0.0])]
-        t, (tip,), seconds = _solve(mbs, sensors, _settings(t_end, dt, scheme, rho_inf, "EigenSparse"), run.stats)
+        settings = simulation_settings(t_end, dt, scheme, rho_inf, linear_solver="EigenSparse", threads=1)
+        t, (tip,), seconds = _solve(mbs, sensors, settings, run.stats)
         return t, tip, seconds
     run.stats = {}
     return run
@@ -258,7 +216,7 @@ def bricard(dt=1e-3, t_end=10.0, scheme="generalized-alpha", rho_inf=0.9):
     axes = np.eye(3)[[1, 2, 0, 1, 2, 0]]
 
     def run():
-        exu, _ = _exudyn()
+        exu, _ = exudyn_modules()
         from exudyn.utilities import InertiaCuboid
         mbs = exu.SystemContainer().AddSystem()
         ground = mbs.CreateGround()
@@ -274,7 +232,8 @@ def bricard(dt=1e-3, t_end=10.0, scheme="generalized-alpha", rho_inf=0.9):
             mbs.CreateRevoluteJoint(itemNumbers=list(pair), position=list(point), axis=list(axis),
                                     useGlobalFrame=True)
         sensors = [_sensor(mbs, "Position", body=rods[1], local=[0.5, 0.0, 0.0])]
-        settings = _settings(t_end, dt, scheme, rho_inf, "EigenDense", ignore_singular=True)
+        settings = simulation_settings(t_end, dt, scheme, rho_inf, linear_solver="EigenDense",
+                                       ignore_singular=True, threads=1)
         t, (p3,), seconds = _solve(mbs, sensors, settings, run.stats)
         return t, p3, seconds
     run.stats = {}
@@ -317,7 +276,7 @@ def spatial_slider_crank(dt=1e-3, t_end=5.0, scheme="generalized-alpha", rho_inf
     cross_frame = np.column_stack([x, arm, np.cross(x, arm)])     # joint x: slider arm, joint y: rod arm
 
     def run():
-        exu, _ = _exudyn()
+        exu, _ = exudyn_modules()
         from exudyn.utilities import RigidBodyInertia
         mbs = exu.SystemContainer().AddSystem()
         ground = mbs.CreateGround()
@@ -338,7 +297,8 @@ def spatial_slider_crank(dt=1e-3, t_end=5.0, scheme="generalized-alpha", rho_inf
         mbs.CreatePrismaticJoint(itemNumbers=[ground, slider], position=list(C), axis=list(x), useGlobalFrame=True)
         sensors = [_sensor(mbs, "Position", body=slider, local=[0.0, 0.0, 0.0]),
                    _sensor(mbs, "RotationMatrix", body=crank, local=[0.0, 0.0, 0.0])]
-        t, (position, rotation), seconds = _solve(mbs, sensors, _settings(t_end, dt, scheme, rho_inf), run.stats)
+        settings = simulation_settings(t_end, dt, scheme, rho_inf, linear_solver="EXUdense", threads=1)
+        t, (position, rotation), seconds = _solve(mbs, sensors, settings, run.stats)
         theta = np.unwrap(np.arctan2(-rotation[:, 5], rotation[:, 8]))     # row-major: d3 = entries 2, 5, 8
         return t, np.column_stack([position[:, 0], theta]), seconds
     run.stats = {}

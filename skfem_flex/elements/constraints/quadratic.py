@@ -24,7 +24,8 @@ from ..motion import MotionLaw
 from ..point_terms import PointLayout
 from .base import Constraint
 
-__all__ = ["Affine", "QuadraticConstraint", "Rigidity", "spatial_reaction", "unit_vector", "perpendiculars", "stack"]
+__all__ = ["Affine", "QuadraticConstraint", "Rigidity", "spatial_reaction", "unit_vector", "perpendiculars", "stack",
+           "hinge_directions"]
 
 
 def unit_vector(name, vec):
@@ -34,6 +35,30 @@ def unit_vector(name, vec):
     if nrm < 1e-300:
         raise ValueError(f"{name} must not have zero length, got {vec!r}")
     return vec / nrm
+
+
+def hinge_directions(body_a, body_b, axis):
+    """The directions a hinge angle about ``axis`` is read from, over the bodies' coordinates.
+
+    Returns (layout, u, n₁, n₂): the :class:`~..point_terms.PointLayout` of body a (and b), u the direction
+    of the turning body (b, or a against the ground when ``body_b`` is None) that lies along n₁ at the start,
+    and n₁, n₂ perpendicular to the axis, fixed in body a (or in space), as :class:`Affine` vectors; the
+    angle is atan2(u·n₂, u·n₁). ``ValueError`` for a body without directors or an axis of zero length.
+    """
+    for nm, b in (("body_a", body_a), ("body_b", body_b)):
+        if b is not None and not hasattr(b, "axis"):
+            raise ValueError(f"{nm} must be a spatial rigid body (with directors), got {b!r}")
+    n1, n2 = perpendiculars(unit_vector("axis", axis))
+    layout = PointLayout.of_bodies([body_a] if body_b is None else [body_a, body_b])
+    n = layout.n
+
+    def direction(k, vec):
+        body = layout.bodies[k]
+        return Affine.of(body.axis(body.body_direction(vec)), layout.slices[k], n)
+
+    if body_b is None:
+        return layout, direction(0, n1), Affine.constant(n1, n), Affine.constant(n2, n)
+    return layout, direction(1, n1), direction(0, n1), direction(0, n2)
 
 
 def perpendiculars(e):
@@ -132,7 +157,6 @@ class QuadraticConstraint(Constraint):
         self.rheonomic = any(law is not None for law in self.laws)
         self.n_equations = m
         self.name = name
-        self._quadratic_rows = np.flatnonzero(np.abs(self.H).reshape(m, -1).max(axis=1) > 0.0)
 
     def _law_values(self, t, k):
         return np.array([0.0 if law is None else float(law(t)[k]) for law in self.laws])
@@ -174,8 +198,6 @@ class QuadraticConstraint(Constraint):
         new.laws = [self.laws[k] for k in keep]
         new.rheonomic = any(law is not None for law in new.laws)
         new.n_equations = int(keep.size)
-        new._quadratic_rows = np.flatnonzero(np.abs(new.H).reshape(keep.size, -1).max(axis=1) > 0.0) \
-            if keep.size else np.zeros(0, dtype=int)
         return new
 
     def compiled_form(self):

@@ -33,7 +33,8 @@ from ...bodies.base import BodyPoint, check_finite_vector
 from ..point_terms import PointLayout
 from ..motion import MotionLaw
 from .base import Constraint
-from .quadratic import Affine, QuadraticConstraint, perpendiculars, spatial_reaction, stack, unit_vector
+from .quadratic import (Affine, QuadraticConstraint, hinge_directions, perpendiculars, spatial_reaction, stack,
+                        unit_vector)
 
 __all__ = ["Spherical", "Revolute3D", "Universal", "Cylindrical", "Prismatic3D", "Weld3D", "Distance3D",
            "TranslationDriver", "RotationDriver"]
@@ -293,24 +294,10 @@ class RotationDriver(Constraint):
     reaction_labels = ("moment",)
 
     def __init__(self, body_a, body_b, axis, law, name="rotation driver"):
-        for nm, b in (("body_a", body_a), ("body_b", body_b)):
-            if b is not None and not hasattr(b, "axis"):
-                raise ValueError(f"{nm} must be a spatial rigid body (with directors), got {b!r}")
         if not isinstance(law, MotionLaw):
             raise ValueError(f"a rotation driver needs a MotionLaw θ(t), got {law!r}")
-        e = unit_vector("axis", axis)
-        n1, n2 = perpendiculars(e)
-        self.layout = PointLayout.of_bodies([body_a] if body_b is None else [body_a, body_b])
+        self.layout, u, a1, a2 = hinge_directions(body_a, body_b, axis)
         self.bodies = self.layout.bodies
-        n = self.layout.n
-
-        def direction(body, k, vec):
-            return Affine.of(body.axis(body.body_direction(vec)), self.layout.slices[k], n)
-
-        if body_b is None:
-            u, a1, a2 = direction(body_a, 0, n1), Affine.constant(n1, n), Affine.constant(n2, n)
-        else:
-            u, a1, a2 = direction(body_b, 1, n1), direction(body_a, 0, n1), direction(body_a, 0, n2)
         (self.Hx, self.bx, self.cx), (self.Hy, self.by, self.cy) = ([p[0][0], p[1][0], float(p[2][0])]
                                                                       for p in (u.dot(a1), u.dot(a2)))
         self.law = law

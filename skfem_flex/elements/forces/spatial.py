@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...bodies.base import BodyPoint, check_finite_vector
-from ..constraints.quadratic import Affine, perpendiculars, unit_vector
+from ..constraints.quadratic import Affine, hinge_directions
 from ..point_terms import PointLayout
 from .base import ForceElement, check_nonnegative
 from .point_loads import time_function
@@ -165,25 +165,10 @@ class _HingeAngle(ForceElement):
     axis θ is the hinge angle (abs(θ) < π)."""
 
     def _setup(self, body_a, body_b, axis):
-        for nm, b in (("body_a", body_a), ("body_b", body_b)):
-            if b is not None and not hasattr(b, "axis"):
-                raise ValueError(f"{nm} must be a spatial rigid body (with directors), got {b!r}")
-        e = unit_vector("axis", axis)
-        n1, n2 = perpendiculars(e)
-        self.layout = PointLayout.of_bodies([body_a] if body_b is None else [body_a, body_b])
+        self.layout, self.u, self.n1, self.n2 = hinge_directions(body_a, body_b, axis)
         self.bodies = self.layout.bodies
-        n = self.layout.n
-
-        def direction(body, k, vec):
-            return Affine.of(body.axis(body.body_direction(vec)), self.layout.slices[k], n)
-
-        if body_b is None:
-            # body a turns against fixed n₁, n₂: its own direction is u, and θ of b against a is −θ of a
-            self.u, self.n1, self.n2 = direction(body_a, 0, n1), Affine.constant(n1, n), Affine.constant(n2, n)
-            self.sign = -1.0
-        else:
-            self.u, self.n1, self.n2 = direction(body_b, 1, n1), direction(body_a, 0, n1), direction(body_a, 0, n2)
-            self.sign = 1.0
+        # against the ground, u is body a's own direction: θ of the ground against a is −θ of a
+        self.sign = -1.0 if body_b is None else 1.0
 
     def angle(self, q):
         """θ, rad (in (−π, π])."""
