@@ -1,8 +1,8 @@
 """skfem_flex: flexible multibody dynamics on scikit-fem.
 
 Timoshenko beams (linear, floating frame of reference, geometrically exact),
-rigid bodies and point masses in the plane, spatial rigid bodies (directors)
-and point masses, joined by constraints and integrated in time by an
+rigid bodies and point masses in the plane, spatial rigid bodies (directors),
+point masses and geometrically exact spatial beams, joined by constraints and integrated in time by an
 energy-conserving scheme, the trapezoidal rule or generalized-α.
 """
 from .numerics import jit_cache  # noqa: F401  (first: compiled kernels must see the package's cache rule)
@@ -16,6 +16,8 @@ from .elements.forces import DistributedLoad, ExactDistributedLoad, NodalLoad
 from .elements.constraints import Constraint, Distance, UserConstraint
 from .bodies.rigid import RigidBody
 from .bodies.spatial import SpatialPointMass, SpatialRigidBody
+from .fem.spatial_section import SpatialSection
+from .bodies.exact.spatial_body import SpatialExactBeam
 from .elements.constraints.quadratic import QuadraticConstraint
 from .elements.constraints.spatial_joints import (Cylindrical, Distance3D, Prismatic3D, Revolute3D, RotationDriver,
                                                   Spherical, TranslationDriver, Universal, Weld3D)

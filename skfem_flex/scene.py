@@ -145,9 +145,11 @@ class Scene:
 
         self.forces = tuple(f.on(self.bodies) if isinstance(f, Gravity) and f.bodies is None else f
                             for f in forces)
-        # spatial rigid bodies are held rigid by their directors' constraints, added first
-        self.constraints = tuple(Rigidity(b) for b in self.bodies if getattr(b, "directors", None)) + tuple(
-            constraints)
+        # spatial rigid bodies and the nodes of spatial beams are held rigid by their directors'
+        # constraints, added first
+        self.constraints = tuple(
+            Rigidity(b, triad, name=f"{b.name}: rigidity" + (f" of node {k}" if len(b.director_triads) > 1 else ""))
+            for b in self.bodies for k, triad in enumerate(getattr(b, "director_triads", ()))) + tuple(constraints)
         self._force_idx = [self._indices(f.bodies, f"force {getattr(f, 'name', f)!r}") for f in self.forces]
         layout, row = [], 0
         for c in self.constraints:

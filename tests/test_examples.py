@@ -186,6 +186,17 @@ def test_spatial_mechanisms(monkeypatch, tmp_path):
     assert ex < 1e-3 and eth < 1e-3 and energy < 1e-10
 
 
+def test_spatial_beams(monkeypatch, tmp_path):
+    """The flying beam in space keeps the pulse's impulse and, under energy-momentum alone, its energy and
+    angular momentum; the frame's elbow moves out of its plane."""
+    example = run_example("spatial_beams", monkeypatch)
+    p, energy, L, _ = example["flying"]["energy-momentum"]
+    assert p < 1e-10 * 50 and energy < 1e-10 and L < 1e-10
+    assert example["flying"]["trapezoidal"][1] > 1e-6
+    assert all(pk["elbow, first peak"][0] > 1.0 for pk in example["frame"].values())
+    assert "flying beam" in example["summary"]()
+
+
 def test_meshed_rod(monkeypatch, tmp_path):
     """The coarse rod's slider–crank: joints hold and the energy balance closes; finite stresses are written."""
     example = run_example("meshed_rod", monkeypatch, tmp_path)

@@ -5,7 +5,8 @@ r"""Following the load path to the equilibrium: pseudo-arc-length continuation, 
 loads: predictor along the tangent, Newton corrector on the hyperplane orthogonal to it, step halved
 on failure and doubled after quick convergence, a last Newton solve at s = 1. A start where no
 stiffness meets the loads raises :class:`SingularStart`; :func:`settle` then lets the scene come to
-rest under its full loads by pseudo-transient continuation first.
+rest under its full loads by pseudo-transient continuation first. :func:`load_stepping` instead takes
+equal steps of s, each solved by Newton (a path-independence check takes 3, 8 or 30 of them).
 """
 from __future__ import annotations
 
@@ -21,7 +22,7 @@ from ..scene import add_matrices
 from .balance import StaticResidual, equilibrium_state, initial_multipliers
 from .matrix_tools import EPS, TINY, inf_norm, submatrix
 
-__all__ = ["SingularStart", "continuation", "settle"]
+__all__ = ["SingularStart", "continuation", "load_stepping", "settle"]
 
 
 class SingularStart(ValueError):
@@ -98,17 +99,12 @@ def _pad(mat, m):
     return out
 
 
-def continuation(scene, q0, v, a, t, settings, max_steps, min_step, steady):
-    """Follow the load path from q0 to the equilibrium under the full loads (the notes of
-    :func:`~skfem_flex.analysis.statics.static_equilibrium`).
-
-    Raises :class:`SingularStart` when no stiffness meets the loads at q0, ``ConvergenceError`` (with
-    ``exc.state``, the last equilibrium on the path) when the path cannot be followed to the full load."""
+def _start(scene, q0, v, a, t, settings, steady):
+    """The residual at the start and the function that turns a point x of the path into an equilibrium."""
     sys_ = StaticResidual(scene, q0, v, a, t, settings)
-    nf, m = sys_.nf, sys_.m
+    nf = sys_.nf
     x0 = np.concatenate([q0[scene.free_index], initial_multipliers(scene, q0, v, a, t)])
     r0, jac0, sc0 = sys_.evaluate(x0)
-    name = "static equilibrium"
 
     def done(x, s, steps, its):
         # the force balance at x, for the prescribed coordinates' forces and the accepted imbalance
@@ -117,6 +113,52 @@ def continuation(scene, q0, v, a, t, settings, max_steps, min_step, steady):
         q = sys_.full_q(x)
         lam = x[nf:]
         return equilibrium_state(scene, t, q, v, a, lam, s, steps, its, steady, sys_.last_force, tolerance)
+
+    return sys_, x0, r0, jac0, sc0, done
+
+
+def load_stepping(scene, q0, v, a, t, settings, n_steps, min_step, steady):
+    """Equal steps of the load factor s = 1/n, 2/n, …, 1 of the homotopy, each solved by Newton from the
+    secant predictor of the two states before (a step that fails is halved down to ``min_step``).
+
+    With loads that do not depend on the configuration (dead loads, gravity), s is the load factor and every
+    step an equilibrium under that share of the loads: a path-independent formulation gives the same end
+    state for any n. Raises ``ConvergenceError`` (with ``exc.state``) when a step cannot be solved."""
+    sys_, x0, r0, _, _, done = _start(scene, q0, v, a, t, settings, steady)
+    name = "static equilibrium"
+    x, s, x_before, s_before = x0, 0.0, None, 0.0
+    steps = its_total = 0
+    target = 1.0 / n_steps
+    while s < 1.0 - 1e-14:
+        s_new = min(s + target, 1.0)
+        pred = x if x_before is None else x + (x - x_before) * ((s_new - s) / (s - s_before))
+        try:
+            x_new, _, its = newton_solve(lambda y, s_new=s_new: _homotopy(sys_, y, s_new, r0), pred, settings,
+                                         name, f"load factor {s_new:.6g}")
+        except (ConvergenceError, np.linalg.LinAlgError):
+            target *= 0.5
+            if target < min_step:
+                exc = ConvergenceError(f"{name} of {scene.name!r} failed: no equilibrium found beyond load factor "
+                                       f"{s:.9g} of 1 with steps down to {min_step:g}", load_factor=s, steps=steps)
+                exc.state = done(x, s, steps, its_total)
+                raise exc from None
+            continue
+        x_before, s_before, x, s = x, s, x_new, s_new
+        steps += 1
+        its_total += its
+        target = max(target, 1.0 / n_steps) if its <= 6 else target
+    return done(x, 1.0, steps, its_total)
+
+
+def continuation(scene, q0, v, a, t, settings, max_steps, min_step, steady):
+    """Follow the load path from q0 to the equilibrium under the full loads (the notes of
+    :func:`~skfem_flex.analysis.statics.static_equilibrium`).
+
+    Raises :class:`SingularStart` when no stiffness meets the loads at q0, ``ConvergenceError`` (with
+    ``exc.state``, the last equilibrium on the path) when the path cannot be followed to the full load."""
+    sys_, x0, r0, jac0, sc0, done = _start(scene, q0, v, a, t, settings, steady)
+    nf, m = sys_.nf, sys_.m
+    name = "static equilibrium"
 
     if sys_.error(r0, sc0) <= 1.0:
         return done(x0, 1.0, 0, 0)

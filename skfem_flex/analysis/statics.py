@@ -12,14 +12,15 @@ import numpy as np
 
 from ..numerics.newton import NewtonSettings
 from ..scene_initial import consistent_initial_state
-from .load_path import SingularStart, continuation, settle
+from .load_path import SingularStart, continuation, load_stepping, settle
 from .matrix_tools import TINY, as_dense, inf_norm
 from .rest_state import check_held, check_steady
 
 __all__ = ["static_equilibrium"]
 
 
-def static_equilibrium(scene, t=0.0, q=None, steady=False, newton=None, max_steps=500, min_step=1e-8):
+def static_equilibrium(scene, t=0.0, q=None, steady=False, newton=None, max_steps=500, min_step=1e-8,
+                       load_steps=None):
     r"""Static (or steady) equilibrium of a scene under its loads.
 
     Parameters
@@ -44,6 +45,11 @@ def static_equilibrium(scene, t=0.0, q=None, steady=False, newton=None, max_step
     min_step : float
         Smallest step of the load path (in units of the start's load factor and its linear
         response) before giving up.
+    load_steps : int, optional
+        Instead of the adaptive path following, n equal steps of the load factor, each solved by
+        Newton (halved where one fails). With loads that do not depend on the configuration the
+        steps are equilibria under 1/n, 2/n, … of the loads, so a path-independent model ends in
+        the same state for any n. Not with ``steady``.
 
     Returns
     -------
@@ -93,6 +99,10 @@ def static_equilibrium(scene, t=0.0, q=None, steady=False, newton=None, max_step
     a = np.zeros(scene.n)
     if steady:
         a[scene.prescribed_index] = scene.prescribed_state(t)[2]
+    if load_steps is not None:
+        if isinstance(load_steps, bool) or int(load_steps) != load_steps or load_steps < 1 or steady:
+            raise ValueError(f"load_steps must be a positive integer (and not with steady=True), got {load_steps!r}")
+        return load_stepping(scene, q0, v, a, t, settings, int(load_steps), float(min_step), steady)
     if not steady:
         try:
             return continuation(scene, q0, v, a, t, settings, int(max_steps), float(min_step), steady)

@@ -34,7 +34,8 @@ import numpy as np
 from .base import Body, BodyGeometry, BodyPoint, check_finite_number, check_finite_vector
 from ..numerics.quaternions import check_quaternion, check_rotation_matrix, matrix_quaternion, quaternion_matrix
 
-__all__ = ["SpatialRigidBody", "SpatialPointMass", "SpatialPoint", "SpatialAxis", "check_inertia_tensor"]
+__all__ = ["SpatialRigidBody", "SpatialPointMass", "SpatialPoint", "SpatialAxis", "SpatialDirection",
+           "check_inertia_tensor"]
 
 _CELLS_BOX = np.array([[0, 1], [1, 3], [3, 2], [2, 0], [4, 5], [5, 7], [7, 6], [6, 4], [0, 4], [1, 5], [2, 6],
                        [3, 7]])
@@ -205,6 +206,24 @@ class SpatialRigidBody(Body):
             G[:, o + 3 * i:o + 3 * i + 3] = s[i] * np.eye(3)
         return G, (np.zeros(3) if self.pivot is None else self.pivot.copy())
 
+    @property
+    def director_triads(self):
+        """The body's one triad of directors (local offsets of d₁, d₂, d₃), which the scene holds rigid."""
+        return (tuple(self.directors),)
+
+    def vector_layout(self):
+        """(positions, directors): local offsets of the position vectors (x, or none about a pivot) and of
+        the directors, for the force and moment a constraint exerts (``spatial_reaction``)."""
+        return ((0,) if self.pivot is None else ()), tuple(self.directors)
+
+    def point_triad(self, s):
+        """The directors' offsets a point at body coordinates s turns with: the body's."""
+        return tuple(self.directors)
+
+    def axis_affine(self, s, components):
+        """G with a = G q: the body-fixed direction of body ``components`` (the same at every point s)."""
+        return self.axis(components).G
+
     def rotation_matrix(self, q):
         """R = [d₁ d₂ d₃] (3, 3); orthonormal up to the constraint tolerance."""
         o = self.directors[0]
@@ -311,6 +330,12 @@ class SpatialPointMass(Body):
     def spatial_momentum_layout(self):
         return np.arange(3).reshape(1, 3), np.zeros(3)
 
+    def vector_layout(self):
+        return (0,), ()
+
+    def point_triad(self, s):
+        return None
+
     def point_affine(self, s):
         return np.eye(3), np.zeros(3)
 
@@ -333,10 +358,30 @@ class SpatialPoint(BodyPoint):
         self.body = body
         self.s = None if s is None else np.asarray(s, dtype=float)
         self.G, self.a = body.point_affine(self.s)
+        #: local offsets of the directors (d₁, d₂, d₃) the point turns with, or None (a point mass)
+        self.triad = body.point_triad(self.s)
 
     def affine(self):
         """(G, a) with r = G q + a; what the quadratic constraints build on."""
         return self.G, self.a
+
+    def axis(self, components):
+        """The direction a = Σ c_i d_i fixed in the point's frame, from its components c in that frame."""
+        if self.triad is None:
+            raise ValueError(f"body {self.body.name!r} has no orientation (a point mass): it cannot carry a "
+                             f"direction")
+        a = check_finite_vector("direction components", components, 3)
+        if float(np.linalg.norm(a)) == 0.0:
+            raise ValueError("a direction must not have zero length")
+        return SpatialDirection(self.body, self.body.axis_affine(self.s, a))
+
+    def direction(self, e_space):
+        """The direction fixed in the point's frame that lies along ``e_space`` (space axes) at the start."""
+        if self.triad is None:
+            return self.axis(np.ones(3))          # the error of a point mass
+        q0 = np.asarray(self.body.q0, dtype=float)
+        R0 = np.column_stack([self.body.axis_affine(self.s, e) @ q0 for e in np.eye(3)])
+        return self.axis(R0.T @ check_finite_vector("direction", e_space, 3))
 
     def position(self, q):
         return self.G @ q + self.a
@@ -358,6 +403,20 @@ class SpatialPoint(BodyPoint):
 
     def compiled_map(self):
         return None         # the compiled position maps are planar; spatial rows are packed as quadratics
+
+
+class SpatialDirection:
+    """A direction a = G q fixed in a spatial body's frame (at one of its points), linear in q."""
+
+    def __init__(self, body, G):
+        self.body = body
+        self.G = np.asarray(G, dtype=float)
+
+    def affine(self):
+        return self.G, np.zeros(3)
+
+    def direction(self, q):
+        return self.G @ q
 
 
 class SpatialAxis:

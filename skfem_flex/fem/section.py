@@ -32,14 +32,14 @@ def _finite_float(name, value):
     return number
 
 
-def _positive(name, value):
+def positive_number(name, value):
     number = _finite_float(name, value)
     if number <= 0.0:
         raise ValueError(f"{name} must be positive, got {value!r}")
     return number
 
 
-def _non_negative(name, value):
+def non_negative_number(name, value):
     number = _finite_float(name, value)
     if number < 0.0:
         raise ValueError(f"{name} must be zero or positive, got {value!r}")
@@ -85,7 +85,7 @@ class Section:
     def __post_init__(self):
         for spec in fields(self):
             value = getattr(self, spec.name)
-            check = _non_negative if spec.name == "rhoI" else _positive
+            check = non_negative_number if spec.name == "rhoI" else positive_number
             # frozen dataclass: store the validated float through object
             object.__setattr__(self, spec.name, check(spec.name, value))
 
@@ -119,12 +119,12 @@ class Section:
         ValueError
             If any input is not finite and positive.
         """
-        E = _positive("E", E)
-        G = _positive("G", G)
-        A = _positive("A", A)
-        I = _positive("I", I)
-        rho = _positive("rho", rho)
-        k = _positive("k", k)
+        E = positive_number("E", E)
+        G = positive_number("G", G)
+        A = positive_number("A", A)
+        I = positive_number("I", I)
+        rho = positive_number("rho", rho)
+        k = positive_number("k", k)
         return cls(EA=E * A, EI=E * I, kGA=k * G * A, rhoA=rho * A, rhoI=rho * I)
 
     @classmethod
@@ -167,9 +167,9 @@ class Section:
         nu = _finite_float("nu", nu)
         if not -1.0 < nu < 0.5:
             raise ValueError(f"nu must lie in the open interval (-1, 0.5), got {nu!r}")
-        E = _positive("E", E)
-        b = _positive("b", b)
-        h = _positive("h", h)
+        E = positive_number("E", E)
+        b = positive_number("b", b)
+        h = positive_number("h", h)
         return cls.from_material(
             E=E, G=E / (2.0 * (1.0 + nu)), A=b * h, I=b * h**3 / 12.0, rho=rho, k=k
         )

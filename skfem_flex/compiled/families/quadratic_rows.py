@@ -54,8 +54,8 @@ def pack(items, packer):
     pi, pj, psi, psj, ph, li, lsl, lb, cols = ([] for _ in range(9))
     row_support, couplings = [], []
     for ((term, _), constraint, (idx, first)) in items:
-        _, H, b, c, laws = term
-        idx = np.asarray(idx, dtype=np.int64)
+        _, H, b, c, laws, columns = term
+        idx = np.asarray(idx, dtype=np.int64)[columns]
         for k in range(H.shape[0]):
             # upper triangle of ½ H: Φ's pair terms h q_i q_j (i ≤ j)
             hi, hj = np.nonzero(np.triu(H[k]))

@@ -18,8 +18,9 @@ direction, a ground point or direction): ``u.equals(w)`` gives three linear equa
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sps
 
-from ...bodies.base import check_finite_vector
+from ...bodies.base import DENSE_LIMIT, check_finite_vector
 from ..motion import MotionLaw
 from ..point_terms import PointLayout
 from .base import Constraint
@@ -134,21 +135,28 @@ class QuadraticConstraint(Constraint):
     laws : sequence of MotionLaw or None, optional
         s_k(t) per equation (None: no time term).
     name : str
+    columns : array_like of int, optional
+        The local coordinates the equations touch (default: all of them); H is then (m, k, k) and b (m, k)
+        over these k columns only, which keeps the equations of one node of a long beam small.
     """
 
     quadratic = True
 
-    def __init__(self, bodies, H, b, c, laws=None, name="quadratic constraint"):
+    def __init__(self, bodies, H, b, c, laws=None, name="quadratic constraint", columns=None):
         self.layout = PointLayout.of_bodies(bodies)
         self.bodies = self.layout.bodies
         H = np.asarray(H, dtype=float)
         self.H = 0.5 * (H + np.transpose(H, (0, 2, 1)))
         self.b = np.asarray(b, dtype=float)
         self.c = np.asarray(c, dtype=float).ravel()
-        m, n = self.b.shape
-        if self.H.shape != (m, n, n) or self.c.shape != (m,) or n != self.layout.n:
+        m, k = self.b.shape
+        n = self.layout.n
+        self.columns = np.arange(n) if columns is None else np.asarray(columns, dtype=np.int64).ravel()
+        if (self.H.shape != (m, k, k) or self.c.shape != (m,) or self.columns.size != k
+                or (self.columns.size and (self.columns.min() < 0 or self.columns.max() >= n))):
             raise ValueError(f"quadratic constraint {name!r}: H {self.H.shape}, b {self.b.shape}, c {self.c.shape} "
-                             f"do not match {m} equations on {self.layout.n} coordinates")
+                             f"do not match {m} equations on {k} of the {n} coordinates")
+        self._full = bool(np.array_equal(self.columns, np.arange(n)))
         if not (np.all(np.isfinite(self.H)) and np.all(np.isfinite(self.b)) and np.all(np.isfinite(self.c))):
             raise ValueError(f"quadratic constraint {name!r} has non-finite coefficients")
         self.laws = [None] * m if laws is None else [_law(law, f"{name}: laws[{k}]") for k, law in enumerate(laws)]
@@ -161,19 +169,37 @@ class QuadraticConstraint(Constraint):
     def _law_values(self, t, k):
         return np.array([0.0 if law is None else float(law(t)[k]) for law in self.laws])
 
+    def _wide(self, rows):
+        """(m, k) rows over the columns placed into (m, n)."""
+        if self._full:
+            return rows
+        out = np.zeros(rows.shape[:-1] + (self.layout.n,))
+        out[..., self.columns] = rows
+        return out
+
     def value(self, q, t):
-        q = np.asarray(q, dtype=float)
+        q = np.asarray(q, dtype=float)[self.columns]
         return 0.5 * np.einsum("kij,i,j->k", self.H, q, q) + self.b @ q + self.c - (
             self._law_values(t, 0) if self.rheonomic else 0.0)
 
     def jacobian(self, q, t):
-        return self.H @ np.asarray(q, dtype=float) + self.b
+        return self._wide(self.H @ np.asarray(q, dtype=float)[self.columns] + self.b)
 
     def hessian_product(self, q, mu, t):
-        return np.tensordot(np.asarray(mu, dtype=float), self.H, axes=1)
+        local = np.tensordot(np.asarray(mu, dtype=float), self.H, axes=1)
+        if self._full:
+            return local
+        n = self.layout.n
+        if n <= DENSE_LIMIT:
+            out = np.zeros((n, n))
+            out[np.ix_(self.columns, self.columns)] = local
+            return out
+        k = self.columns.size
+        rows = np.repeat(self.columns, k)
+        return sps.csr_matrix((local.ravel(), (rows, np.tile(self.columns, k))), shape=(n, n))
 
     def velocity_jacobian(self, q, v, t):
-        return self.H @ np.asarray(v, dtype=float)
+        return self._wide(self.H @ np.asarray(v, dtype=float)[self.columns])
 
     def time_derivative(self, q, t):
         return -self._law_values(t, 1) if self.rheonomic else np.zeros(self.n_equations)
@@ -201,10 +227,10 @@ class QuadraticConstraint(Constraint):
         return new
 
     def compiled_form(self):
-        """``("quadratic", H, b, c, laws)``: the quadratic-rows family packs it."""
+        """``("quadratic", H, b, c, laws, columns)``: the quadratic-rows family packs it."""
         if type(self).value is not QuadraticConstraint.value:
             return None
-        return "quadratic", self.H, self.b, self.c, tuple(self.laws)
+        return "quadratic", self.H, self.b, self.c, tuple(self.laws), self.columns
 
 
 def _cross(a, b):
@@ -215,49 +241,53 @@ def _cross(a, b):
 
 def spatial_reaction(constraint, body, where, point, q, lam):
     """Force (3,) N and moment (3,) N m that ``constraint`` exerts on ``body`` (its block at ``where`` of the
-    local q), from f = −Φ_qᵀλ on the body's coordinates: F = f_x (the centre of mass' block) and the moment
-    about ``point`` (a body point at r), M = Σ d_i × f_{d_i} + (x − r) × F. A body turning about a pivot has
-    no x: the pivot takes the force, F is reported 0 and M is the moment about the pivot.
+    local q), from f = −Φ_qᵀλ on the body's coordinates: F = Σ f_x over its position vectors x (the centre
+    of mass, or a beam's nodes) and the moment about ``point`` (a body point at r),
+    M = Σ d × f_d over its directors + Σ (x − r) × f_x (``body.vector_layout()``). A body turning about a
+    pivot has no x: the pivot takes the force, F is reported 0 and M is the moment about the pivot.
 
     ``q`` (N, n) and ``lam`` (N, m) give (N, 6), one row per state; ``q`` (n,) and ``lam`` (m,) give (6,).
     """
     q, lam = np.asarray(q, dtype=float), np.asarray(lam, dtype=float)
     one = q.ndim == 1
     q, lam = np.atleast_2d(q), np.atleast_2d(lam)
-    jac = np.einsum("kij,Nj->Nki", constraint.H, q) + constraint.b          # Φ_q at each state
+    jac = constraint._wide(np.einsum("kij,Nj->Nki", constraint.H, q[:, constraint.columns]) + constraint.b)
     f = -np.einsum("Nk,Nki->Ni", lam, jac)[:, where]
     qb = q[:, where]
-    directors = tuple(getattr(body, "directors", ()))
+    positions, directors = body.vector_layout()
     M = np.zeros((q.shape[0], 3))
+    F = np.zeros((q.shape[0], 3))
     for o in directors:
         M += _cross(qb[:, o:o + 3], f[:, o:o + 3])
-    if directors and directors[0] == 0:
-        F = np.zeros((q.shape[0], 3))
-    else:
-        F = f[:, :3]
-        M += _cross(qb[:, :3] - (qb @ point.G.T + point.a), F)
+    r = qb @ point.G.T + point.a
+    for o in positions:
+        F += f[:, o:o + 3]
+        M += _cross(qb[:, o:o + 3] - r, f[:, o:o + 3])
     out = np.concatenate([F, M], axis=1)
     return out[0] if one else out
 
 
 class Rigidity(QuadraticConstraint):
-    """The six rigidity equations of a body's directors: ½(d_i·d_i − 1) = 0, d_i·d_j = 0 (i < j).
+    """The six rigidity equations of a triad of directors: ½(d_i·d_i − 1) = 0, d_i·d_j = 0 (i < j).
 
-    The scene adds one for every body that names its ``directors`` (local offsets of d₁, d₂, d₃).
+    The scene adds one for every triad a body names in ``director_triads`` (the local offsets of d₁, d₂,
+    d₃): a spatial rigid body has one, a spatial beam one per node. The equations touch only the triad's
+    nine coordinates.
     """
 
     reaction_labels = ("N11", "N22", "N33", "N12", "N13", "N23")
 
-    def __init__(self, body):
-        offs = tuple(body.directors)
-        n = body.n_dofs
-        H, c = np.zeros((6, n, n)), np.zeros(6)
+    def __init__(self, body, triad=None, name=None):
+        offs = tuple(int(o) for o in (body.directors if triad is None else triad))
+        columns = np.concatenate([np.arange(o, o + 3) for o in offs])
+        H, c = np.zeros((6, 9, 9)), np.zeros(6)
         pairs = [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
         for k, (i, j) in enumerate(pairs):
             for a in range(3):
-                H[k, offs[i] + a, offs[j] + a] += 1.0
-                H[k, offs[j] + a, offs[i] + a] += 1.0
+                H[k, 3 * i + a, 3 * j + a] += 1.0
+                H[k, 3 * j + a, 3 * i + a] += 1.0
             if i == j:
                 H[k] *= 0.5
                 c[k] = -0.5
-        super().__init__([body], H, np.zeros((6, n)), c, name=f"{body.name}: rigidity")
+        super().__init__([body], H, np.zeros((6, 9)), c, name=name or f"{body.name}: rigidity",
+                         columns=columns)

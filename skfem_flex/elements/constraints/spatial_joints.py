@@ -77,11 +77,11 @@ class _Joint(QuadraticConstraint):
         n = self._layout.n
         if point is None:
             return Affine.constant(e_space, n)
-        body = point.body
-        if not hasattr(body, "axis"):
-            raise ValueError(f"body {body.name!r} has no orientation (a point mass): it cannot carry a joint axis")
+        if point.triad is None:
+            raise ValueError(f"body {point.body.name!r} has no orientation (a point mass): it cannot carry a "
+                             f"joint axis")
         sl = self._layout.slices[0 if which == "a" else 1]
-        return Affine.of(body.axis(body.body_direction(e_space)), sl, n)
+        return Affine.of(point.direction(e_space), sl, n)
 
     def _finish(self, parts, name, laws=None):
         H, b, c = stack(parts)

@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...bodies.base import BodyPoint, check_finite_vector
+from ...numerics.quaternions import skew
 from ..constraints.quadratic import Affine, hinge_directions
 from ..point_terms import PointLayout
 from .base import ForceElement, check_nonnegative
@@ -302,14 +303,15 @@ class SpatialPointForce(ForceElement):
     def __init__(self, point, force, following=False, name="point force"):
         self.point = _spatial_point("point", point)
         body = point.body
-        if following and not hasattr(body, "axis"):
-            raise ValueError("a following force needs a body with an orientation (a spatial rigid body)")
+        if following and point.triad is None:
+            raise ValueError("a following force needs a point with an orientation (of a spatial rigid body or "
+                             "a beam)")
         self.force = time_function(force, 3, "force")
         self.following = bool(following)
         self.bodies = (body,)
         n = body.n_dofs
         self.G = point.G
-        self._axes = [Affine.of(body.axis(e), slice(0, n), n).A for e in np.eye(3)] if following else None
+        self._axes = [Affine.of(point.axis(e), slice(0, n), n).A for e in np.eye(3)] if following else None
         self.name = name
 
     def generalized_force(self, q, v, t):
@@ -323,7 +325,7 @@ class SpatialPointForce(ForceElement):
 
 
 class SpatialMoment(ForceElement):
-    """A moment M(t) on a spatial rigid body, in space axes or following the body (body axes).
+    """A moment M(t) on a spatial rigid body or a beam's node, in space axes or following it (its axes).
 
     Generalized forces on the directors f_{d_i} = W × d_i with S W = M, S = Σ_i (‖d_i‖² I − d_i d_iᵀ) (= 2 I
     for orthonormal directors): their moment Σ d_i × f_{d_i} = S W is M exactly at any state, so the
@@ -332,42 +334,51 @@ class SpatialMoment(ForceElement):
 
     Parameters
     ----------
-    body : SpatialRigidBody
+    target : SpatialRigidBody or SpatialPoint
+        A rigid body, or a point whose frame carries the moment (a beam's node: ``beam.point(s)``).
     moment : array_like (3,) or callable t -> (3,)
         N m.
     following : bool
-        M given in body axes (M = Σ M_j d_j turns with the body).
+        M given in the body's (node's) axes (M = Σ M_j d_j turns with it).
     name : str
     """
 
     conservative = False
 
-    def __init__(self, body, moment, following=False, name="moment"):
-        if not hasattr(body, "axis"):
-            raise ValueError(f"a moment needs a spatial rigid body (with directors), got {body!r}")
+    def __init__(self, target, moment, following=False, name="moment"):
+        if isinstance(target, BodyPoint):
+            body, triad = target.body, getattr(target, "triad", None)
+        else:
+            body, triad = target, (tuple(target.directors) if hasattr(target, "director_triads") else None)
+        if triad is None:
+            raise ValueError(f"a moment needs a spatial rigid body or a point with directors (a beam's node), "
+                             f"got {target!r}")
         self.moment = time_function(moment, 3, "moment")
         self.following = bool(following)
         self.bodies = (body,)
         self.body = body
+        self.triad = tuple(triad)
         self.name = name
 
     def generalized_force(self, q, v, t):
         n = self.body.n_dofs
         M = self.moment(t)
-        offs = self.body.directors
-        d = [np.asarray(q[o:o + 3], dtype=float) for o in offs]
-        S = sum((di @ di) * np.eye(3) - np.outer(di, di) for di in d)
-        Mw = sum(Mj * dj for Mj, dj in zip(M, d)) if self.following else M
+        offs = self.triad
+        d = np.array([q[o:o + 3] for o in offs], dtype=float)           # rows d_i
+        S = float(np.sum(d * d)) * np.eye(3) - d.T @ d
+        Mw = d.T @ M if self.following else M
         W = np.linalg.solve(S, Mw)
         f, fq = np.zeros(n), np.zeros((n, n))
         for o, di in zip(offs, d):
-            f[o:o + 3] = np.cross(W, di)
-        for j, oj in enumerate(offs):          # ∂/∂(d_j)_c
-            for c in range(3):
-                e = np.eye(3)[c]
-                dS = 2.0 * d[j][c] * np.eye(3) - np.outer(e, d[j]) - np.outer(d[j], e)
-                dW = np.linalg.solve(S, (M[j] * e if self.following else 0.0) - dS @ W)
-                for i, oi in enumerate(offs):
-                    col = np.cross(dW, d[i]) + (np.cross(W, e) if i == j else 0.0)
-                    fq[oi:oi + 3, oj + c] = col
+            f[o:o + 3] = skew(W) @ di
+        # ∂W/∂(d_j)_c = S⁻¹ (M_j e_c [following] − ∂S/∂(d_j)_c W), ∂S/∂(d_j)_c W = 2 d_jc W − e_c (d_j·W) − d_j W_c
+        rhs = np.zeros((3, 9))
+        for j in range(3):
+            rhs[:, 3 * j:3 * j + 3] = (-2.0 * np.outer(W, d[j]) + (d[j] @ W) * np.eye(3) + np.outer(d[j], W)
+                                       + (M[j] * np.eye(3) if self.following else 0.0))
+        dW = np.linalg.solve(S, rhs)
+        for i, oi in enumerate(offs):
+            block = -skew(d[i]) @ dW                      # f_i = −d_i × W
+            for j, oj in enumerate(offs):
+                fq[oi:oi + 3, oj:oj + 3] = block[:, 3 * j:3 * j + 3] + (skew(W) if i == j else 0.0)
         return f, fq, np.zeros((n, n))

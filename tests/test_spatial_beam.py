@@ -1,0 +1,148 @@
+"""The spatial geometrically exact (director) beam: its strain energy against central differences, its
+discrete gradient's exactness and equivariance, closed-form statics, the 45° bend, and the conservation laws of
+the energy–momentum step on the flying beam and the right-angle frame."""
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import skfem_flex as sf
+from skfem_flex.bodies.exact.spatial_body import SpatialExactBeam
+from skfem_flex.fem.spatial_section import SpatialSection
+from skfem_flex.io.output import VTKSeries, read_pvd
+from skfem_flex.scenes.spatial_beams import BEND_45_REFERENCE
+
+SECTION = SpatialSection(EA=1e4, GA1=8e3, GA2=6e3, GJ=400.0, EI1=500.0, EI2=300.0, rhoA=1.0, rhoI1=10.0,
+                         rhoI2=5.0)
+
+
+def dense(a):
+    return a.toarray() if hasattr(a, "toarray") else np.asarray(a)
+
+
+@pytest.fixture(params=[1, 2], ids=["P1", "P2"])
+def beam(request):
+    return SpatialExactBeam.straight(SECTION, (0.0, 0.0, 8.0), (6.0, 0.0, 0.0), n_elements=3, order=request.param)
+
+
+def states(beam, seed=0, size=0.1):
+    rng = np.random.default_rng(seed)
+    q0 = beam.q0 + size * rng.standard_normal(beam.n_dofs)
+    return q0, q0 + size * rng.standard_normal(beam.n_dofs)
+
+
+def test_gradient_hessian_and_discrete_gradient_against_central_differences(beam):
+    q0, q1 = states(beam)
+    h = 1e-6
+    V = beam.potential_energy
+    for i in (0, 5, 13, beam.n_dofs - 1):
+        e = np.zeros(beam.n_dofs)
+        e[i] = h
+        assert beam.potential_gradient(q0)[i] == pytest.approx((V(q0 + e) - V(q0 - e)) / (2 * h), rel=1e-6)
+        col = (beam.potential_gradient(q0 + e) - beam.potential_gradient(q0 - e)) / (2 * h)
+        assert np.abs(dense(beam.potential_hessian(q0))[:, i] - col).max() <= 1e-6 * np.abs(col).max()
+        g_plus, g_minus = (beam.potential_discrete_gradient(q0, q1 + s * e)[0] for s in (1, -1))
+        col = (g_plus - g_minus) / (2 * h)
+        assert np.abs(dense(beam.potential_discrete_gradient(q0, q1)[1])[:, i] - col).max() <= 1e-6 * np.abs(col).max()
+
+
+def test_discrete_gradient_is_exact_and_exerts_no_net_force_or_moment(beam):
+    for seed in range(3):
+        q0, q1 = states(beam, seed, size=0.3)
+        g, _ = beam.potential_discrete_gradient(q0, q1)
+        dV = beam.potential_energy(q1) - beam.potential_energy(q0)
+        assert g @ (q1 - q0) == pytest.approx(dV, rel=1e-12, abs=1e-9)
+        vec, mid = g.reshape(-1, 3), (0.5 * (q0 + q1)).reshape(-1, 3)
+        scale = np.abs(g).max() * 10.0
+        assert np.abs(vec[0::4].sum(axis=0)).max() <= 1e-12 * scale            # forces on positions
+        assert np.abs(np.cross(mid, vec).sum(axis=0)).max() <= 1e-12 * scale    # moment of all of them
+
+
+def test_strain_energy_is_objective(beam):
+    q0, _ = states(beam, 4, size=0.2)
+    R = Rotation.random(random_state=3).as_matrix()
+    moved = q0.reshape(-1, 3) @ R.T
+    moved[0::4] += [1.0, -2.0, 3.0]
+    assert beam.potential_energy(moved.ravel()) == pytest.approx(beam.potential_energy(q0), rel=1e-12)
+    assert beam.potential_energy(beam.q0) == 0.0
+
+
+@pytest.mark.parametrize("load, closed_form", [
+    ("z", lambda P, L: P * L ** 3 / (3 * 300.0) + P * L / 8e3),      # along d₁: bends about d₂ (EI₂), shears Γ₁
+    ("y", lambda P, L: P * L ** 3 / (3 * 500.0) + P * L / 6e3),      # along −d₂: bends about d₁ (EI₁), shears Γ₂
+    ("twist", lambda P, L: P * L / 400.0),
+])
+def test_linear_cantilever_against_timoshenko(load, closed_form):
+    """P2, 6 elements: the tip deflections in both principal planes and the end twist, to 1e-3."""
+    L, P = 2.0, 1e-3
+    b = SpatialExactBeam.straight(SECTION, (0.0, 0.0, 0.0), (L, 0.0, 0.0), n_elements=6, order=2,
+                                  normal=(0.0, 0.0, 1.0))
+    tip = b.point(L)
+    force = {"z": (0.0, 0.0, P), "y": (0.0, P, 0.0)}.get(load, (0.0, 0.0, 0.0))
+    moment = (P, 0.0, 0.0) if load == "twist" else (0.0, 0.0, 0.0)
+    scene = sf.Scene([b], constraints=[sf.Weld3D(b.point(0.0))],
+                     forces=[sf.SpatialPointForce(tip, force), sf.SpatialMoment(tip, moment)])
+    q = sf.static_equilibrium(scene).q
+    if load == "twist":
+        d1 = b.node_frames(q)[-1][:, 0]
+        value = np.arctan2(-d1[1], d1[2])
+    else:
+        value = (tip.position(q) - tip.position(b.q0))[{"z": 2, "y": 1}[load]]
+    assert value == pytest.approx(closed_form(P, L), rel=1e-3)
+
+
+def test_bend_45_is_path_independent_and_converges_to_the_published_tip():
+    """P2, 4 elements: the adaptive load path and 8 equal load steps end at the same tip, within 0.5 % of the
+    converged published displacement (its norm, each component)."""
+    scene = sf.scenes.bend_45(n_elements=4, order=2)
+    tip = scene.probes["tip"].point
+    ends = [tip.position(sf.static_equilibrium(scene, load_steps=n).q) for n in (None, 8)]
+    assert np.abs(ends[0] - ends[1]).max() <= 1e-8 * 100.0
+    u = ends[0] - tip.position(scene.bodies[0].q0)
+    assert np.abs(u - BEND_45_REFERENCE).max() <= 5e-3 * np.linalg.norm(BEND_45_REFERENCE)
+
+
+def test_flying_spaghetti_conserves_momenta_and_energy_after_the_pulse():
+    scene = sf.scenes.flying_spaghetti_3d(n_elements=8)
+    r = sf.simulate(scene, 6.0, 0.1, scheme="energy-momentum")
+    t = np.asarray(r.t)
+    free = t >= 5.0 - 1e-12
+    p, L, E = np.asarray(r.linear_momentum), np.asarray(r.angular_momentum), np.asarray(r.total_energy)
+    # the impulse of F_x = 0.1 h(t): 0.1 × ½ × 5 s × 200 N
+    assert np.abs(p[free] - [50.0, 0.0, 0.0]).max() <= 1e-10 * 50.0
+    assert np.ptp(E[free]) <= 1e-10 * np.abs(E[free]).max()
+    assert np.abs(np.ptp(L[free], axis=0)).max() <= 1e-10 * np.abs(L[free]).max()
+    frames = scene.bodies[0].node_frames(np.asarray(r.q)[-1])
+    assert max(np.abs(R.T @ R - np.eye(3)).max() for R in frames) <= 1e-12
+
+
+def test_right_angle_frame_welds_two_beams_and_conserves_energy_after_the_load(tmp_path):
+    scene = sf.scenes.right_angle_frame(n_elements=2)
+    r = sf.simulate(scene, 2.5, 0.05, scheme="energy-momentum", output=VTKSeries(tmp_path, "frame"))
+    t, E = np.asarray(r.t), np.asarray(r.total_energy)
+    after = t >= 2.0 - 1e-12
+    assert np.ptp(E[after]) <= 1e-10 * np.abs(E[after]).max()
+    elbow = np.asarray(r.probes["elbow"])
+    assert elbow[-1, 2] > 0.1                                   # pushed out of the plane along +z
+    q = np.asarray(r.q)[-1]
+    legs = scene.bodies
+    # the weld: the elbow node of leg 1 and the first node of leg 2 coincide and keep their relative turn
+    off = scene.coordinates(legs[0], q), scene.coordinates(legs[1], q)
+    assert np.abs(legs[0].node_positions(off[0])[-1] - legs[1].node_positions(off[1])[0]).max() <= 1e-9
+    relative = [a.node_frames(qa)[k].T @ b.node_frames(qb)[0] for a, b, qa, qb, k in
+                ((legs[0], legs[1], legs[0].q0, legs[1].q0, -1), (legs[0], legs[1], off[0], off[1], -1))]
+    assert np.abs(relative[0] - relative[1]).max() <= 1e-9
+    assert np.abs(legs[0].node_frames(off[0])[-1] - legs[0].node_frames(legs[0].q0)[-1]).max() > 1e-2
+    assert len(read_pvd(tmp_path / "frame.pvd")) == len(t)
+
+
+def test_bad_input_names_the_value():
+    with pytest.raises(ValueError, match="parallel to the beam axis"):
+        SpatialExactBeam.straight(SECTION, (0, 0, 0), (1, 0, 0), normal=(2.0, 0.0, 0.0))
+    with pytest.raises(ValueError, match="EA must be positive"):
+        SpatialSection(EA=0.0, GA1=1, GA2=1, GJ=1, EI1=1, EI2=1)
+    with pytest.raises(ValueError, match="rotation matrix"):
+        SpatialExactBeam(SECTION, 1.0, lambda s: (np.zeros(3) + s, 2.0 * np.eye(3)), n_elements=2)
+    with pytest.raises(ValueError, match="start and end must differ"):
+        SpatialExactBeam.straight(SECTION, (1, 1, 1), (1, 1, 1))
+    with pytest.raises(ValueError, match="outside beam"):
+        SpatialExactBeam.straight(SECTION, (0, 0, 0), (1, 0, 0)).point(2.0)
