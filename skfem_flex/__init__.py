@@ -17,6 +17,7 @@ from .elements.constraints import Constraint, Distance, UserConstraint
 from .bodies.rigid import RigidBody
 from .bodies.spatial import SpatialPointMass, SpatialRigidBody
 from .fem.spatial_section import SpatialSection
+from .fem.spatial_beam import TimoshenkoBeam3D
 from .bodies.exact.spatial_body import SpatialExactBeam
 from .elements.constraints.quadratic import QuadraticConstraint
 from .elements.constraints.spatial_joints import (Cylindrical, Distance3D, Prismatic3D, Revolute3D, RotationDriver,

@@ -35,7 +35,7 @@ from . import forms
 from ..numerics.resources import BYTES_PER_ELEMENT, check_fits
 from .section import Section
 
-__all__ = ["TimoshenkoBeam", "ElementQuadrature", "gauss_line", "line_mesh"]
+__all__ = ["TimoshenkoBeam", "LinearBeamAnalyses", "ElementQuadrature", "gauss_line", "line_mesh"]
 
 # Fields of the composite element, in scikit-fem's node-major DOF order.
 FIELDS = ("u", "w", "theta")
@@ -110,7 +110,7 @@ def _coordinate(x, what):
     return float(x)
 
 
-def _check_mesh(mesh):
+def check_mesh(mesh):
     """Raise ``ValueError`` unless ``mesh`` is a straight beam: a single chain of
     positive-length elements along x."""
     if not isinstance(mesh, skfem.MeshLine1):
@@ -173,7 +173,141 @@ def line_mesh(length, n_elements, order=1):
     return skfem.MeshLine(np.linspace(0.0, float(length), n + 1))
 
 
-class TimoshenkoBeam:
+class LinearBeamAnalyses:
+    """The analyses every linear beam shares: the DOFs of a node, statics K q = F and the modes K φ = ω² M φ.
+
+    A subclass provides ``stiffness()``, ``mass()``, ``n_dofs``, ``length``, ``x_nodes`` (ascending node
+    coordinates, m) and ``node_dofs`` (the DOFs of those nodes, one row each).
+    """
+
+    def dofs_at(self, x):
+        """Global DOFs of the node at x (every field of the node, in field order).
+
+        Parameters
+        ----------
+        x : float
+            Node coordinate in m (P2 midpoints are nodes too).
+
+        Returns
+        -------
+        ndarray of int, shape (n_fields,)
+
+        Raises
+        ------
+        ValueError
+            If no node lies at x (within 1e-9 of the beam length).
+        """
+        x = _coordinate(x, "dofs_at")
+        nearest = int(np.argmin(np.abs(self.x_nodes - x)))
+        if abs(self.x_nodes[nearest] - x) > 1e-9 * self.length:
+            raise ValueError(f"no node at x = {x!r}; the nearest is at x = {self.x_nodes[nearest]}")
+        return self.node_dofs[nearest].copy()
+
+    def _fixed(self, fixed):
+        fixed = np.unique(np.asarray(fixed, dtype=np.int64).ravel())
+        if fixed.size and (fixed[0] < 0 or fixed[-1] >= self.n_dofs):
+            raise ValueError(f"fixed DOFs must lie in [0, {self.n_dofs}), got {fixed}")
+        return fixed
+
+    # ------------------------------------------------------------------
+    # analyses
+
+    def solve_static(self, load, fixed):
+        """Static displacements K q = F with the DOFs ``fixed`` held at zero.
+
+        Parameters
+        ----------
+        load : array_like, shape (n_dofs,)
+            Load vector, e.g. from :meth:`load`.
+        fixed : array_like of int
+            Global DOFs held at zero, e.g. ``beam.dofs_at(0.0)`` for a clamp.
+
+        Returns
+        -------
+        ndarray, shape (n_dofs,)
+            q with the fields of every node, in m and rad.
+
+        Raises
+        ------
+        ValueError
+            If the load is malformed or the supports leave a rigid-body mode
+            (singular stiffness).
+        """
+        load = np.asarray(load, dtype=float)
+        if load.shape != (self.n_dofs,) or not np.all(np.isfinite(load)):
+            raise ValueError(
+                f"load must be a finite vector of length {self.n_dofs}, got shape {load.shape}"
+            )
+        fixed = self._fixed(fixed)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", scipy.sparse.linalg.MatrixRankWarning)
+            try:
+                q = solve(*condense(self.stiffness(), load, D=fixed))
+            except (scipy.sparse.linalg.MatrixRankWarning, RuntimeError):
+                q = None
+        if q is None or not np.all(np.isfinite(q)):
+            raise ValueError(
+                f"stiffness is singular with fixed DOFs {fixed}: the supports leave "
+                "a rigid-body motion free"
+            )
+        return q
+
+    def modes(self, fixed, n_modes=6, sigma=0.0):
+        """Natural angular frequencies and mode shapes, K φ = ω² M φ.
+
+        Solved with ``scipy.sparse.linalg.eigsh`` in shift-invert mode about
+        ``sigma`` (the lowest modes for sigma = 0); tiny systems, where ARPACK
+        cannot return that many modes, use a dense solver.
+
+        Parameters
+        ----------
+        fixed : array_like of int
+            Global DOFs held at zero.
+        n_modes : int, optional
+            Number of modes, lowest first.
+        sigma : float, optional
+            Shift in rad²/s². Unsupported (free) beams have a singular K; pass
+            a small negative shift for them.
+
+        Returns
+        -------
+        omega : ndarray, shape (n_modes,)
+            Natural angular frequencies in rad/s, ascending.
+        shapes : ndarray, shape (n_dofs, n_modes)
+            Mode shapes, zero at the fixed DOFs, normalised to φᵀ M φ = 1
+            (units 1/√kg) with their largest entry positive.
+        """
+        fixed = self._fixed(fixed)
+        free = np.setdiff1d(np.arange(self.n_dofs), fixed)
+        if isinstance(n_modes, bool) or int(n_modes) != n_modes or not 1 <= n_modes <= free.size:
+            raise ValueError(f"n_modes must be an integer in [1, {free.size}], got {n_modes!r}")
+        n_modes = int(n_modes)
+        K = self.stiffness()[free][:, free]
+        M = self.mass()[free][:, free]
+        if n_modes < free.size - 1:
+            try:
+                eigenvalues, vectors = scipy.sparse.linalg.eigsh(
+                    K.tocsc(), k=n_modes, M=M.tocsc(), sigma=sigma, which="LM"
+                )
+            except RuntimeError as err:
+                raise ValueError(
+                    f"K - sigma M is singular (sigma = {sigma}, fixed DOFs {fixed}); "
+                    "free beams need a small negative sigma"
+                ) from err
+        else:
+            eigenvalues, vectors = scipy.linalg.eigh(K.toarray(), M.toarray())
+        by_value = np.argsort(eigenvalues)[:n_modes]
+        # rigid-body modes come out as tiny negative numbers, not as NaN
+        omega = np.sqrt(np.clip(eigenvalues[by_value], 0.0, None))
+        shapes = np.zeros((self.n_dofs, n_modes))
+        shapes[free] = vectors[:, by_value]
+        shapes /= np.sqrt(np.einsum("ik,ik->k", shapes, self.mass() @ shapes))
+        largest = np.argmax(np.abs(shapes), axis=0)
+        shapes *= np.sign(shapes[largest, np.arange(n_modes)])
+        return omega, shapes
+
+
+class TimoshenkoBeam(LinearBeamAnalyses):
     r"""Linear Timoshenko beam: scikit-fem bases, K, M, loads, statics, modes.
 
     Weak form (eq. 40 of Liu & Yun; γ = w' − θ):
@@ -247,7 +381,7 @@ class TimoshenkoBeam:
     """
 
     def __init__(self, mesh, section, order=1, shear="reduced"):
-        _check_mesh(mesh)
+        check_mesh(mesh)
         if not isinstance(section, Section):
             raise ValueError(f"section must be a skfem_flex Section, got {section!r}")
         if isinstance(order, bool) or order not in (1, 2):
@@ -437,128 +571,3 @@ class TimoshenkoBeam:
     # ------------------------------------------------------------------
     # DOFs
 
-    def dofs_at(self, x):
-        """Global (u, w, θ) DOFs of the node at x.
-
-        Parameters
-        ----------
-        x : float
-            Node coordinate in m (P2 midpoints are nodes too).
-
-        Returns
-        -------
-        ndarray of int, shape (3,)
-
-        Raises
-        ------
-        ValueError
-            If no node lies at x (within 1e-9 of the beam length).
-        """
-        x = _coordinate(x, "dofs_at")
-        nearest = int(np.argmin(np.abs(self.x_nodes - x)))
-        if abs(self.x_nodes[nearest] - x) > 1e-9 * self.length:
-            raise ValueError(f"no node at x = {x!r}; the nearest is at x = {self.x_nodes[nearest]}")
-        return self.node_dofs[nearest].copy()
-
-    def _fixed(self, fixed):
-        fixed = np.unique(np.asarray(fixed, dtype=np.int64).ravel())
-        if fixed.size and (fixed[0] < 0 or fixed[-1] >= self.n_dofs):
-            raise ValueError(f"fixed DOFs must lie in [0, {self.n_dofs}), got {fixed}")
-        return fixed
-
-    # ------------------------------------------------------------------
-    # analyses
-
-    def solve_static(self, load, fixed):
-        """Static displacements K q = F with the DOFs ``fixed`` held at zero.
-
-        Parameters
-        ----------
-        load : array_like, shape (n_dofs,)
-            Load vector, e.g. from :meth:`load`.
-        fixed : array_like of int
-            Global DOFs held at zero, e.g. ``beam.dofs_at(0.0)`` for a clamp.
-
-        Returns
-        -------
-        ndarray, shape (n_dofs,)
-            q with (u, w, θ) per node in m and rad.
-
-        Raises
-        ------
-        ValueError
-            If the load is malformed or the supports leave a rigid-body mode
-            (singular stiffness).
-        """
-        load = np.asarray(load, dtype=float)
-        if load.shape != (self.n_dofs,) or not np.all(np.isfinite(load)):
-            raise ValueError(
-                f"load must be a finite vector of length {self.n_dofs}, got shape {load.shape}"
-            )
-        fixed = self._fixed(fixed)
-        with warnings.catch_warnings():
-            warnings.simplefilter("error", scipy.sparse.linalg.MatrixRankWarning)
-            try:
-                q = solve(*condense(self.stiffness(), load, D=fixed))
-            except (scipy.sparse.linalg.MatrixRankWarning, RuntimeError):
-                q = None
-        if q is None or not np.all(np.isfinite(q)):
-            raise ValueError(
-                f"stiffness is singular with fixed DOFs {fixed}: the supports leave "
-                "a rigid-body motion free"
-            )
-        return q
-
-    def modes(self, fixed, n_modes=6, sigma=0.0):
-        """Natural angular frequencies and mode shapes, K φ = ω² M φ.
-
-        Solved with ``scipy.sparse.linalg.eigsh`` in shift-invert mode about
-        ``sigma`` (the lowest modes for sigma = 0); tiny systems, where ARPACK
-        cannot return that many modes, use a dense solver.
-
-        Parameters
-        ----------
-        fixed : array_like of int
-            Global DOFs held at zero.
-        n_modes : int, optional
-            Number of modes, lowest first.
-        sigma : float, optional
-            Shift in rad²/s². Unsupported (free) beams have a singular K; pass
-            a small negative shift for them.
-
-        Returns
-        -------
-        omega : ndarray, shape (n_modes,)
-            Natural angular frequencies in rad/s, ascending.
-        shapes : ndarray, shape (n_dofs, n_modes)
-            Mode shapes, zero at the fixed DOFs, normalised to φᵀ M φ = 1
-            (units 1/√kg) with their largest entry positive.
-        """
-        fixed = self._fixed(fixed)
-        free = np.setdiff1d(np.arange(self.n_dofs), fixed)
-        if isinstance(n_modes, bool) or int(n_modes) != n_modes or not 1 <= n_modes <= free.size:
-            raise ValueError(f"n_modes must be an integer in [1, {free.size}], got {n_modes!r}")
-        n_modes = int(n_modes)
-        K = self.stiffness()[free][:, free]
-        M = self.mass()[free][:, free]
-        if n_modes < free.size - 1:
-            try:
-                eigenvalues, vectors = scipy.sparse.linalg.eigsh(
-                    K.tocsc(), k=n_modes, M=M.tocsc(), sigma=sigma, which="LM"
-                )
-            except RuntimeError as err:
-                raise ValueError(
-                    f"K - sigma M is singular (sigma = {sigma}, fixed DOFs {fixed}); "
-                    "free beams need a small negative sigma"
-                ) from err
-        else:
-            eigenvalues, vectors = scipy.linalg.eigh(K.toarray(), M.toarray())
-        by_value = np.argsort(eigenvalues)[:n_modes]
-        # rigid-body modes come out as tiny negative numbers, not as NaN
-        omega = np.sqrt(np.clip(eigenvalues[by_value], 0.0, None))
-        shapes = np.zeros((self.n_dofs, n_modes))
-        shapes[free] = vectors[:, by_value]
-        shapes /= np.sqrt(np.einsum("ik,ik->k", shapes, self.mass() @ shapes))
-        largest = np.argmax(np.abs(shapes), axis=0)
-        shapes *= np.sign(shapes[largest, np.arange(n_modes)])
-        return omega, shapes
