@@ -119,6 +119,8 @@ class SpatialExactBeam(Body):
     constant_mass = True
     has_potential = True
     dimension = 3
+    #: the compiled family of its strain energy (:mod:`skfem_flex.compiled.families.director_beam`)
+    strain_family = "director beam"
 
     def __init__(self, section, length, placement, n_elements=10, order=1, mesh=None, q0=None, v0=None,
                  name="spatial_beam"):
@@ -253,6 +255,14 @@ class SpatialExactBeam(Body):
     def potential_discrete_gradient(self, q0, q1):
         """(g, ∂g/∂q₁) with g · (q₁ − q₀) = V(q₁) − V(q₀) exactly, equivariant under rotations."""
         return self.strain_points.discrete_gradient(q0, q1)
+
+    def compiled_strain_data(self):
+        """The packed arrays of the compiled strain-energy kernels (:mod:`.director_kernel`), built once."""
+        kd = getattr(self, "_kernel_data", None)
+        if kd is None:
+            from .director_kernel import pack
+            kd = self._kernel_data = pack(self.strain_points)
+        return kd
 
     # --------------------------------------------------------------- kinetic
     def mass_matrix(self, q):

@@ -37,6 +37,7 @@ FAMILY_MODULES = (
     "dampers",
     "floating_frame",
     "exact_beam",
+    "director_beam",
     "rotated_rows",
     "quadratic_rows",
     "linear_potentials",

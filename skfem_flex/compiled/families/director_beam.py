@@ -1,0 +1,109 @@
+r"""Spatial geometrically exact beams (:class:`~skfem_flex.bodies.exact.spatial_body.SpatialExactBeam`): their
+strain energy.
+
+Their inertia is constant (the scheme's own mass matrix) and their rigidity rows are quadratic constraint
+rows; this family adds only the strain energy, by the beams' compiled kernels
+(:mod:`skfem_flex.bodies.exact.director_kernel`, on each body's ``compiled_strain_data()``):
+
+* TASK_EVAL: g_p ← the exact discrete gradient D_V(q_a, q_b) (at q_a = q_b the gradient), the tangent
+  w_gp c_dg dq1 ∂D_V/∂q_b (energy-momentum: Δt ∂g/∂q₁; Newmark: 2Δt × ½ ∇²V) and the round-off floor
+  w_gp c_dg dq1 Σ abs(∂D_V/∂q_b) (abs(q_a) + abs(q_b));
+* TASK_ENERGY: V(q₁) into ``out[0]``.
+
+The tangent is the data of the beam's CSR pattern (the union of its element blocks, handed to the scene
+as the family's entries), added through positions in the Newton matrix's storage fixed once per scene
+(:func:`.floating_frame.pattern_positions`).
+"""
+from __future__ import annotations
+
+from collections import namedtuple
+
+import numba
+import numpy as np
+
+from ...bodies.exact.director_kernel import DirectorKernelData, discrete_gradient_terms, potential_energy
+from ..abi import context_of, f1, f2, family_of, fvec, i1, i2
+from ..registry import compiled_kernel
+from ..storage import storage_of
+from ..tasks import TASK_ENERGY, TASK_EVAL
+from . import FamilyPack
+from .floating_frame import body_fields, pattern_positions
+
+__all__ = ["NAME", "FORMS", "pack", "kernel"]
+
+NAME = "spatial exact beams"
+FORMS = ("director beam",)
+
+_HEAD = 3
+_NKD = len(DirectorKernelData._fields)
+
+
+def pack(items, packer):
+    """The family's data: each beam's DirectorKernelData fields one after another (``b<k>_<name>``), after
+    the offsets of the beams' blocks and the positions of their tangents' entries (set by ``finish``).
+
+    Parameters
+    ----------
+    items : list of (DirectorKernelData, SpatialExactBeam, int)
+        Per beam its ``compiled_strain_data()``, the beam and the offset of its block.
+    packer : Packer
+    """
+    names, arrays = ["offs", "pos", "pos_ptr"], [None, None, None]
+    offs, rows, cols, ptr = [], [], [], [0]
+    for b, (kd, body, off) in enumerate(items):
+        nb_names, nb_arrays = body_fields(kd, f"b{b}_", ())
+        names += nb_names
+        arrays += nb_arrays
+        offs.append(off)
+        rows.append(off + np.repeat(np.arange(int(kd.n[0]), dtype=np.int64), np.diff(kd.pat_ptr)))
+        cols.append(off + np.asarray(kd.pat_idx, dtype=np.int64))
+        ptr.append(ptr[-1] + rows[-1].size)
+    rows, cols = np.concatenate(rows), np.concatenate(cols)
+    arrays[0] = np.asarray(offs, dtype=np.int64)
+    arrays[1] = -np.ones(rows.size, dtype=np.int64)
+    arrays[2] = np.asarray(ptr, dtype=np.int64)
+    data = namedtuple("DirectorBeamData", names)(*arrays)
+
+    def finish(layout):
+        return data._replace(pos=pattern_positions(rows, cols, layout))
+    return FamilyPack(data=data, count=len(items), entries=(rows, cols), finish=finish)
+
+
+@numba.njit(cache=True)
+def _beams(ctx, fam):
+    """Every beam's part of TASK_EVAL or TASK_ENERGY (module docstring); ``fam``: the family record."""
+    n = ctx.n
+    offs, pos_all, ptr = i1(fam, 0), i1(fam, 1), i1(fam, 2)
+    for b in range(offs.size):
+        k = _HEAD + _NKD * b
+        kd = DirectorKernelData(i1(fam, k), i2(fam, k + 1), f1(fam, k + 2), f2(fam, k + 3), f1(fam, k + 4),
+                                f1(fam, k + 5), i1(fam, k + 6), i1(fam, k + 7), i1(fam, k + 8))
+        o, nb = offs[b], kd.n[0]
+        if ctx.task == TASK_ENERGY:
+            fvec(ctx.out, 7)[0] += potential_energy(kd, fvec(ctx.q1, n)[o:o + nb])
+            continue
+        qa, qb = fvec(ctx.qa, n), fvec(ctx.qb, n)
+        g, data, fl = discrete_gradient_terms(kd, qa[o:o + nb], qb[o:o + nb])
+        gp, floor = fvec(ctx.gp, n), fvec(ctx.floor, n)
+        w = ctx.w_gp * ctx.c_dg * ctx.dq1
+        for a in range(nb):
+            gp[o + a] += g[a]
+            floor[o + a] += w * fl[a]
+        if w != 0.0:
+            mat = storage_of(ctx)[0]
+            for t in range(data.size):
+                p = pos_all[ptr[b] + t]
+                if p >= 0:
+                    mat[p] += w * data[t]
+
+
+def _kernel(ctx_p, fam_p):
+    """The family's kernel (signature of :mod:`..abi`): TASK_EVAL and TASK_ENERGY."""
+    ctx = context_of(ctx_p)
+    if ctx.task == TASK_EVAL or ctx.task == TASK_ENERGY:
+        _beams(ctx, family_of(fam_p))
+
+
+def kernel():
+    """The compiled kernel (from the cache, or compiled now)."""
+    return compiled_kernel(_kernel, "the spatial exact-beam family", nrt=True)
