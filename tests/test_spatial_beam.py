@@ -118,9 +118,9 @@ def test_linear_cantilever_against_timoshenko(load, closed_form):
 
 
 def test_bend_45_is_path_independent_and_converges_to_the_published_tip():
-    """P2, 4 elements: the adaptive load path and 8 equal load steps end at the same tip, within 0.5 % of the
-    converged published displacement (its norm, each component)."""
-    scene = sf.scenes.bend_45(n_elements=4, order=2)
+    """P2, 3 elements: the adaptive load path and 8 equal load steps end at the same tip, within 0.5 % of the
+    converged published displacement (its norm, each component; 0.38 % here, 0.19 % from 4 elements on)."""
+    scene = sf.scenes.bend_45(n_elements=3, order=2)
     tip = scene.probes["tip"].point
     ends = [tip.position(sf.static_equilibrium(scene, load_steps=n).q) for n in (None, 8)]
     assert np.abs(ends[0] - ends[1]).max() <= 1e-8 * 100.0

@@ -119,19 +119,26 @@ def _start(scene, q0, v, a, t, settings, steady):
 
 def load_stepping(scene, q0, v, a, t, settings, n_steps, min_step, steady):
     """Equal steps of the load factor s = 1/n, 2/n, …, 1 of the homotopy, each solved by Newton from the
-    secant predictor of the two states before (a step that fails is halved down to ``min_step``).
+    secant predictor of the two states before (the first from the linear response to the loads; a step that
+    fails is halved down to ``min_step``).
 
     With loads that do not depend on the configuration (dead loads, gravity), s is the load factor and every
     step an equilibrium under that share of the loads: a path-independent formulation gives the same end
     state for any n. Raises ``ConvergenceError`` (with ``exc.state``) when a step cannot be solved."""
-    sys_, x0, r0, _, _, done = _start(scene, q0, v, a, t, settings, steady)
+    sys_, x0, r0, jac0, _, done = _start(scene, q0, v, a, t, settings, steady)
     name = "static equilibrium"
     x, s, x_before, s_before = x0, 0.0, None, 0.0
+    try:                                   # the first predictor: the linear response to the load
+        dxds = -linear_solve(jac0, r0)
+    except np.linalg.LinAlgError:
+        dxds = np.zeros_like(x0)
+    if not np.all(np.isfinite(dxds)):
+        dxds = np.zeros_like(x0)
     steps = its_total = 0
     target = 1.0 / n_steps
     while s < 1.0 - 1e-14:
         s_new = min(s + target, 1.0)
-        pred = x if x_before is None else x + (x - x_before) * ((s_new - s) / (s - s_before))
+        pred = x + (s_new - s) * dxds if x_before is None else x + (x - x_before) * ((s_new - s) / (s - s_before))
         try:
             x_new, _, its = newton_solve(lambda y, s_new=s_new: _homotopy(sys_, y, s_new, r0), pred, settings,
                                          name, f"load factor {s_new:.6g}")
