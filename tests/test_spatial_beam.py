@@ -84,6 +84,24 @@ def test_compiled_run_follows_the_python_run():
     assert np.abs(np.asarray(fast.q) - np.asarray(slow.q)).max() <= 1e-9
 
 
+@pytest.mark.parametrize("scheme", ["energy-momentum", "trapezoidal", "generalized-alpha"])
+def test_compiled_following_loads_follow_their_python_methods(scheme):
+    """The spatial-load family (following forces and moments, on a rigid body and on beam nodes, with time
+    functions) against the elements' own generalized_force, step by step."""
+    body = sf.SpatialRigidBody(2.0, [0.3, 0.4, 0.5], position=(0, 0, 0), name="b")
+    beam = SpatialExactBeam.straight(SECTION, (1, 0, 0), (3, 0, 0), n_elements=4)
+    loads = [sf.SpatialPointForce(body.point([0.1, 0.2, 0.3]), lambda t: np.array([np.sin(t), 0.5, -1.0]),
+                                  following=True),
+             sf.SpatialMoment(body, lambda t: np.array([0.2, np.cos(t), 0.1]), following=True),
+             sf.SpatialMoment(beam.point(2.0), (1.0, -2.0, 3.0), following=True),
+             sf.SpatialPointForce(beam.point(1.0), (0.0, 3.0, 1.0), following=True),
+             sf.SpatialMoment(beam.point(0.0), lambda t: np.array([0.0, 0.0, 5.0 * t]))]
+    scene = sf.Scene([body, beam], forces=loads)
+    fast, slow = (sf.simulate(scene, 0.3, 0.01, scheme=scheme, compiled=c) for c in (None, False))
+    assert fast.run_path["python_elements"] == []
+    assert np.abs(np.asarray(fast.q) - np.asarray(slow.q)).max() <= 1e-11
+
+
 def test_strain_energy_is_objective(beam):
     q0, _ = states(beam, 4, size=0.2)
     R = Rotation.random(random_state=3).as_matrix()

@@ -83,11 +83,11 @@ def _call(fn, what, *args):
     return fn(*args)
 
 
-def _plan_fields(packed, lapack):
-    if packed.plan is None:
+def _plan_fields(plan, lapack):
+    if plan is None:
         z = np.zeros(1, dtype=np.int64)
         return solvers.SolverPlan(z, z, np.zeros(2, dtype=np.int64), lapack)
-    interior, border, lo, up = packed.plan
+    interior, border, lo, up = plan
     return solvers.SolverPlan(np.asarray(interior, dtype=np.int64), np.asarray(border, dtype=np.int64),
                               np.array([lo, up], dtype=np.int64), lapack)
 
@@ -104,8 +104,8 @@ class Stepper:
         compile_units(units(pk, scheme))
         self.ws = Workspace(scene, scheme.newton, python_only)
         pk = self.packed = self.ws.packed
-        self.lapack_work, lapack = solvers.lapack_work(pk.nx)
-        self.solver_fields = Fields(_plan_fields(pk, lapack))
+        self.lapack_work, self.lapack = solvers.lapack_work(pk.nx)
+        self.solver_fields = Fields(_plan_fields(pk.plan, self.lapack))
         self.solver = np.zeros(1, dtype=FAMILY)
         self.solver[0] = self.solver_fields.record(kernel().address, -1, 0)
         nx = pk.nx
@@ -143,6 +143,14 @@ class Stepper:
         rec[0] = data.record(start_kernel().address, -1, 0)
         table = time_table(pk.columns, float(t), np.zeros(0), False)
         ok = _call(start_state, "the consistent start's driver", self.ws.ctx, rec, self.solver, table, float(t))
+        if not ok and pk.solver == "bordered band (CSR)":
+            # a coordinate without inertia of its own (a spatial beam's normal director d₃, held by its rigidity
+            # rows alone) leaves the band's interior, M alone at the start, singular: the start alone is solved
+            # with pivoting (SuperLU on the same storage); the steps' interior carries the stiffness too
+            fields = Fields(_plan_fields(None, self.lapack))
+            pivoting = np.zeros(1, dtype=FAMILY)
+            pivoting[0] = fields.record(sparse_solver().address, -1, 0)
+            ok = _call(start_state, "the consistent start's driver", self.ws.ctx, rec, pivoting, table, float(t))
         self._check_status()
         if self.ws.ctx[0]["status"] == STATUS_REFUSED:
             family, exc = self.refusal(q, v, t)

@@ -41,6 +41,7 @@ FAMILY_MODULES = (
     "rotated_rows",
     "quadratic_rows",
     "linear_potentials",
+    "spatial_loads",
 )
 
 

@@ -314,6 +314,15 @@ class SpatialPointForce(ForceElement):
         self._axes = [Affine.of(point.axis(e), slice(0, n), n).A for e in np.eye(3)] if following else None
         self.name = name
 
+    def compiled_form(self):
+        """A force fixed in space: ("generalized force", G, F) of the point-load family; a following one:
+        ("spatial following force", G, triad, F) of the spatial-load family."""
+        if type(self).generalized_force is not SpatialPointForce.generalized_force:
+            return None
+        if not self.following:
+            return "generalized force", self.G, self.force
+        return "spatial following force", self.G, tuple(self.point.triad), self.force
+
     def generalized_force(self, q, v, t):
         F = self.force(t)
         n = self.G.shape[1]
@@ -359,6 +368,12 @@ class SpatialMoment(ForceElement):
         self.body = body
         self.triad = tuple(triad)
         self.name = name
+
+    def compiled_form(self):
+        """("spatial moment", triad, following, M): the spatial-load family."""
+        if type(self).generalized_force is not SpatialMoment.generalized_force:
+            return None
+        return "spatial moment", self.triad, self.following, self.moment
 
     def generalized_force(self, q, v, t):
         n = self.body.n_dofs
