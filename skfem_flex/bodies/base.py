@@ -379,3 +379,20 @@ class Body:
     def geometry(self, q, v):
         """A :class:`BodyGeometry` of the current configuration."""
         raise self._not_provided("geometry(q, v)", "output sinks (VTK series) need")
+
+
+class StrainPointsPotential:
+    """Mixin of a body whose strain energy lives in its ``strain_points`` (an object with ``energy(q)``,
+    ``gradient(q)`` and ``hessian(q)``): the exact beams, planar and spatial."""
+
+    def potential_energy(self, q):
+        """V(q), J: ``strain_points.energy``."""
+        return self.strain_points.energy(q)
+
+    def potential_gradient(self, q):
+        """∇V(q): ``strain_points.gradient``."""
+        return self.strain_points.gradient(q)
+
+    def potential_hessian(self, q):
+        """∇²V(q): ``strain_points.hessian``."""
+        return self.strain_points.hessian(q)

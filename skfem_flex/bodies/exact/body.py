@@ -32,14 +32,14 @@ from ...errors import ConvergenceError
 from ...fem.beam import TimoshenkoBeam, line_mesh
 from ...fem.section import Section
 from ...numerics.newton import NewtonSettings, newton_solve
-from ..base import (DENSE_LIMIT, Body, BodyGeometry, BodyPoint, check_finite_number, check_finite_vector,
-                    to_dense)
+from ..base import (DENSE_LIMIT, Body, BodyGeometry, BodyPoint, StrainPointsPotential, check_finite_number,
+                    check_finite_vector, to_dense)
 from .strain import ElementInversionError, StrainPoints
 
 __all__ = ["ExactBeam", "BeamPoint"]
 
 
-class ExactBeam(Body):
+class ExactBeam(StrainPointsPotential, Body):
     r"""Planar geometrically exact (Simo–Reissner) beam in absolute nodal coordinates.
 
     Parameters
@@ -243,16 +243,6 @@ class ExactBeam(Body):
         return self.EA * eps, self.kGA * gam, self.EI * kap
 
     # ------------------------------------------------------------- potential
-    def potential_energy(self, q):
-        """V = ½ ∫ EA ε² + kGA γ² + EI κ² ds, J."""
-        return self.strain_points.energy(q)
-
-    def potential_gradient(self, q):
-        return self.strain_points.gradient(q)
-
-    def potential_hessian(self, q):
-        return self.strain_points.hessian(q)
-
     def potential_discrete_gradient(self, q0, q1):
         """Equivariant discrete gradient: stress at the mean strain, strain increments in Cayley rates.
 

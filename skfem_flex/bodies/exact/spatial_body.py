@@ -29,7 +29,7 @@ from skfem import Basis, BilinearForm, ElementLineP1, ElementLineP2, asm
 from ...fem.beam import line_mesh
 from ...fem.spatial_section import SpatialSection
 from ...numerics.quaternions import check_rotation_matrix
-from ..base import DENSE_LIMIT, Body, BodyGeometry, check_finite_number, check_finite_vector
+from ..base import DENSE_LIMIT, Body, BodyGeometry, StrainPointsPotential, check_finite_number, check_finite_vector
 from ..spatial import SpatialPoint
 from .director_strain import NODE_SIZE, DirectorStrainPoints
 
@@ -74,7 +74,7 @@ def straight_placement(start, end, normal=None):
     return placement, length
 
 
-class SpatialExactBeam(Body):
+class SpatialExactBeam(StrainPointsPotential, Body):
     r"""Spatial geometrically exact beam with nodal positions and directors (module docstring).
 
     Parameters
@@ -242,22 +242,16 @@ class SpatialExactBeam(Body):
         return self.strain_points.section_forces(q)
 
     # ------------------------------------------------------------- potential
-    def potential_energy(self, q):
-        """V = ½ ∫ eᵀ C e ds, J (:mod:`.director_strain`)."""
-        return self.strain_points.energy(q)
-
-    def potential_gradient(self, q):
-        return self.strain_points.gradient(q)
-
-    def potential_hessian(self, q):
-        return self.strain_points.hessian(q)
-
     def potential_discrete_gradient(self, q0, q1):
         """(g, ∂g/∂q₁) with g · (q₁ − q₀) = V(q₁) − V(q₀) exactly, equivariant under rotations."""
         return self.strain_points.discrete_gradient(q0, q1)
 
     def compiled_strain_data(self):
-        """The packed arrays of the compiled strain-energy kernels (:mod:`.director_kernel`), built once."""
+        """The packed arrays of the compiled strain-energy kernels (:mod:`.director_kernel`), built once; None
+        for a subclass that changes the strain energy (it runs through its own methods)."""
+        if any(getattr(type(self), m) is not getattr(SpatialExactBeam, m) for m in
+               ("potential_energy", "potential_gradient", "potential_discrete_gradient")):
+            return None
         kd = getattr(self, "_kernel_data", None)
         if kd is None:
             from .director_kernel import pack

@@ -16,18 +16,13 @@ as the family's entries), added through positions in the Newton matrix's storage
 """
 from __future__ import annotations
 
-from collections import namedtuple
-
 import numba
-import numpy as np
 
 from ...bodies.exact.director_kernel import DirectorKernelData, discrete_gradient_terms, potential_energy
 from ..abi import context_of, f1, f2, family_of, fvec, i1, i2
 from ..registry import compiled_kernel
-from ..storage import storage_of
 from ..tasks import TASK_ENERGY, TASK_EVAL
-from . import FamilyPack
-from .floating_frame import body_fields, pattern_positions
+from .exact_beam import add_strain_terms, pack_strain_bodies
 
 __all__ = ["NAME", "FORMS", "pack", "kernel"]
 
@@ -48,25 +43,7 @@ def pack(items, packer):
         Per beam its ``compiled_strain_data()``, the beam and the offset of its block.
     packer : Packer
     """
-    names, arrays = ["offs", "pos", "pos_ptr"], [None, None, None]
-    offs, rows, cols, ptr = [], [], [], [0]
-    for b, (kd, body, off) in enumerate(items):
-        nb_names, nb_arrays = body_fields(kd, f"b{b}_", ())
-        names += nb_names
-        arrays += nb_arrays
-        offs.append(off)
-        rows.append(off + np.repeat(np.arange(int(kd.n[0]), dtype=np.int64), np.diff(kd.pat_ptr)))
-        cols.append(off + np.asarray(kd.pat_idx, dtype=np.int64))
-        ptr.append(ptr[-1] + rows[-1].size)
-    rows, cols = np.concatenate(rows), np.concatenate(cols)
-    arrays[0] = np.asarray(offs, dtype=np.int64)
-    arrays[1] = -np.ones(rows.size, dtype=np.int64)
-    arrays[2] = np.asarray(ptr, dtype=np.int64)
-    data = namedtuple("DirectorBeamData", names)(*arrays)
-
-    def finish(layout):
-        return data._replace(pos=pattern_positions(rows, cols, layout))
-    return FamilyPack(data=data, count=len(items), entries=(rows, cols), finish=finish)
+    return pack_strain_bodies(items, (), "DirectorBeamData")
 
 
 @numba.njit(cache=True)
@@ -84,17 +61,7 @@ def _beams(ctx, fam):
             continue
         qa, qb = fvec(ctx.qa, n), fvec(ctx.qb, n)
         g, data, fl = discrete_gradient_terms(kd, qa[o:o + nb], qb[o:o + nb])
-        gp, floor = fvec(ctx.gp, n), fvec(ctx.floor, n)
-        w = ctx.w_gp * ctx.c_dg * ctx.dq1
-        for a in range(nb):
-            gp[o + a] += g[a]
-            floor[o + a] += w * fl[a]
-        if w != 0.0:
-            mat = storage_of(ctx)[0]
-            for t in range(data.size):
-                p = pos_all[ptr[b] + t]
-                if p >= 0:
-                    mat[p] += w * data[t]
+        add_strain_terms(ctx, o, g, data, fl, pos_all, ptr[b])
 
 
 def _kernel(ctx_p, fam_p):

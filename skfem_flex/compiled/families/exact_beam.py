@@ -30,7 +30,7 @@ from ..tasks import STATUS_REFUSED, TASK_ENERGY, TASK_EVAL
 from . import FamilyPack
 from .floating_frame import body_fields, pattern_positions
 
-__all__ = ["NAME", "FORMS", "pack", "kernel"]
+__all__ = ["NAME", "FORMS", "pack", "kernel", "pack_strain_bodies", "add_strain_terms"]
 
 NAME = "exact beams"
 FORMS = ("exact beam",)
@@ -54,25 +54,53 @@ def pack(items, packer):
     FamilyPack
         ``entries``: every entry of the beams' tangent patterns (their element blocks), in scene coordinates.
     """
+    return pack_strain_bodies(items, ("map_el",), "ExactBeamData")
+
+
+def pack_strain_bodies(items, flatten, data_name):
+    """The data of a family of bodies whose strain-energy tangent is a CSR pattern (``kd.n``, ``kd.pat_ptr``,
+    ``kd.pat_idx``): the offsets of their blocks, the positions of their entries in the Newton matrix's
+    storage (set by ``finish``), then each body's kernel-data fields (``b<k>_<name>``, the ``flatten`` ones
+    raveled). Shared by the planar and the spatial exact beams."""
     names, arrays = ["offs", "pos", "pos_ptr"], [None, None, None]
     offs, rows, cols, ptr = [], [], [], [0]
     for b, (kd, body, off) in enumerate(items):
-        nb_names, nb_arrays = body_fields(kd, f"b{b}_", ("map_el",))
+        nb_names, nb_arrays = body_fields(kd, f"b{b}_", flatten)
         names += nb_names
         arrays += nb_arrays
         offs.append(off)
-        rows.append(off + np.repeat(np.arange(int(kd.n), dtype=np.int64), np.diff(kd.pat_ptr)))
+        n = int(np.asarray(kd.n).ravel()[0])
+        rows.append(off + np.repeat(np.arange(n, dtype=np.int64), np.diff(kd.pat_ptr)))
         cols.append(off + np.asarray(kd.pat_idx, dtype=np.int64))
         ptr.append(ptr[-1] + rows[-1].size)
     rows, cols = np.concatenate(rows), np.concatenate(cols)
     arrays[0] = np.asarray(offs, dtype=np.int64)
     arrays[1] = -np.ones(rows.size, dtype=np.int64)
     arrays[2] = np.asarray(ptr, dtype=np.int64)
-    data = namedtuple("ExactBeamData", names)(*arrays)
+    data = namedtuple(data_name, names)(*arrays)
 
     def finish(layout):
         return data._replace(pos=pattern_positions(rows, cols, layout))
     return FamilyPack(data=data, count=len(items), entries=(rows, cols), finish=finish)
+
+
+@numba.njit(cache=True)
+def add_strain_terms(ctx, o, g, data, fl, pos, first):
+    """Add a body's discrete gradient g (into g_p), its floor and its tangent (CSR data, whose entry t lands
+    at ``pos[first + t]`` of the Newton matrix's storage, −1: nowhere), weighted w_gp c_dg dq1; ``o``: the
+    offset of the body's block."""
+    n = ctx.n
+    gp, floor = fvec(ctx.gp, n), fvec(ctx.floor, n)
+    w = ctx.w_gp * ctx.c_dg * ctx.dq1
+    for a in range(g.size):
+        gp[o + a] += g[a]
+        floor[o + a] += w * fl[a]
+    if w != 0.0:
+        mat = storage_of(ctx)[0]
+        for t in range(data.size):
+            p = pos[first + t]
+            if p >= 0:
+                mat[p] += w * data[t]
 
 
 @numba.njit(cache=True)
@@ -99,17 +127,7 @@ def _beams(ctx, fam):
         if status != OK:
             ctx.status = STATUS_REFUSED
             return
-        gp, floor = fvec(ctx.gp, n), fvec(ctx.floor, n)
-        w = ctx.w_gp * ctx.c_dg * ctx.dq1
-        for a in range(nb):
-            gp[o + a] += g[a]
-            floor[o + a] += w * fl[a]
-        if w != 0.0:
-            mat = storage_of(ctx)[0]
-            for t in range(data.size):
-                p = pos_all[ptr[b] + t]
-                if p >= 0:
-                    mat[p] += w * data[t]
+        add_strain_terms(ctx, o, g, data, fl, pos_all, ptr[b])
 
 
 #: the driver's :func:`refusal_error` looks at the refused trial end state (q_1, v_1, t_1)
