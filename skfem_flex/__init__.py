@@ -27,8 +27,8 @@ from .elements.forces import LinearDamper, LinearSpring, PointForce, PointMoment
 from .scene_initial import (InconsistentInitialConditionsError, RedundantConstraintsError,
                                  consistent_initial_state)
 from .elements.forces import ForceElement, Gravity, NonlinearSpring
-from .elements.forces import (SpatialDamper, SpatialMoment, SpatialPointForce, SpatialSpring, SpatialTorsionalDamper,
-                              SpatialTorsionalSpring)
+from .elements.forces import (SpatialDamper, SpatialDistributedLoad, SpatialMoment, SpatialPointForce, SpatialSpring,
+                              SpatialTorsionalDamper, SpatialTorsionalSpring)
 from .elements.motion import MotionLaw, Prescribed, spin_up_law
 from .scene import Scene
 from .schemes import EnergyMomentum, GeneralizedAlpha, Newmark, NewtonSettings, Trapezoidal

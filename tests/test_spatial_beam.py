@@ -135,6 +135,24 @@ def test_linear_cantilever_against_timoshenko(load, closed_form):
     assert value == pytest.approx(closed_form(P, L), rel=1e-3)
 
 
+def test_distributed_load_and_gravity_against_the_linear_beam():
+    """A uniform force per length and gravity (ρA g per length) on the exact cantilever at a tiny load: the
+    tip deflection of the linear Timoshenko cantilever, q L⁴/(8 EI₂) + q L²/(2 kGA₁); the load's resultant
+    is q L."""
+    L, q = 2.0, 1e-4
+    b = SpatialExactBeam.straight(SECTION, (0.0, 0.0, 0.0), (L, 0.0, 0.0), n_elements=6, order=2,
+                                  normal=(0.0, 0.0, 1.0))
+    load = sf.SpatialDistributedLoad(b, (0.0, 0.0, q))
+    assert np.abs(load.generalized_force(b.q0, b.q0, 0.0)[0].reshape(-1, 3)[0::4].sum(axis=0)
+                  - [0.0, 0.0, q * L]).max() <= 1e-15
+    expected = q * L ** 4 / (8 * 300.0) + q * L ** 2 / (2 * 8e3)
+    for force in (load, sf.Gravity((0.0, 0.0, q / SECTION.rhoA))):
+        scene = sf.Scene([b], constraints=[sf.Weld3D(b.point(0.0))], forces=[force])
+        tip = b.point(L)
+        z = (tip.position(sf.static_equilibrium(scene).q) - tip.position(b.q0))[2]
+        assert z == pytest.approx(expected, rel=1e-3)
+
+
 def test_bend_45_is_path_independent_and_converges_to_the_published_tip():
     """P2, 3 elements: the adaptive load path and 8 equal load steps end at the same tip, within 0.5 % of the
     converged published displacement (its norm, each component; 0.38 % here, 0.19 % from 4 elements on)."""

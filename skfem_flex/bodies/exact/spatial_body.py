@@ -172,11 +172,9 @@ class SpatialExactBeam(StrainPointsPotential, Body):
         mass = sps.kron(scalar, sps.diags(per_node)).tocsr()
         mass.eliminate_zeros()
         self._mass = mass.toarray() if self.dense else mass
-        weights = np.asarray(scalar.sum(axis=1)).ravel()          # ∫ N_a ds
-        gam = np.zeros((3, n))
-        for c in range(3):
-            gam[c, NODE_SIZE * np.arange(self.n_nodes) + c] = section.rhoA * weights
-        self._gamma = gam
+        #: ∫ N_a ds of every node, m
+        self.node_weights = np.asarray(scalar.sum(axis=1)).ravel()
+        self._gamma = section.rhoA * self.line_integral()
         self.total_mass = float(section.rhoA * self.length)
 
     @classmethod
@@ -265,6 +263,14 @@ class SpatialExactBeam(StrainPointsPotential, Body):
 
     def momentum(self, q, v):
         return self._mass @ v
+
+    def line_integral(self):
+        """G (3, n) with ∫ φ ds = G q: ∫ N_a ds on every node's position (the consistent load of a force per
+        length, and ρA G the first moment of the mass)."""
+        G = np.zeros((3, self.n_dofs))
+        for c in range(3):
+            G[c, NODE_SIZE * np.arange(self.n_nodes) + c] = self.node_weights
+        return G
 
     def mass_moment(self):
         """(Γ, c) with ∫ φ dm = Γ q + c (c = 0)."""

@@ -12,7 +12,7 @@
 ``exact_beam_loads.py``    :class:`NodalLoad`, :class:`ExactDistributedLoad` on an exact beam
 ``spatial.py``             on spatial bodies: :class:`SpatialSpring`, :class:`SpatialDamper`,
                            :class:`SpatialTorsionalSpring`, :class:`SpatialTorsionalDamper`,
-                           :class:`SpatialPointForce`, :class:`SpatialMoment`
+                           :class:`SpatialPointForce`, :class:`SpatialMoment`, :class:`SpatialDistributedLoad`
 =========================  =========================================================================
 
 Every name is importable from here (``skfem_flex.elements.forces.PointForce``).
@@ -23,8 +23,8 @@ from .exact_beam_loads import ExactDistributedLoad, NodalLoad
 from .floating_beam_loads import DistributedLoad
 from .gravity import Gravity
 from .point_loads import PointForce, PointMoment, half_sine_pulse, time_function
-from .spatial import (SpatialDamper, SpatialMoment, SpatialPointForce, SpatialSpring, SpatialTorsionalDamper,
-                      SpatialTorsionalSpring)
+from .spatial import (SpatialDamper, SpatialDistributedLoad, SpatialMoment, SpatialPointForce, SpatialSpring,
+                      SpatialTorsionalDamper, SpatialTorsionalSpring)
 from .torsion import RotationalDamper, RotationalSpring
 from .two_point import LinearDamper, LinearSpring
 
@@ -32,4 +32,4 @@ __all__ = ["ForceElement", "Gravity", "NonlinearSpring", "split_blocks", "Linear
            "RotationalSpring", "RotationalDamper", "PointForce", "PointMoment", "time_function", "half_sine_pulse",
            "DistributedLoad", "NodalLoad", "ExactDistributedLoad", "CONSERVATIVE", "MAX_SPRING_EXPONENT",
            "SpatialSpring", "SpatialDamper", "SpatialTorsionalSpring", "SpatialTorsionalDamper", "SpatialPointForce",
-           "SpatialMoment"]
+           "SpatialMoment", "SpatialDistributedLoad"]

@@ -24,6 +24,7 @@ from .base import ForceElement, check_nonnegative
 from .point_loads import time_function
 
 __all__ = ["SpatialSpring", "SpatialDamper", "SpatialTorsionalSpring", "SpatialTorsionalDamper", "SpatialPointForce",
+           "SpatialDistributedLoad",
            "SpatialMoment"]
 
 
@@ -397,3 +398,36 @@ class SpatialMoment(ForceElement):
             for j, oj in enumerate(offs):
                 fq[oi:oi + 3, oj:oj + 3] = block[:, 3 * j:3 * j + 3] + (skew(W) if i == j else 0.0)
         return f, fq, np.zeros((n, n))
+
+
+class SpatialDistributedLoad(ForceElement):
+    """A force per length f(t) (N/m), fixed in space, along a spatial beam: Q = Gᵀ f with G = ∫ N_a ds on
+    every node's position (the consistent load of the beam's interpolation; its resultant is f L).
+
+    Parameters
+    ----------
+    beam : SpatialExactBeam
+    force : array_like (3,) or callable t -> (3,)
+        N/m, in space axes.
+    name : str
+    """
+
+    conservative = False
+
+    def __init__(self, beam, force, name="distributed load"):
+        if not callable(getattr(beam, "line_integral", None)):
+            raise ValueError(f"a distributed load needs a spatial beam (SpatialExactBeam), got {beam!r}")
+        self.force = time_function(force, 3, "force")
+        self.bodies = (beam,)
+        self.G = beam.line_integral()
+        self.name = name
+
+    def generalized_force(self, q, v, t):
+        n = self.G.shape[1]
+        return self.G.T @ self.force(t), np.zeros((n, n)), np.zeros((n, n))
+
+    def compiled_form(self):
+        """("generalized force", G, f): the point-load family."""
+        if type(self).generalized_force is not SpatialDistributedLoad.generalized_force:
+            return None
+        return "generalized force", self.G, self.force
