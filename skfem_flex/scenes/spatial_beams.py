@@ -6,13 +6,15 @@ import numpy as np
 
 from ..bodies.exact.spatial_body import SpatialExactBeam
 from ..bodies.probes import PointProbe
-from ..elements.constraints.spatial_joints import Weld3D
+from ..bodies.spatial import SpatialRigidBody
+from ..elements.constraints.spatial_joints import Revolute3D, RotationDriver, Weld3D
 from ..elements.forces.spatial import SpatialMoment, SpatialPointForce
+from ..elements.motion import spin_up_law
 from ..fem.spatial_section import SpatialSection
 from ..scene import Scene
-from ._registry import positive_count, register
+from ._registry import positive_count, positive_value, register
 
-__all__ = ["bend_45", "right_angle_frame", "flying_spaghetti_3d", "BEND_45_REFERENCE", "hat_pulse"]
+__all__ = ["bend_45", "right_angle_frame", "flying_spaghetti_3d", "spin_up_3d", "BEND_45_REFERENCE", "hat_pulse"]
 
 #: tip displacement (m, in the scene's global axes) of the 45° bend under the tip load 600: the spectrally
 #: converged single-element result of Kynema's Legendre spectral element (identical for 15 and 18 nodes), with
@@ -108,3 +110,44 @@ def flying_spaghetti_3d(n_elements=10, order=1):
                                  SpatialMoment(end, lambda t: np.array([0.0, h(t), 0.5 * h(t)]), name="moment")],
                  name="flying_spaghetti_3d", probes={"tip": PointProbe(beam.point(beam.length))},
                  parameters=dict(n_elements=n, order=order))
+
+
+@register(t_end=30.0, dt=0.01, omega="rad/s", T="s", length="m", EA="N", EI="N m²", GJ="N m²", kGA="N",
+          rhoA="kg/m", rhoI="kg m", tip_load="N", n_elements="-", order="-")
+def spin_up_3d(omega=4.0, T=15.0, length=10.0, EA=2.8e7, EI=1.4e4, GJ=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4,
+               tip_load=10.0, n_elements=8, order=1):
+    """The spin-up manoeuvre of Simo and Vu-Quoc in space: the planar spin-up beam (its hub angle
+    :func:`~skfem_flex.elements.motion.spin_up_law`, length, EA, EI, kGA, ρA, ρI; here EI and ρI the same
+    about both section axes, and GJ) as a :class:`~skfem_flex.bodies.exact.spatial_body.SpatialExactBeam`
+    welded to a hub that turns about z on a hinge with a rotation driver, with an out-of-plane tip load
+    along z growing with the spin, ``tip_load`` · min(t/T, 1) (N). With ``tip_load`` = 0 it moves in the
+    plane of the planar scene.
+
+    Probe ``"tip"``: the tip's displacement in the hub frame, R_hubᵀ (r_tip − r_root) − (L, 0, 0) (axial,
+    in-plane transverse, out of plane), m.
+    """
+    n = positive_count("n_elements", n_elements)
+    length = positive_value("length", length)
+    T = positive_value("T", T)
+    load = float(tip_load)
+    if not np.isfinite(load):
+        raise ValueError(f"tip_load must be finite, got {tip_load!r}")
+    sec = SpatialSection(EA=EA, GA1=kGA, GA2=kGA, GJ=GJ, EI1=EI, EI2=EI, rhoA=rhoA, rhoI1=rhoI, rhoI2=rhoI)
+    beam = SpatialExactBeam.straight(sec, (0.0, 0.0, 0.0), (length, 0.0, 0.0), n_elements=n, order=_order(order),
+                                     normal=(0.0, 1.0, 0.0), name="beam")
+    hub = SpatialRigidBody(1.0, [0.1, 0.1, 0.1], name="hub")
+    joints = [Revolute3D(hub.point([0.0, 0.0, 0.0]), axis=(0.0, 0.0, 1.0), name="hub hinge"),
+              RotationDriver(hub, None, (0.0, 0.0, 1.0), spin_up_law(positive_value("omega", omega), T),
+                             name="hub drive"),
+              Weld3D(beam.point(0.0), hub.point([0.0, 0.0, 0.0]), name="clamp")]
+    tip, root = beam.point(length), beam.point(0.0)
+
+    def probe_tip(scene, t, q, v):
+        qb, qh = scene.coordinates(beam, q), scene.coordinates(hub, q)
+        return hub.rotation_matrix(qh).T @ (tip.position(qb) - root.position(qb)) - [length, 0.0, 0.0]
+
+    force = SpatialPointForce(tip, lambda t: np.array([0.0, 0.0, load * min(max(t, 0.0) / T, 1.0)]),
+                              name="tip load")
+    return Scene([hub, beam], constraints=joints, forces=[force], name="spin_up_3d", probes={"tip": probe_tip},
+                 parameters=dict(omega=omega, T=T, length=length, EA=EA, EI=EI, GJ=GJ, kGA=kGA, rhoA=rhoA,
+                                 rhoI=rhoI, tip_load=load, n_elements=n, order=order))
