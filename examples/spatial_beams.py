@@ -8,16 +8,24 @@
   energy-momentum and the trapezoidal rule.
 * ``right_angle_frame``: the elbow's and the tip's out-of-plane displacement, their largest values and
   times, on two meshes and steps (energy-momentum).
+* The rotating cantilever (the linear ``TimoshenkoBeam3D``, nearly Euler–Bernoulli and inextensible, spinning
+  about an axis through its root): the first flapwise and lead-lag frequencies over λ = Ω √(ρA L⁴/EI) from 0
+  to 12, with and without the centrifugal stiffening, and their Campbell diagram
+  (``rotating_beam_3d_campbell.png`` in OUT_DIR).
 
-Run ``python examples/spatial_beams.py``. Importing the module computes the results. Quick mode
+Run ``python examples/spatial_beams.py [OUT_DIR]`` (default ``examples/output/``). Importing the module computes the results. Quick mode
 (``SKFEM_FLEX_EXAMPLE_QUICK=1``, used by the tests): no bend (``tests/test_spatial_beam.py`` solves it) and
 short runs.
 """
 import os
+import sys
+from pathlib import Path
 
 import numpy as np
+import skfem
 
 import skfem_flex as sf
+from skfem_flex.io.plots import pyplot_for
 from skfem_flex.scenes.spatial_beams import BEND_45_REFERENCE
 
 QUICK = os.environ.get("SKFEM_FLEX_EXAMPLE_QUICK", "") not in ("", "0")
@@ -25,6 +33,7 @@ BEND_MESHES = () if QUICK else ((1, 8), (1, 16), (1, 32), (2, 4), (2, 8), (2, 16
 LOAD_STEPS = () if QUICK else (3, 8, 30)
 T_FLY = 6.0 if QUICK else 30.0
 FRAME_RUNS = ((2, 0.05, 3.5),) if QUICK else ((5, 0.05, 30.0), (10, 0.025, 30.0))
+LAMBDAS = (0.0, 6.0, 12.0) if QUICK else tuple(np.linspace(0.0, 12.0, 25))
 
 
 def bend_tip(order, n, load_steps=None):
@@ -60,6 +69,17 @@ for n, dt, t_end in FRAME_RUNS:
     frame[(n, dt)] = peaks
 
 
+spin_section = sf.SpatialSection(EA=1e4, GA1=1e5, GA2=1e5, GJ=1.0, EI1=1.0, EI2=1.0, rhoA=1.0, rhoI1=1e-6,
+                                 rhoI2=1e-6)
+spin_beam = sf.TimoshenkoBeam3D(skfem.MeshLine(np.linspace(0.0, 1.0, 9)), spin_section, order=2)
+spin_fixed = np.concatenate([spin_beam.dofs_at(0.0), spin_beam.node_dofs[:, 2]])      # clamped, inextensible
+campbell = {}
+for lam in LAMBDAS:
+    stiff = spin_beam.rotating_modes(spin_fixed, lam)
+    linear = spin_beam.rotating_modes(spin_fixed, lam, stiffening=False)
+    campbell[lam] = (stiff.first(True)[0], stiff.first(False)[0], linear.first(False))
+
+
 def summary():
     ref = np.linalg.norm(BEND_45_REFERENCE)
     lines = ["45° bend, tip displacement under 600 (reference " + ", ".join(f"{x:.3f}" for x in BEND_45_REFERENCE)
@@ -82,8 +102,28 @@ def summary():
     for (n, dt), pk in frame.items():
         cells = [f"{pk[k][0]:.3f} ({pk[k][1]:.2f} s)" for k in ("elbow, first peak", "elbow", "tip")]
         lines.append(f"| {n} | {dt:g} | " + " | ".join(cells) + f" | {pk['wall'][0]:.1f} | {pk['wall'][1]:.2f} |")
+    lines += ["", "rotating cantilever, first frequencies ω √(ρA L⁴/EI) over λ = Ω √(ρA L⁴/EI):", "",
+              "| λ | flapwise | lead-lag | lead-lag, linear strain (growth rate if it diverges) |", "|---|---|---|---|"]
+    for lam, (flap, lag, (lin, growth)) in campbell.items():
+        lin_text = f"{lin:.4f}" if growth <= 1e-6 * flap else f"diverges ({growth:.3f})"
+        lines.append(f"| {lam:g} | {flap:.4f} | {lag:.4f} | {lin_text} |")
     return "\n".join(lines)
 
 
 if __name__ == "__main__":
     print(summary())
+    plt, out = pyplot_for(sys.argv[1] if len(sys.argv) > 1 else Path(__file__).parent / "output")
+    lams = np.array(list(campbell))
+    vals = np.array([[c[0], c[1], c[2][0]] for c in campbell.values()])
+    fig, ax = plt.subplots(figsize=(5, 4))
+    ax.plot(lams, vals[:, 0], "o-", label="flapwise")
+    ax.plot(lams, vals[:, 1], "s-", label="lead-lag")
+    ax.plot(lams, vals[:, 2], "x--", label="lead-lag, linear strain")
+    ax.plot(lams, lams, "k:", label="λ (once per revolution)")
+    ax.set_xlabel("λ = Ω √(ρA L⁴/EI)")
+    ax.set_ylabel("ω √(ρA L⁴/EI)")
+    ax.set_title("Rotating cantilever (TimoshenkoBeam3D)")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(out / "rotating_beam_3d_campbell.png", dpi=120)
+    print(f"wrote {out / 'rotating_beam_3d_campbell.png'}")

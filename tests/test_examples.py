@@ -194,6 +194,8 @@ def test_spatial_beams(monkeypatch, tmp_path):
     assert p < 1e-10 * 50 and energy < 1e-10 and L < 1e-10
     assert example["flying"]["trapezoidal"][1] > 1e-6
     assert all(pk["elbow, first peak"][0] > 1.0 for pk in example["frame"].values())
+    flap, lag, (lin, growth) = example["campbell"][12.0]
+    assert flap == pytest.approx(13.1702, rel=5e-3) and lag == pytest.approx(5.4270, rel=5e-3) and growth > 1.0
     assert "flying beam" in example["summary"]()
 
 

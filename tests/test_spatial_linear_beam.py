@@ -1,5 +1,7 @@
 """The linear spatial Timoshenko beam on scikit-fem: a cantilever's static tip deflections in both principal
 planes, its twist, and its first bending and torsion frequencies against the closed forms (P2, 8 elements)."""
+import functools
+
 import numpy as np
 import pytest
 import skfem
@@ -59,3 +61,39 @@ def test_bad_input():
     beam, _, _ = cantilever()
     with pytest.raises(ValueError, match="finite 3-vectors"):
         beam.point_load(L, force=(np.nan, 0.0, 0.0))
+
+
+#: λ = Ω √(ρA L⁴/EI) and the first flapwise and lead-lag ω √(ρA L⁴/EI) of a uniform Euler–Bernoulli cantilever
+#: spinning about an axis through its root (the classical tables of Wright, Smith, Thresher & Wang 1982 and
+#: Hodges & Rutkowski 1981, to their 4 decimals; lead-lag² = flap² − λ² for this model)
+ROTATING_TABLE = [(0.0, 3.5160, 3.5160), (1.0, 3.6816, 3.5432), (3.0, 4.7973, 3.7435), (6.0, 7.3604, 4.2632),
+                  (9.0, 10.2257, 4.8543), (12.0, 13.1702, 5.4270)]
+
+
+@functools.lru_cache(maxsize=1)
+def rotating_cantilever():
+    """EI = ρA = L = 1, nearly Euler–Bernoulli (kGA = 1e5 EI/L², ρI = 1e-6 ρA L²), inextensible (u₃ held)."""
+    sec = SpatialSection(EA=1e4, GA1=1e5, GA2=1e5, GJ=1.0, EI1=1.0, EI2=1.0, rhoA=1.0, rhoI1=1e-6, rhoI2=1e-6)
+    beam = TimoshenkoBeam3D(skfem.MeshLine(np.linspace(0.0, 1.0, 7)), sec, order=2)
+    return beam, np.concatenate([beam.dofs_at(0.0), beam.node_dofs[:, 2]])
+
+
+@pytest.mark.parametrize("lam, flap, lag", ROTATING_TABLE)
+def test_rotating_cantilever_frequencies_against_the_classical_table(lam, flap, lag):
+    beam, fixed = rotating_cantilever()
+    modes = beam.rotating_modes(fixed, lam)
+    (f, gf), (g, gg) = modes.first(True), modes.first(False)
+    assert f == pytest.approx(flap, rel=5e-4) and g == pytest.approx(lag, rel=5e-4)
+    assert max(gf, gg) <= 1e-6 * f
+    assert g ** 2 == pytest.approx(f ** 2 - lam ** 2, rel=1e-3)
+
+
+def test_linear_strain_lead_lag_diverges_beyond_the_first_frequency():
+    """Without the centrifugal stiffening the lead-lag frequency is √(ω̄₀² − λ²) and the mode diverges
+    for λ > ω̄₀ = 3.5160 (the spin-up failure of linear floating-frame models)."""
+    beam, fixed = rotating_cantilever()
+    for lam in (2.0, 3.4):
+        g, growth = beam.rotating_modes(fixed, lam, stiffening=False).first(False)
+        assert g == pytest.approx(np.sqrt(3.51602 ** 2 - lam ** 2), rel=1e-3) and growth <= 1e-6
+    g, growth = beam.rotating_modes(fixed, 3.7, stiffening=False).first(False)
+    assert g == 0.0 and growth == pytest.approx(np.sqrt(3.7 ** 2 - 3.51602 ** 2), rel=1e-3)

@@ -9,7 +9,10 @@ affine line mapping of scikit-fem degenerates for a line embedded in 3D).
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
+import scipy.linalg
 from skfem import Basis, ElementLineP1, ElementLineP2, asm
 
 from . import spatial_forms as forms
@@ -17,10 +20,37 @@ from .beam import LinearBeamAnalyses, check_mesh, gauss_line
 from .spatial_section import SpatialSection
 from ..numerics.resources import BYTES_PER_ELEMENT, check_fits
 
-__all__ = ["TimoshenkoBeam3D", "FIELDS_3D"]
+__all__ = ["TimoshenkoBeam3D", "FIELDS_3D", "RotatingModes"]
 
 #: the fields of a node, in order
 FIELDS_3D = ("u1", "u2", "u3", "theta1", "theta2", "theta3")
+
+
+@dataclass(frozen=True)
+class RotatingModes:
+    """Modes of a beam about steady rotation (:meth:`TimoshenkoBeam3D.rotating_modes`).
+
+    Attributes
+    ----------
+    omega : ndarray
+        Natural angular frequencies in the rotating frame, rad/s, ascending (0 for a diverging mode).
+    growth : ndarray
+        Real parts of the eigenvalues, 1/s: zero for a stable mode, positive for one that diverges.
+    flapwise : ndarray of bool
+        True for a mode whose motion is mostly along the spin axis d₁ (out of the plane of rotation), False
+        for a lead-lag mode (u₂, in the plane).
+    shapes : ndarray (n_dofs, n), complex
+    """
+
+    omega: np.ndarray
+    growth: np.ndarray
+    flapwise: np.ndarray
+    shapes: np.ndarray
+
+    def first(self, flapwise):
+        """(ω, growth) of the lowest flapwise (True) or lead-lag (False) mode."""
+        k = int(np.flatnonzero(self.flapwise == bool(flapwise))[0])
+        return float(self.omega[k]), float(self.growth[k])
 
 
 class TimoshenkoBeam3D(LinearBeamAnalyses):
@@ -109,3 +139,74 @@ class TimoshenkoBeam3D(LinearBeamAnalyses):
         if f.shape != (3,) or m.shape != (3,) or not (np.all(np.isfinite(f)) and np.all(np.isfinite(m))):
             raise ValueError(f"force and moment must be finite 3-vectors, got {force!r} and {moment!r}")
         return asm(forms.distributed_load, self.basis, f1=f[0], f2=f[1], f3=f[2], m1=m[0], m2=m[1], m3=m[2])
+
+    def _spin_matrices(self, r):
+        """(K_σ, M_c, G) at Ω = 1 for the hub radius r, assembled once per r (they scale with Ω², Ω², Ω)."""
+        cache = self.__dict__.setdefault("_spin_cache", {})
+        if r not in cache:
+            rhoA = self.section.rhoA
+            cache[r] = (asm(forms.centrifugal_tension, self.basis, rhoA=rhoA, Omega=1.0, r=r, L=self.length),
+                        asm(forms.centrifugal_softening, self.basis, rhoA=rhoA),
+                        asm(forms.coriolis, self.basis, rhoA=rhoA))
+        return cache[r]
+
+    def rotating_modes(self, fixed, omega, hub_radius=0.0, stiffening=True, n_modes=8):
+        r"""Modes about a steady spin Ω about the hub's axis d₁ (normal to the beam, through the root at radius
+        ``hub_radius`` from the spin axis), in the rotating frame:
+
+        .. math::  M \ddot q + 2Ω G \dot q + (K + K_σ − Ω² M_c) q = 0,
+
+        with K_σ the geometric stiffness of the centrifugal tension N(s) = ρA Ω² (r (L − s) + (L² − s²)/2)
+        (``stiffening=False`` leaves it out: the linear-strain model, whose lead-lag mode diverges beyond
+        Ω² = K/M), M_c the centrifugal force of displacements in the plane of rotation and G the Coriolis
+        coupling of the lead-lag and axial motion (forms in :mod:`.spatial_forms`; the section's rotary
+        inertia enters M only). Solved as the first-order system of the free DOFs (dense).
+
+        Parameters
+        ----------
+        fixed : array_like of int
+            DOFs held at zero (the clamp, and e.g. every u₃ for an inextensible beam).
+        omega : float
+            Ω, rad/s.
+        hub_radius : float
+            r, m.
+        stiffening : bool
+        n_modes : int
+            How many modes to return, lowest first.
+
+        Returns
+        -------
+        RotatingModes
+        """
+        om = float(omega)
+        r = float(hub_radius)
+        if not (np.isfinite(om) and np.isfinite(r)):
+            raise ValueError(f"omega and hub_radius must be finite, got {omega!r} and {hub_radius!r}")
+        fixed = self._fixed(fixed)
+        free = np.setdiff1d(np.arange(self.n_dofs), fixed)
+        tension, softening, coriolis = self._spin_matrices(r)
+        K = self.stiffness() - om ** 2 * softening + (om ** 2 * tension if stiffening else 0.0)
+        G = 2.0 * om * coriolis
+        M, K, G = (a.tocsr()[free][:, free].toarray() for a in (self.mass(), K, G))
+        n = free.size
+        A = np.block([[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(M, K), -np.linalg.solve(M, G)]])
+        lam, vec = scipy.linalg.eig(A)
+        # one of each pair: the eigenvalue with imag ≥ 0; diverging modes come as real pairs ±σ (keep +σ)
+        keep = (lam.imag > 1e-9 * np.abs(lam).max()) | ((np.abs(lam.imag) <= 1e-9 * np.abs(lam).max())
+                                                        & (lam.real > 0))
+        lam, vec = lam[keep], vec[:n, keep]
+        order = np.argsort(np.abs(lam.imag) + np.abs(lam.real))[:int(n_modes)]
+        lam, vec = lam[order], vec[:, order]
+        shapes = np.zeros((self.n_dofs, lam.size), dtype=complex)
+        shapes[free] = vec
+        flap_rows = self.node_dofs[:, 0]
+        for k in range(lam.size - 1):
+            # a repeated frequency (no spin, equal bending stiffnesses): any mix of the pair is a mode; take
+            # the one with the most and the one with the least flapwise motion
+            if abs(lam[k + 1] - lam[k]) <= 1e-8 * max(abs(lam[k]), 1e-300):
+                pair = shapes[:, k:k + 2]
+                _, _, vh = np.linalg.svd(pair[flap_rows])
+                shapes[:, k:k + 2] = pair @ vh.conj().T
+        u1 = np.abs(shapes[flap_rows]).sum(axis=0)
+        u2 = np.abs(shapes[self.node_dofs[:, 1]]).sum(axis=0)
+        return RotatingModes(np.abs(lam.imag), np.maximum(lam.real, 0.0), u1 > u2, shapes)

@@ -29,7 +29,8 @@ from __future__ import annotations
 
 from skfem import BilinearForm, LinearForm
 
-__all__ = ["axial", "torsion", "bending", "shear", "mass", "distributed_load"]
+__all__ = ["axial", "torsion", "bending", "shear", "mass", "distributed_load", "centrifugal_tension",
+           "centrifugal_softening", "coriolis"]
 
 
 @BilinearForm
@@ -69,3 +70,27 @@ def mass(u1, u2, u3, t1, t2, t3, v1, v2, v3, s1, s2, s3, prm):
 def distributed_load(v1, v2, v3, s1, s2, s3, prm):
     """f·δu + m·δθ per length (parameters ``f1, f2, f3`` N/m and ``m1, m2, m3`` N m/m)."""
     return (prm.f1 * v1 + prm.f2 * v2 + prm.f3 * v3 + prm.m1 * s1 + prm.m2 * s2 + prm.m3 * s3)
+
+
+@BilinearForm
+def centrifugal_tension(u1, u2, u3, t1, t2, t3, v1, v2, v3, s1, s2, s3, prm):
+    """N(s) (u₁' δu₁' + u₂' δu₂'): the geometric stiffness of the centrifugal tension of a beam spinning at Ω
+    about an axis through the hub (radius ``r``) normal to it, N(s) = ρA Ω² (r (L − s) + (L² − s²)/2)
+    (parameters ``rhoA``, ``Omega`` rad/s, ``r``, ``L`` m; s = ``prm.x[0]``)."""
+    s = prm.x[0]
+    N = prm.rhoA * prm.Omega ** 2 * (prm.r * (prm.L - s) + 0.5 * (prm.L ** 2 - s ** 2))
+    return N * (u1.grad[0] * v1.grad[0] + u2.grad[0] * v2.grad[0])
+
+
+@BilinearForm
+def centrifugal_softening(u1, u2, u3, t1, t2, t3, v1, v2, v3, s1, s2, s3, prm):
+    """ρA (u₂ δu₂ + u₃ δu₃): times Ω², the centrifugal force of displacements in the plane of rotation (normal
+    to the spin axis d₁) (parameter ``rhoA``)."""
+    return prm.rhoA * (u2 * v2 + u3 * v3)
+
+
+@BilinearForm
+def coriolis(u1, u2, u3, t1, t2, t3, v1, v2, v3, s1, s2, s3, prm):
+    """ρA (u₂ δu₃ − u₃ δu₂): times 2Ω and applied to the velocities, the Coriolis force 2ρA Ω d₁ × u̇ of a
+    spin about d₁ (parameter ``rhoA``)."""
+    return prm.rhoA * (u2 * v3 - u3 * v2)
