@@ -153,6 +153,19 @@ class Run:
 
     def _fail_or_halve(self, ch, h, record):
         self._raise_python_error()
+        if ch.status == SINGULAR and self.stepper.pivot():
+            # the band plan's interior was singular (a coordinate without inertia of its own): the same step
+            # again, factorized with pivoting from now on
+            ch = self.stepper.advance(self.t, np.array([h]), np.array([record]), self.scheme.newton.max_iterations,
+                                      self.scheme.newton.line_search)
+            self.its += ch.iterations
+            if ch.steps == 1:
+                if record:
+                    self._stamp(np.array([self.step + 1]), ch.records, ch.n_records)
+                self._take(ch.records, ch.n_records)
+                self.step += 1
+                self.t = self._time_of(self.step)
+                return
         recs, n_rec = self._halve(self.t, h, self.control.max_halvings, record, ch.status)
         if record:
             self._stamp(np.array([self.step + 1]), recs, n_rec)
@@ -312,7 +325,7 @@ class Run:
         fs.update(t=np.float64(self.t), work=np.float64(state.work), step=np.int64(self.step),
                   halvings=np.int64(self.halvings))
         pk = self.stepper.packed
-        path = {"loop": "compiled", "solver": pk.solver, "storage": "dense" if pk.storage == 0 else "sparse",
+        path = {"loop": "compiled", "solver": self.stepper.solver_name, "storage": "dense" if pk.storage == 0 else "sparse",
                 "python_elements": [f"{type(e).__name__} {getattr(e, 'name', '')!r}: {why}"
                                     for e, why in pk.python_elements]}
         # compiles happen where a unit is first needed (building the stepper, the start, the first chunk):

@@ -10,7 +10,7 @@ the scheme's data record, the solver's record and the Newton core's arrays — a
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numba
 import numpy as np
@@ -106,6 +106,7 @@ class Stepper:
         pk = self.packed = self.ws.packed
         self.lapack_work, self.lapack = solvers.lapack_work(pk.nx)
         self.solver_fields = Fields(_plan_fields(pk.plan, self.lapack))
+        self.solver_name = pk.solver
         self.solver = np.zeros(1, dtype=FAMILY)
         self.solver[0] = self.solver_fields.record(kernel().address, -1, 0)
         nx = pk.nx
@@ -126,6 +127,23 @@ class Stepper:
         return self.scheme.unpack_state(self.data, t)
 
     # ------------------------------------------------------------------ start, steps, evaluations
+    def pivot(self):
+        """Leave the band plan for a factorization with pivoting (dense LU, or SuperLU on CSR storage), once;
+        True if it switched. A band plan factorizes its interior (the coordinates) first, without pivoting:
+        a coordinate without inertia of its own (a spatial beam's normal director d₃, held by its rigidity
+        rows) can make that interior singular, at the start (M alone) or in a step, though the whole
+        matrix is regular."""
+        pk = self.packed
+        if pk.plan is None or getattr(self, "_pivoting", None) is not None:
+            return False
+        kernel = sparse_solver if pk.storage != DENSE else solvers.dense_solver
+        if pk.storage == DENSE:
+            compile_units(units(replace(pk, solver="dense"), self.scheme))
+        self._pivoting = Fields(_plan_fields(None, self.lapack))
+        self.solver[0] = self._pivoting.record(kernel().address, -1, 0)
+        self.solver_name = "sparse (SuperLU)" if pk.storage != DENSE else "dense"
+        return True
+
     def start(self, t, q, v):
         """(acceleration, λ, prescribed forces) consistent with (q, v) at time t: M q̈ + Φ_qᵀλ = Q + Q_v − ∇V,
         Φ_q q̈ = −∂(Φ_q v)/∂q v − Φ_tt; the prescribed coordinates take their laws' accelerations.
@@ -143,14 +161,8 @@ class Stepper:
         rec[0] = data.record(start_kernel().address, -1, 0)
         table = time_table(pk.columns, float(t), np.zeros(0), False)
         ok = _call(start_state, "the consistent start's driver", self.ws.ctx, rec, self.solver, table, float(t))
-        if not ok and pk.solver == "bordered band (CSR)":
-            # a coordinate without inertia of its own (a spatial beam's normal director d₃, held by its rigidity
-            # rows alone) leaves the band's interior, M alone at the start, singular: the start alone is solved
-            # with pivoting (SuperLU on the same storage); the steps' interior carries the stiffness too
-            fields = Fields(_plan_fields(None, self.lapack))
-            pivoting = np.zeros(1, dtype=FAMILY)
-            pivoting[0] = fields.record(sparse_solver().address, -1, 0)
-            ok = _call(start_state, "the consistent start's driver", self.ws.ctx, rec, pivoting, table, float(t))
+        if not ok and self.pivot():
+            ok = _call(start_state, "the consistent start's driver", self.ws.ctx, rec, self.solver, table, float(t))
         self._check_status()
         if self.ws.ctx[0]["status"] == STATUS_REFUSED:
             family, exc = self.refusal(q, v, t)

@@ -151,6 +151,12 @@ class QuadraticConstraint(Constraint):
         self.c = np.asarray(c, dtype=float).ravel()
         m, k = self.b.shape
         n = self.layout.n
+        if columns is None and self.H.shape == (m, n, n):
+            # only the coordinates the equations touch (a joint at one node of a long beam touches 12 of them)
+            touched = np.flatnonzero(np.any(self.H != 0.0, axis=(0, 1)) | np.any(self.b != 0.0, axis=0))
+            if touched.size < n:
+                self.H, self.b = self.H[:, touched][:, :, touched], self.b[:, touched]
+                columns, k = touched, touched.size
         self.columns = np.arange(n) if columns is None else np.asarray(columns, dtype=np.int64).ravel()
         if (self.H.shape != (m, k, k) or self.c.shape != (m,) or self.columns.size != k
                 or (self.columns.size and (self.columns.min() < 0 or self.columns.max() >= n))):
