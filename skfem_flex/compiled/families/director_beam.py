@@ -53,8 +53,9 @@ def _beams(ctx, fam):
     offs, pos_all, ptr = i1(fam, 0), i1(fam, 1), i1(fam, 2)
     for b in range(offs.size):
         k = _HEAD + _NKD * b
-        kd = DirectorKernelData(i1(fam, k), i2(fam, k + 1), f1(fam, k + 2), f2(fam, k + 3), f1(fam, k + 4),
-                                f1(fam, k + 5), i1(fam, k + 6), i1(fam, k + 7), i1(fam, k + 8))
+        kd = DirectorKernelData(i1(fam, k), i2(fam, k + 1), i1(fam, k + 2), i1(fam, k + 3), i1(fam, k + 4),
+                                f1(fam, k + 5), f2(fam, k + 6), f1(fam, k + 7), f1(fam, k + 8), i1(fam, k + 9),
+                                i1(fam, k + 10), i1(fam, k + 11))
         o, nb = offs[b], kd.n[0]
         if ctx.task == TASK_ENERGY:
             fvec(ctx.out, 7)[0] += potential_energy(kd, fvec(ctx.q1, n)[o:o + nb])
