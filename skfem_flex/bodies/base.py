@@ -226,6 +226,8 @@ class Body:
     #: writes its potential discrete gradient so that, with its rows on these coordinates scaled
     #: by Δφ/w, it is conjugate to those rates. Constant-mass bodies only.
     cayley_coordinates: tuple = ()
+    #: the form name of the compiled family that packs ``compiled_strain_data()`` (a body that provides it)
+    strain_family: str = None
     name: str = "body"
 
     def _not_provided(self, method, why):

@@ -365,11 +365,14 @@ class SpatialPoint(BodyPoint):
         """(G, a) with r = G q + a; what the quadratic constraints build on."""
         return self.G, self.a
 
-    def axis(self, components):
-        """The direction a = Σ c_i d_i fixed in the point's frame, from its components c in that frame."""
+    def _check_oriented(self):
         if self.triad is None:
             raise ValueError(f"body {self.body.name!r} has no orientation (a point mass): it cannot carry a "
                              f"direction")
+
+    def axis(self, components):
+        """The direction a = Σ c_i d_i fixed in the point's frame, from its components c in that frame."""
+        self._check_oriented()
         a = check_finite_vector("direction components", components, 3)
         if float(np.linalg.norm(a)) == 0.0:
             raise ValueError("a direction must not have zero length")
@@ -377,8 +380,7 @@ class SpatialPoint(BodyPoint):
 
     def direction(self, e_space):
         """The direction fixed in the point's frame that lies along ``e_space`` (space axes) at the start."""
-        if self.triad is None:
-            return self.axis(np.ones(3))          # the error of a point mass
+        self._check_oriented()
         q0 = np.asarray(self.body.q0, dtype=float)
         R0 = np.column_stack([self.body.axis_affine(self.s, e) @ q0 for e in np.eye(3)])
         return self.axis(R0.T @ check_finite_vector("direction", e_space, 3))

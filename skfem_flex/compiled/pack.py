@@ -221,7 +221,7 @@ def _pack(scene, python_only=False):
         if b.has_potential:
             strain = None if python_only else _call(b, "compiled_strain_data")
             if strain is not None:
-                add(family_for(getattr(b, "strain_family", "exact beam")), (strain, b, off))
+                add(family_for(b.strain_family), (strain, b, off))
             else:
                 in_python("potential", b, idx, "compiled=False" if python_only else
                           "its strain energy has no compiled_strain_data()")

@@ -103,6 +103,8 @@ class ExactBeam(StrainPointsPotential, Body):
 
     constant_mass = True
     has_potential = True
+    #: the compiled family of its strain energy (:mod:`skfem_flex.compiled.families.exact_beam`)
+    strain_family = "exact beam"
 
     def __init__(self, beam, start=(0.0, 0.0), angle=0.0, q0=None, v0=None, name="exact_beam",
                  rotation_rate="cayley"):
@@ -276,9 +278,6 @@ class ExactBeam(StrainPointsPotential, Body):
     def mass_matrix(self, q):
         """Constant consistent mass ∫ ρA (δx x + δy y) + ρI δφ φ ds (kg, kg m²)."""
         return self._mass
-
-    def momentum(self, q, v):
-        return self._mass @ v
 
     def mass_moment(self):
         """(Γ, c) with ∫ r dm = Γ q + c, c = ∫ ρA X ds (consistent gravity and centre of mass)."""

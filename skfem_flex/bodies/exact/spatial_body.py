@@ -261,9 +261,6 @@ class SpatialExactBeam(StrainPointsPotential, Body):
         """The constant consistent mass (kg for φ, kg m² for the directors)."""
         return self._mass
 
-    def momentum(self, q, v):
-        return self._mass @ v
-
     def line_integral(self):
         """G (3, n) with ∫ φ ds = G q: ∫ N_a ds on every node's position (the consistent load of a force per
         length, and ρA G the first moment of the mass)."""

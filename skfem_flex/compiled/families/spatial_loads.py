@@ -141,11 +141,13 @@ def _loads(ctx, d, tangent):
                 ext[d.elements[e, 3 + i] + c] += fi[c]
         if not tangent:
             continue
+        # W × e_c is column c of skew(W)
+        skw = np.array([[0.0, -W[2], W[1]], [W[2], 0.0, -W[0]], [-W[1], W[0], 0.0]])
+        rhs = np.empty(3)
         for j in range(3):
             dj = dv[j]
             d_j_w = dj[0] * W[0] + dj[1] * W[1] + dj[2] * W[2]
             for c in range(3):
-                rhs = np.zeros(3)
                 for a in range(3):
                     rhs[a] = -2.0 * W[a] * dj[c] + dj[a] * W[c]
                 rhs[c] += d_j_w + (F[j] if following else 0.0)
@@ -154,11 +156,7 @@ def _loads(ctx, d, tangent):
                 for i in range(3):
                     dfi = _cross(dv[i], dW)
                     for a in range(3):
-                        val = -dfi[a]
-                        if i == j:
-                            ec = np.zeros(3)
-                            ec[c] = 1.0
-                            val += _cross(W, ec)[a]
+                        val = -dfi[a] + (skw[a, c] if i == j else 0.0)
                         add_qq(ctx, st, d.elements[e, 3 + i] + a, col_j, w * val)
 
 
