@@ -97,7 +97,7 @@ def test_compiled_following_loads_follow_their_python_methods(scheme):
              sf.SpatialPointForce(beam.point(1.0), (0.0, 3.0, 1.0), following=True),
              sf.SpatialMoment(beam.point(0.0), lambda t: np.array([0.0, 0.0, 5.0 * t]))]
     scene = sf.Scene([body, beam], forces=loads)
-    fast, slow = (sf.simulate(scene, 0.3, 0.01, scheme=scheme, compiled=c) for c in (None, False))
+    fast, slow = (sf.simulate(scene, 0.1, 0.01, scheme=scheme, compiled=c) for c in (None, False))
     assert fast.run_path["python_elements"] == []
     assert np.abs(np.asarray(fast.q) - np.asarray(slow.q)).max() <= 1e-11
 
@@ -215,12 +215,12 @@ def test_spin_up_3d_in_its_plane_follows_the_planar_exact_beam():
     """Without its out-of-plane load the spatial spin-up stays in the plane (to round-off) and its tip follows
     the planar geometrically exact beam's (same mesh) to 1e-4 of the deflection; with the load the tip leaves
     the plane along +z and the energy balance closes."""
-    spatial = sf.simulate(sf.scenes.spin_up_3d(tip_load=0.0), 2.0, 0.01, scheme="energy-momentum")
-    planar = sf.simulate(sf.scenes.exact_spin_up_beam(), 2.0, 0.01, scheme="energy-momentum")
+    spatial = sf.simulate(sf.scenes.spin_up_3d(tip_load=0.0), 1.0, 0.01, scheme="energy-momentum")
+    planar = sf.simulate(sf.scenes.exact_spin_up_beam(), 1.0, 0.01, scheme="energy-momentum")
     p3, p2 = np.asarray(spatial.probes["tip"]), np.asarray(planar.probes["tip"])
     assert np.abs(p3[:, 2]).max() <= 1e-12
     assert np.abs(p3[:, :2] - p2).max() <= 1e-4 * np.abs(p2[:, 1]).max()
-    loaded = sf.simulate(sf.scenes.spin_up_3d(), 2.0, 0.01, scheme="energy-momentum")
+    loaded = sf.simulate(sf.scenes.spin_up_3d(), 1.0, 0.01, scheme="energy-momentum")
     assert np.asarray(loaded.probes["tip"])[-1, 2] > 1e-3
     assert np.abs(np.asarray(loaded.energy_balance_error)).max() <= 1e-9
 
