@@ -134,7 +134,8 @@ def main(argv=None):
     n_python = 6 if QUICK else max(args.steps // 10, 5)
     slow, its_p, _ = cpu_per_step(factory, n_python, dt, scheme.name, False)
     print(f"Python-methods run: {slow * 1e6:9.1f} µs per step, {its_p:.2f} Newton iterations per step "
-          f"({n_python} steps): {slow / fast:.0f}× the compiled run")
+          f"({n_python} steps): " + (f"{slow / fast:.0f}× the compiled run" if fast > 0
+                                     else "the compiled run was too short for the CPU clock to time"))
 
 
 if __name__ == "__main__":

@@ -26,6 +26,13 @@ SPIN_UP_SECTION = dict(EA=2.8e7, EI=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4)
 FLYING_BEAM_SECTION = sf.Section(EA=1e4, EI=100.0, kGA=3e3, rhoA=1.0, rhoI=10.0)
 
 
+#: λ = Ω √(ρA L⁴/EI) and the first flapwise and lead-lag ω √(ρA L⁴/EI) of a uniform Euler–Bernoulli cantilever
+#: spinning about an axis through its root (the classical tables of Wright, Smith, Thresher & Wang 1982 and
+#: Hodges & Rutkowski 1981, to their 4 decimals; lead-lag² = flap² − λ² for this model)
+ROTATING_TABLE = [(0.0, 3.5160, 3.5160), (1.0, 3.6816, 3.5432), (3.0, 4.7973, 3.7435), (6.0, 7.3604, 4.2632),
+                  (9.0, 10.2257, 4.8543), (12.0, 13.1702, 5.4270)]
+
+
 # ------------------------------------------------------------------ arrays
 def dense(a):
     """``a`` as a dense float array (sparse matrices converted)."""

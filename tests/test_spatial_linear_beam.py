@@ -8,6 +8,7 @@ import skfem
 
 from skfem_flex.fem.spatial_beam import TimoshenkoBeam3D
 from skfem_flex.fem.spatial_section import SpatialSection
+from helpers import ROTATING_TABLE
 
 L, P = 2.0, 1.0
 SECTION = SpatialSection(EA=1e4, GA1=8e3, GA2=6e3, GJ=400.0, EI1=500.0, EI2=300.0, rhoA=2.0, rhoI1=1e-2,
@@ -61,13 +62,6 @@ def test_bad_input():
     beam, _, _ = cantilever()
     with pytest.raises(ValueError, match="finite 3-vectors"):
         beam.point_load(L, force=(np.nan, 0.0, 0.0))
-
-
-#: λ = Ω √(ρA L⁴/EI) and the first flapwise and lead-lag ω √(ρA L⁴/EI) of a uniform Euler–Bernoulli cantilever
-#: spinning about an axis through its root (the classical tables of Wright, Smith, Thresher & Wang 1982 and
-#: Hodges & Rutkowski 1981, to their 4 decimals; lead-lag² = flap² − λ² for this model)
-ROTATING_TABLE = [(0.0, 3.5160, 3.5160), (1.0, 3.6816, 3.5432), (3.0, 4.7973, 3.7435), (6.0, 7.3604, 4.2632),
-                  (9.0, 10.2257, 4.8543), (12.0, 13.1702, 5.4270)]
 
 
 @functools.lru_cache(maxsize=1)

@@ -34,7 +34,7 @@ import numpy as np
 from .base import Body, BodyGeometry, BodyPoint, check_finite_number, check_finite_vector
 from ..numerics.quaternions import check_quaternion, check_rotation_matrix, matrix_quaternion, quaternion_matrix
 
-__all__ = ["SpatialRigidBody", "SpatialPointMass", "SpatialPoint", "SpatialAxis", "SpatialDirection",
+__all__ = ["DirectorFrame", "SpatialRigidBody", "SpatialPointMass", "SpatialPoint", "SpatialAxis", "SpatialDirection",
            "check_inertia_tensor"]
 
 _CELLS_BOX = np.array([[0, 1], [1, 3], [3, 2], [2, 0], [4, 5], [5, 7], [7, 6], [6, 4], [0, 4], [1, 5], [2, 6],
@@ -66,7 +66,7 @@ def check_inertia_tensor(inertia):
     return 0.5 * (arr + arr.T)
 
 
-def _orientation(orientation):
+def orientation_matrix(orientation):
     """R from a quaternion (4,) or a rotation matrix (3, 3)."""
     arr = np.asarray(orientation, dtype=float)
     if arr.shape == (3, 3):
@@ -74,7 +74,80 @@ def _orientation(orientation):
     return quaternion_matrix(check_quaternion("orientation", arr))
 
 
-class SpatialRigidBody(Body):
+class DirectorFrame:
+    """The frame of a body with the directors d₁, d₂, d₃ at local offsets ``directors`` (and its reference point
+    x at offsets 0..2, or a fixed ``pivot``): its rotation, body-fixed directions and the affine maps of points
+    that turn with it. Shared by :class:`SpatialRigidBody` and the spatial floating-frame beam, whose
+    reference frame is such a triad."""
+
+    pivot = None
+
+    def point_affine(self, s):
+        """(G, a) with r = G q + a for the body coordinates s (m, from the centre of mass or the pivot)."""
+        G = np.zeros((3, self.n_dofs))
+        o = self.directors[0]
+        if o:
+            G[:, :3] = np.eye(3)
+        for i in range(3):
+            G[:, o + 3 * i:o + 3 * i + 3] = s[i] * np.eye(3)
+        return G, (np.zeros(3) if self.pivot is None else self.pivot.copy())
+
+    @property
+    def director_triads(self):
+        """The body's one triad of directors (local offsets of d₁, d₂, d₃), which the scene holds rigid."""
+        return (tuple(self.directors),)
+
+    def vector_layout(self):
+        """(positions, directors): local offsets of the position vectors (x, or none about a pivot) and of
+        the directors, for the force and moment a constraint exerts (``spatial_reaction``)."""
+        return ((0,) if self.pivot is None else ()), tuple(self.directors)
+
+    def point_triad(self, s):
+        """The directors' offsets a point at body coordinates s turns with: the body's."""
+        return tuple(self.directors)
+
+    def axis_affine(self, s, components):
+        """G with a = G q: the body-fixed direction of body ``components`` (the same at every point s)."""
+        return self.axis(components).G
+
+    def rotation_matrix(self, q):
+        """R = [d₁ d₂ d₃] (3, 3); orthonormal up to the constraint tolerance."""
+        o = self.directors[0]
+        q = np.asarray(q, dtype=float)
+        return np.column_stack([q[o:o + 3], q[o + 3:o + 6], q[o + 6:o + 9]])
+
+    def euler_parameters(self, q, reference=None):
+        """The Euler parameters of :meth:`rotation_matrix` (``numerics.quaternions.matrix_quaternion``)."""
+        return matrix_quaternion(self.rotation_matrix(q), reference)
+
+    def body_angular_velocity(self, q, v):
+        """Ω in body axes, rad/s: Ω̂ = Rᵀ Ṙ (its skew part, exact for orthonormal directors)."""
+        W = self.rotation_matrix(q).T @ self.rotation_matrix(v)
+        W = 0.5 * (W - W.T)
+        return np.array([W[2, 1], W[0, 2], W[1, 0]])
+
+    def reference_point(self, q):
+        """The centre of mass x, or the pivot, m."""
+        return np.asarray(q[:3], dtype=float) if self.pivot is None else self.pivot.copy()
+
+    def axis(self, direction):
+        """The body-fixed direction a = a_i d_i of body components ``direction`` (not normalized here)."""
+        a = check_finite_vector("body axis", direction, 3)
+        if float(np.linalg.norm(a)) == 0.0:
+            raise ValueError("a body axis must not have zero length")
+        return SpatialAxis(self, a)
+
+    def body_coordinates(self, point):
+        """Body coordinates s of a point given in space at the initial state, m."""
+        x = check_finite_vector("point", point, 3)
+        return self.rotation_matrix(self.q0).T @ (x - self.reference_point(self.q0))
+
+    def body_direction(self, direction):
+        """Body components of a direction given in space axes at the initial state."""
+        return self.rotation_matrix(self.q0).T @ check_finite_vector("direction", direction, 3)
+
+
+class SpatialRigidBody(DirectorFrame, Body):
     """A rigid body in space with the coordinates q = (x, d₁, d₂, d₃), or q = (d₁, d₂, d₃) about a pivot.
 
     Parameters
@@ -117,7 +190,7 @@ class SpatialRigidBody(Body):
             raise ValueError(f"mass must be positive, got {mass!r}")
         self.inertia = check_inertia_tensor(inertia)
         self.euler_tensor = 0.5 * np.trace(self.inertia) * np.eye(3) - self.inertia
-        R = np.eye(3) if orientation is None else _orientation(orientation)
+        R = np.eye(3) if orientation is None else orientation_matrix(orientation)
         if angular_velocity is not None and body_angular_velocity is not None:
             raise ValueError("give angular_velocity (space axes) or body_angular_velocity, not both")
         if body_angular_velocity is not None:
@@ -196,76 +269,12 @@ class SpatialRigidBody(Body):
         :meth:`mass_moment`)."""
         return np.arange(self.n_dofs).reshape(-1, 3), (np.zeros(3) if self.pivot is None else self.pivot)
 
-    def point_affine(self, s):
-        """(G, a) with r = G q + a for the body coordinates s (m, from the centre of mass or the pivot)."""
-        G = np.zeros((3, self.n_dofs))
-        o = self.directors[0]
-        if o:
-            G[:, :3] = np.eye(3)
-        for i in range(3):
-            G[:, o + 3 * i:o + 3 * i + 3] = s[i] * np.eye(3)
-        return G, (np.zeros(3) if self.pivot is None else self.pivot.copy())
-
-    @property
-    def director_triads(self):
-        """The body's one triad of directors (local offsets of d₁, d₂, d₃), which the scene holds rigid."""
-        return (tuple(self.directors),)
-
-    def vector_layout(self):
-        """(positions, directors): local offsets of the position vectors (x, or none about a pivot) and of
-        the directors, for the force and moment a constraint exerts (``spatial_reaction``)."""
-        return ((0,) if self.pivot is None else ()), tuple(self.directors)
-
-    def point_triad(self, s):
-        """The directors' offsets a point at body coordinates s turns with: the body's."""
-        return tuple(self.directors)
-
-    def axis_affine(self, s, components):
-        """G with a = G q: the body-fixed direction of body ``components`` (the same at every point s)."""
-        return self.axis(components).G
-
-    def rotation_matrix(self, q):
-        """R = [d₁ d₂ d₃] (3, 3); orthonormal up to the constraint tolerance."""
-        o = self.directors[0]
-        q = np.asarray(q, dtype=float)
-        return np.column_stack([q[o:o + 3], q[o + 3:o + 6], q[o + 6:o + 9]])
-
-    def euler_parameters(self, q, reference=None):
-        """The Euler parameters of :meth:`rotation_matrix` (``numerics.quaternions.matrix_quaternion``)."""
-        return matrix_quaternion(self.rotation_matrix(q), reference)
-
-    def body_angular_velocity(self, q, v):
-        """Ω in body axes, rad/s: Ω̂ = Rᵀ Ṙ (its skew part, exact for orthonormal directors)."""
-        W = self.rotation_matrix(q).T @ self.rotation_matrix(v)
-        W = 0.5 * (W - W.T)
-        return np.array([W[2, 1], W[0, 2], W[1, 0]])
-
-    def reference_point(self, q):
-        """The centre of mass x, or the pivot, m."""
-        return np.asarray(q[:3], dtype=float) if self.pivot is None else self.pivot.copy()
-
     # ---------------------------------------------------------- body points
     def point(self, locator=None):
         """The material point at body coordinates ``locator`` = (s₁, s₂, s₃), m from the centre of mass
         (or from the pivot); ``None``: that reference point."""
         s = np.zeros(3) if locator is None else check_finite_vector("spatial body point", locator, 3)
         return SpatialPoint(self, s)
-
-    def axis(self, direction):
-        """The body-fixed direction a = a_i d_i of body components ``direction`` (not normalized here)."""
-        a = check_finite_vector("body axis", direction, 3)
-        if float(np.linalg.norm(a)) == 0.0:
-            raise ValueError("a body axis must not have zero length")
-        return SpatialAxis(self, a)
-
-    def body_coordinates(self, point):
-        """Body coordinates s of a point given in space at the initial state, m."""
-        x = check_finite_vector("point", point, 3)
-        return self.rotation_matrix(self.q0).T @ (x - self.reference_point(self.q0))
-
-    def body_direction(self, direction):
-        """Body components of a direction given in space axes at the initial state."""
-        return self.rotation_matrix(self.q0).T @ check_finite_vector("direction", direction, 3)
 
     # --------------------------------------------------------------- output
     def geometry(self, q, v):

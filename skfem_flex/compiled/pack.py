@@ -174,6 +174,17 @@ def _momentum_layout(body):
     return ix, iy, ix, iy, zero, zero, (np.array([2]) if nb >= 3 else none)
 
 
+def _spatial_first_moment(body):
+    """(Γ, c) of a spatial body whose positions are linear in q, or None (planar, or not linear: the spatial
+    floating-frame beam, whose gravity runs in Python)."""
+    if getattr(body, "dimension", 2) != 3:
+        return None
+    try:
+        return body.mass_moment()
+    except NotImplementedError:
+        return None
+
+
 def _pack(scene, python_only=False):
     packer = Packer(scene)
     n = scene.n
@@ -230,10 +241,11 @@ def _pack(scene, python_only=False):
         mod = family_for(form[0]) if form is not None else None
         if form is not None and form[0] == "gravity":
             for b in (f.bodies if f.bodies is not None else scene.bodies):
-                if getattr(b, "dimension", 2) == 3:
-                    # spatial bodies are linear in q: V = −g·(Γ q + c), a constant gradient
+                moment = _spatial_first_moment(b)
+                if moment is not None:
+                    # a spatial body linear in q: V = −g·(Γ q + c), a constant gradient
                     off, nb = packer.block(b)
-                    gam, c = b.mass_moment()
+                    gam, c = moment
                     g3 = np.asarray(form[1], dtype=float)
                     add(family_for("linear potential"), ((-(g3 @ gam), -float(g3 @ c)), b, np.arange(off, off + nb)))
                 elif id(b) in first_moment:

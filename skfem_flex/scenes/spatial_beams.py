@@ -13,6 +13,7 @@ from ..elements.motion import spin_up_law
 from ..fem.spatial_section import SpatialSection
 from ..scene import Scene
 from ._registry import positive_count, positive_value, register
+from .spatial_rotors import floating_hub_beam_3d, hub_frame_displacement
 
 __all__ = ["bend_45", "right_angle_frame", "flying_spaghetti_3d", "spin_up_3d", "BEND_45_REFERENCE", "hat_pulse"]
 
@@ -113,15 +114,16 @@ def flying_spaghetti_3d(n_elements=10, order=1):
 
 
 @register(t_end=30.0, dt=0.01, omega="rad/s", T="s", length="m", EA="N", EI="N m²", GJ="N m²", kGA="N",
-          rhoA="kg/m", rhoI="kg m", tip_load="N", n_elements="-", order="-")
+          rhoA="kg/m", rhoI="kg m", tip_load="N", n_elements="-", order="-", body="-")
 def spin_up_3d(omega=4.0, T=15.0, length=10.0, EA=2.8e7, EI=1.4e4, GJ=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4,
-               tip_load=10.0, n_elements=8, order=1):
+               tip_load=10.0, n_elements=8, order=1, body="exact"):
     """The spin-up manoeuvre of Simo and Vu-Quoc in space: the planar spin-up beam (its hub angle
     :func:`~skfem_flex.elements.motion.spin_up_law`, length, EA, EI, kGA, ρA, ρI; here EI and ρI the same
     about both section axes, and GJ) as a :class:`~skfem_flex.bodies.exact.spatial_body.SpatialExactBeam`
     welded to a hub that turns about z on a hinge with a rotation driver, with an out-of-plane tip load
     along z growing with the spin, ``tip_load`` · min(t/T, 1) (N). With ``tip_load`` = 0 it moves in the
-    plane of the planar scene.
+    plane of the planar scene. ``body="floating"`` builds the same manoeuvre with a spatial floating-frame beam
+    (:func:`~skfem_flex.scenes.spatial_rotors.floating_hub_beam_3d`) whose frame is the hub.
 
     Probe ``"tip"``: the tip's displacement in the hub frame, R_hubᵀ (r_tip − r_root) − (L, 0, 0) (axial,
     in-plane transverse, out of plane), m.
@@ -132,6 +134,22 @@ def spin_up_3d(omega=4.0, T=15.0, length=10.0, EA=2.8e7, EI=1.4e4, GJ=1.4e4, kGA
     load = float(tip_load)
     if not np.isfinite(load):
         raise ValueError(f"tip_load must be finite, got {tip_load!r}")
+    params = dict(omega=omega, T=T, length=length, EA=EA, EI=EI, GJ=GJ, kGA=kGA, rhoA=rhoA, rhoI=rhoI, tip_load=load,
+                  n_elements=n, order=order, body=body)
+
+    def load_law(t):
+        return np.array([0.0, 0.0, load * min(max(t, 0.0) / T, 1.0)])
+    if body not in ("exact", "floating"):
+        raise ValueError(f"body must be 'exact' or 'floating', got {body!r}")
+    if body == "floating":
+        ffr = floating_hub_beam_3d(length, EA, EI, GJ, kGA, rhoA, rhoI, n, _order(order))
+        axis = (0.0, 0.0, 1.0)
+        tip = ffr.point(length)
+        return Scene([ffr], constraints=[Revolute3D(ffr.point(0.0), axis=axis, name="hub hinge"),
+                                         RotationDriver(ffr, None, axis, spin_up_law(positive_value("omega", omega), T),
+                                                        name="hub drive")],
+                     forces=[SpatialPointForce(tip, load_law, name="tip load")], name="spin_up_3d",
+                     probes={"tip": hub_frame_displacement(ffr, tip, length)}, parameters=params)
     sec = SpatialSection(EA=EA, GA1=kGA, GA2=kGA, GJ=GJ, EI1=EI, EI2=EI, rhoA=rhoA, rhoI1=rhoI, rhoI2=rhoI)
     beam = SpatialExactBeam.straight(sec, (0.0, 0.0, 0.0), (length, 0.0, 0.0), n_elements=n, order=_order(order),
                                      normal=(0.0, 1.0, 0.0), name="beam")
@@ -146,8 +164,6 @@ def spin_up_3d(omega=4.0, T=15.0, length=10.0, EA=2.8e7, EI=1.4e4, GJ=1.4e4, kGA
         qb, qh = scene.coordinates(beam, q), scene.coordinates(hub, q)
         return hub.rotation_matrix(qh).T @ (tip.position(qb) - root.position(qb)) - [length, 0.0, 0.0]
 
-    force = SpatialPointForce(tip, lambda t: np.array([0.0, 0.0, load * min(max(t, 0.0) / T, 1.0)]),
-                              name="tip load")
+    force = SpatialPointForce(tip, load_law, name="tip load")
     return Scene([hub, beam], constraints=joints, forces=[force], name="spin_up_3d", probes={"tip": probe_tip},
-                 parameters=dict(omega=omega, T=T, length=length, EA=EA, EI=EI, GJ=GJ, kGA=kGA, rhoA=rhoA,
-                                 rhoI=rhoI, tip_load=load, n_elements=n, order=order))
+                 parameters=params)

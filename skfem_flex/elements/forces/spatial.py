@@ -311,14 +311,17 @@ class SpatialPointForce(ForceElement):
         self.following = bool(following)
         self.bodies = (body,)
         n = body.n_dofs
-        self.G = point.G
+        # a point whose position is affine in q (rigid bodies, beam nodes) has a constant Jacobian G; any
+        # other (a floating-frame beam's axis) gives its Jacobian and Hessian at each state
+        self.G = getattr(point, "G", None)
         self._axes = [Affine.of(point.axis(e), slice(0, n), n).A for e in np.eye(3)] if following else None
         self.name = name
 
     def compiled_form(self):
         """A force fixed in space: ("generalized force", G, F) of the point-load family; a following one:
-        ("spatial following force", G, triad, F) of the spatial-load family."""
-        if type(self).generalized_force is not SpatialPointForce.generalized_force:
+        ("spatial following force", G, triad, F) of the spatial-load family; a point that is not affine in q:
+        None (the Python path)."""
+        if type(self).generalized_force is not SpatialPointForce.generalized_force or self.G is None:
             return None
         if not self.following:
             return "generalized force", self.G, self.force
@@ -326,6 +329,8 @@ class SpatialPointForce(ForceElement):
 
     def generalized_force(self, q, v, t):
         F = self.force(t)
+        if self.G is None:
+            return self.point.position_jacobian(q).T @ F, self.point.position_hessian_product(q, F), None
         n = self.G.shape[1]
         if not self.following:
             return self.G.T @ F, np.zeros((n, n)), np.zeros((n, n))

@@ -1,0 +1,305 @@
+r"""Spatial floating frame of reference: a 3D Timoshenko beam in large overall motion.
+
+A :class:`FloatingBeam3D` carries the coordinates of a body frame, its origin x and its directors
+d₁, d₂, d₃ (the frame of a :class:`~skfem_flex.bodies.spatial.SpatialRigidBody`, held orthonormal by the
+scene's rigidity constraints), and elastic coordinates y of a
+:class:`~skfem_flex.fem.spatial_beam.TimoshenkoBeam3D` measured in that frame. The beam lies along d₃;
+d₁, d₂ are its section's principal axes. A point of the axis at arc length s is at
+
+.. math::  r(s) = x + D\,(X_0(s) + S(s)\,y),\qquad X_0 = (0, 0, s),\quad D = [d_1\ d_2\ d_3],
+
+and its section turns by θ(s) = N_θ(s) y relative to the frame (small). Reference conditions remove the
+six rigid modes from y: ``"clamped"`` eliminates the six DOFs of the root (the frame is the root
+section), ``"chord"`` eliminates u₁, u₂, u₃ and the twist θ₃ at the root and u₁, u₂ at the tip (the
+frame's axis d₃ runs through both ends).
+
+The kinetic energy (``kinetics.py``, on the invariants of ``inertia.py``, assembled once) and the gravity
+potential are polynomials of degree two in q, and the strain energy (``strain.py``) depends on y only:
+every discrete gradient is exact, and the energy–momentum scheme conserves energy to the Newton
+tolerance. Coriolis, centrifugal and Euler forces are the quadratic-velocity force of M(q); with the
+Green–Lagrange axis (``strain="green-lagrange"``) the centrifugal tension stiffens bending in both planes,
+with ``strain="linear"`` it does not (and the lead-lag mode of a fast rotor diverges).
+
+This is a Python body: scenes that hold it run on the Python-assembled path (``Result.run_path`` says so).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ...fem.spatial_beam import FIELDS_3D, TimoshenkoBeam3D
+from ..base import Body, BodyGeometry, BodyPoint, check_finite_vector
+from ..spatial import DirectorFrame, SpatialPoint, orientation_matrix
+from . import kinetics
+from .inertia import spatial_frame_inertia
+from .strain import SpatialBeamStrain
+
+__all__ = ["FloatingBeam3D", "AxisPoint"]
+
+_REFERENCES = {"clamped": (("root", (0, 1, 2, 3, 4, 5)),),
+               "chord": (("root", (0, 1, 2, 5)), ("tip", (0, 1)))}
+
+
+class FloatingBeam3D(DirectorFrame, Body):
+    """A spatial Timoshenko beam in the floating frame of reference (module docstring).
+
+    Coordinates q = (x, d₁, d₂, d₃, y), named ``"x", "y", "z", "d1x", ..., "d3z"`` and then
+    ``"u1_1", ..., "theta3_<node>"`` (field and node number from the root) for the elastic DOFs left by
+    the reference condition.
+
+    Parameters
+    ----------
+    beam : TimoshenkoBeam3D
+        A straight beam over the arc length s (its mesh), along the frame's d₃.
+    reference : {"clamped", "chord"}
+    strain : {"green-lagrange", "linear"}
+        Axial strain measure (``strain.py``).
+    position : array_like (3,)
+        Initial frame origin x, m (the point s = 0 of the axis).
+    orientation : array_like, (4,) or (3, 3)
+        Initial frame: Euler parameters or rotation matrix [d₁ d₂ d₃] (the beam along its third column).
+    velocity, angular_velocity : array_like (3,)
+        Initial ẋ (m/s) and frame angular velocity ω in space axes (rad/s).
+    elastic, elastic_velocity : array_like (n_elastic,), optional
+        Initial y and ẏ.
+    name : str
+
+    Raises
+    ------
+    ValueError
+        For a beam that is not a TimoshenkoBeam3D, an unknown reference condition or strain measure, a
+        rotation that is not a rotation, or non-finite or wrongly sized initial data.
+    """
+
+    constant_mass = False
+    has_potential = True
+    dimension = 3
+    directors = (3, 6, 9)
+
+    def __init__(self, beam, reference="clamped", strain="green-lagrange", position=(0.0, 0.0, 0.0),
+                 orientation=None, velocity=(0.0, 0.0, 0.0), angular_velocity=(0.0, 0.0, 0.0), elastic=None,
+                 elastic_velocity=None, name="beam"):
+        if not isinstance(beam, TimoshenkoBeam3D):
+            raise ValueError(f"FloatingBeam3D needs a TimoshenkoBeam3D, got {beam!r}")
+        if reference not in _REFERENCES:
+            raise ValueError(f"reference must be one of {sorted(_REFERENCES)}, got {reference!r}")
+        self.beam, self.section, self.reference, self.strain, self.name = beam, beam.section, reference, strain, name
+        self.s_root, self.s_tip = float(beam.x_nodes[0]), float(beam.x_nodes[-1])
+        ends = {"root": beam.node_dofs[0], "tip": beam.node_dofs[-1]}
+        fixed = np.array(sorted(int(ends[end][k]) for end, fields in _REFERENCES[reference] for k in fields))
+        self.fixed_dofs = fixed
+        self.free_dofs = np.setdiff1d(np.arange(beam.n_dofs), fixed)
+        self.n_elastic = self.free_dofs.size
+        self.n_dofs = 12 + self.n_elastic
+        node_of = {int(d): (node, k) for node, row in enumerate(beam.node_dofs) for k, d in enumerate(row)}
+        self._names = (("x", "y", "z") + tuple(f"d{i}{c}" for i in (1, 2, 3) for c in "xyz")
+                       + tuple(f"{FIELDS_3D[node_of[int(d)][1]]}_{node_of[int(d)][0] + 1}" for d in self.free_dofs))
+        self.inertia = spatial_frame_inertia(beam, self.free_dofs)
+        self.strain_energy = SpatialBeamStrain(beam, self.free_dofs, strain)
+
+        R = np.eye(3) if orientation is None else orientation_matrix(orientation)
+        omega = check_finite_vector("angular_velocity", angular_velocity, 3)
+        y0 = np.zeros(self.n_elastic) if elastic is None else check_finite_vector("elastic", elastic, self.n_elastic)
+        w0 = (np.zeros(self.n_elastic) if elastic_velocity is None
+              else check_finite_vector("elastic_velocity", elastic_velocity, self.n_elastic))
+        self.q0 = np.concatenate([check_finite_vector("position", position, 3), R.T.ravel(), y0])
+        self.v0 = np.concatenate([check_finite_vector("velocity", velocity, 3),
+                                  np.cross(omega, R.T).ravel(), w0])
+
+    # ================================================================ coordinates
+    @property
+    def coordinate_names(self):
+        return self._names
+
+    def elastic_vector(self, full):
+        """y from a vector over all the beam's DOFs (``beam.node_dofs`` numbering); ValueError if it is not
+        zero where the reference condition eliminates a DOF."""
+        full = check_finite_vector("elastic field", full, self.beam.n_dofs)
+        bad = np.abs(full[self.fixed_dofs])
+        if bad.size and bad.max() > 1e-12 * max(1.0, np.abs(full).max()):
+            raise ValueError(f"elastic field is not zero at the DOFs the reference condition {self.reference!r} "
+                             f"eliminates: {full[self.fixed_dofs]}")
+        return full[self.free_dofs].copy()
+
+    def full_elastic(self, q):
+        """The beam's DOF vector (u₁, u₂, u₃, θ₁, θ₂, θ₃ per node, in the frame's axes) of q."""
+        d = np.zeros(self.beam.n_dofs)
+        d[self.free_dofs] = np.asarray(q, dtype=float)[12:]
+        return d
+
+    # ================================================================ kinetic
+    def mass_matrix(self, q):
+        return kinetics.mass_matrix(self.inertia, q)
+
+    def momentum_jacobian(self, q, v):
+        return kinetics.momentum_jacobian(self.inertia, q, v)
+
+    def quadratic_velocity_force(self, q, v):
+        return kinetics.quadratic_velocity_force(self.inertia, q, v)
+
+    def kinetic_discrete_gradient(self, q0, q1, v0, v1):
+        return kinetics.kinetic_discrete_gradient(self.inertia, q0, q1, v0, v1)
+
+    def linear_momentum(self, q, v):
+        """m ẋ + Σ_i s_i ḋ_i + D S̄ ẏ (the x rows of M(q) v), kg m/s."""
+        return self.momentum(q, v)[:3]
+
+    def angular_momentum(self, q, v):
+        """L = x × p_x + Σ_i d_i × p_{d_i} about the origin (p = M(q) v; Noether's momentum of the turning
+        invariance), kg m²/s."""
+        p = self.momentum(q, v)
+        q = np.asarray(q, dtype=float)
+        return sum(np.cross(q[3 * k:3 * k + 3], p[3 * k:3 * k + 3]) for k in range(4))
+
+    # ================================================================ strain and gravity
+    def potential_energy(self, q):
+        return self.strain_energy.energy(np.asarray(q, dtype=float)[12:])
+
+    def potential_gradient(self, q):
+        g = np.zeros(self.n_dofs)
+        g[12:] = self.strain_energy.gradient(np.asarray(q, dtype=float)[12:])
+        return g
+
+    def potential_hessian(self, q):
+        H = np.zeros((self.n_dofs, self.n_dofs))
+        H[12:, 12:] = self.strain_energy.hessian(np.asarray(q, dtype=float)[12:])
+        return H
+
+    def potential_discrete_gradient(self, q0, q1):
+        g = np.zeros(self.n_dofs)
+        H = np.zeros((self.n_dofs, self.n_dofs))
+        g[12:], H[12:, 12:] = self.strain_energy.discrete_gradient(np.asarray(q0, dtype=float)[12:],
+                                                                   np.asarray(q1, dtype=float)[12:])
+        return g, H
+
+    def gravity_potential(self, q, g):
+        """V = −g · (m x + D s(y)), s = S₀ + S̄ y (quadratic in q); (V, ∇V, ∇²V)."""
+        g = np.asarray(g, dtype=float)
+        x, D, y = kinetics.split(q)
+        inv = self.inertia
+        s = inv.S0 + inv.Sbar @ y
+        grad = np.zeros(self.n_dofs)
+        grad[:3] = -inv.mass * g
+        grad[3:12] = -np.outer(s, g).ravel()
+        grad[12:] = -inv.Sbar.T @ (D.T @ g)
+        H = np.zeros((self.n_dofs, self.n_dofs))
+        for i in range(3):
+            H[3 + 3 * i:6 + 3 * i, 12:] = -np.outer(g, inv.Sbar[i])
+        H[12:, 3:12] = H[3:12, 12:].T
+        return -float(g @ (inv.mass * x + D @ s)), grad, H
+
+    def gravity_discrete_gradient(self, q0, q1, g):
+        """The gradient at the mid-point (exact: the potential is quadratic) and half the Hessian."""
+        _, grad, H = self.gravity_potential(0.5 * (np.asarray(q0, dtype=float) + np.asarray(q1, dtype=float)), g)
+        return grad, 0.5 * H
+
+    # ================================================================ points
+    def shape_at(self, s):
+        """S(s) (3, n_elastic) and N_θ(s) (3, n_elastic) at arc length s (m); ValueError off the beam."""
+        if isinstance(s, bool) or not np.isscalar(s) or not np.isfinite(s):
+            raise ValueError(f"a point of beam {self.name!r}: arc length s must be a finite number, got {s!r}")
+        tol = 1e-9 * self.beam.length
+        if not self.s_root - tol <= s <= self.s_tip + tol:
+            raise ValueError(f"s = {s!r} lies outside beam {self.name!r} [{self.s_root}, {self.s_tip}]")
+        s = float(np.clip(s, self.s_root, self.s_tip))
+        beam = self.beam
+        pr = beam.field_basis.probes(np.array([[s]])).tocsr()
+        field_dofs = np.array(beam.basis.split_indices())
+        full = np.zeros((6, beam.n_dofs))
+        for k in range(6):
+            full[k, field_dofs[k][pr.indices]] = pr.data
+        full = full[:, self.free_dofs]
+        return full[:3].copy(), full[3:].copy()
+
+    def point(self, locator=None):
+        """The material point of the axis at arc length ``locator`` (m; default the tip). Where the
+        reference condition clamps the beam it is the frame's own point (affine in q, with the frame's
+        orientation, so spatial joints take it); elsewhere an :class:`AxisPoint` (loads and probes)."""
+        s = self.s_tip if locator is None else locator
+        S, Nth = self.shape_at(s)
+        if not S.any() and not Nth.any():
+            return SpatialPoint(self, np.array([0.0, 0.0, float(s)]))
+        return AxisPoint(self, float(s), S)
+
+    def frame_point(self, s):
+        """The point at frame coordinates ``s`` (3,), m: it moves with the frame, not with the beam."""
+        return SpatialPoint(self, check_finite_vector("frame point", s, 3))
+
+    def spatial_momentum_layout(self):
+        """Not a constant-mass body: the compiled constant-mass family does not take it."""
+        raise NotImplementedError(f"body {self.name!r} has a configuration-dependent mass")
+
+    # ================================================================ output
+    def strains(self, q):
+        """u' (3, n_points) of the axis and the axial strain ε at the Gauss points."""
+        return self.strain_energy.strains(np.asarray(q, dtype=float)[12:])
+
+    def geometry(self, q, v):
+        """The axis through the nodes (line cells) with displacement and velocity, and the section frame
+        (d₁, d₂ of each node turned by its θ)."""
+        x, D, y = kinetics.split(q)
+        vx, V, vy = kinetics.split(v)
+        full = self.full_elastic(q)
+        fv = self.full_elastic(np.concatenate([np.zeros(12), vy]))
+        nd = self.beam.node_dofs
+        rho = np.stack([full[nd[:, 0]], full[nd[:, 1]], self.beam.x_nodes + full[nd[:, 2]]], axis=1)
+        pts = x + rho @ D.T
+        vel = vx + rho @ V.T + np.stack([fv[nd[:, k]] for k in range(3)], axis=1) @ D.T
+        x0, D0, _ = kinetics.split(self.q0)
+        ref = x0 + np.stack([np.zeros_like(self.beam.x_nodes), np.zeros_like(self.beam.x_nodes),
+                             self.beam.x_nodes], axis=1) @ D0.T
+        theta = np.stack([full[nd[:, k]] for k in range(3, 6)], axis=1)
+        d1 = (np.eye(3)[0] + np.cross(theta, np.eye(3)[0])) @ D.T
+        d2 = (np.eye(3)[1] + np.cross(theta, np.eye(3)[1])) @ D.T
+        order = np.argsort(self.beam.x_nodes)
+        conn = np.stack([order[:-1], order[1:]], axis=1)
+        return BodyGeometry(pts, [("line", conn)], {"displacement": pts - ref, "velocity": vel, "d1": d1, "d2": d2},
+                            {})
+
+
+class AxisPoint(BodyPoint):
+    """A material point of a :class:`FloatingBeam3D`'s axis: r = x + D(X₀ + S y), quadratic in q.
+
+    Its Jacobian [I, ρ₁I, ρ₂I, ρ₃I, D S] (ρ = X₀ + S y) at the mid-point is its exact discrete gradient."""
+
+    dimension = 3
+    triad = None
+
+    def __init__(self, body, s, S):
+        self.body, self.s, self.S = body, s, S
+        self.X0 = np.array([0.0, 0.0, s])
+
+    def position(self, q):
+        x, D, y = kinetics.split(q)
+        return x + D @ (self.X0 + self.S @ y)
+
+    def velocity(self, q, v):
+        _, D, y = kinetics.split(q)
+        vx, V, vy = kinetics.split(v)
+        return vx + V @ (self.X0 + self.S @ y) + D @ (self.S @ vy)
+
+    def position_jacobian(self, q):
+        _, D, y = kinetics.split(q)
+        rho = self.X0 + self.S @ y
+        J = np.zeros((3, self.body.n_dofs))
+        J[:, :3] = np.eye(3)
+        for i in range(3):
+            J[:, 3 + 3 * i:6 + 3 * i] = rho[i] * np.eye(3)
+        J[:, 12:] = D @ self.S
+        return J
+
+    def position_hessian_product(self, q, f):
+        f = np.asarray(f, dtype=float)
+        H = np.zeros((self.body.n_dofs, self.body.n_dofs))
+        for i in range(3):
+            H[3 + 3 * i:6 + 3 * i, 12:] = np.outer(f, self.S[i])
+        H[12:, 3:12] = H[3:12, 12:].T
+        return H
+
+    def position_discrete_gradient(self, q0, q1):
+        return self.position_jacobian(0.5 * (np.asarray(q0, dtype=float) + np.asarray(q1, dtype=float)))
+
+    def position_discrete_gradient_jacobian(self, q0, q1, f):
+        return 0.5 * self.position_hessian_product(q0, f)
+
+    def compiled_map(self):
+        return None

@@ -1,0 +1,84 @@
+"""Spatial rotor scenes with the floating-frame beam: the spinning cantilever ``rotating_beam_3d`` and the hub
+beam the floating-frame ``spin_up_3d`` turns (docs/spatial_beams.md)."""
+from __future__ import annotations
+
+import numpy as np
+import skfem
+
+from ..bodies.floating_spatial.body import FloatingBeam3D
+from ..bodies.floating_spatial.rotation import spinning_modes, steady_spin
+from ..elements.constraints.spatial_joints import Revolute3D, RotationDriver
+from ..elements.motion import MotionLaw
+from ..fem.spatial_beam import TimoshenkoBeam3D
+from ..fem.spatial_section import SpatialSection
+from ..scene import Scene
+from ._registry import positive_count, positive_value, register
+
+__all__ = ["rotating_beam_3d", "floating_hub_beam_3d", "HUB_FRAME"]
+
+#: the frame [d₁ d₂ d₃] of a hub beam: the beam along x (d₃), its flapwise axis d₁ along the spin axis z, and
+#: d₂ = d₃ × d₁ = −y in the plane of rotation
+HUB_FRAME = np.array([[0.0, 0.0, 1.0], [0.0, -1.0, 0.0], [1.0, 0.0, 0.0]])
+
+
+def floating_hub_beam_3d(length, EA, EI, GJ, kGA, rhoA, rhoI, n_elements, order, strain="green-lagrange"):
+    """A :class:`FloatingBeam3D` clamped to its frame at the origin, along x, spinning axis z (:data:`HUB_FRAME`);
+    the same EI, kGA and ρI about both section axes."""
+    sec = SpatialSection(EA=EA, GA1=kGA, GA2=kGA, GJ=GJ, EI1=EI, EI2=EI, rhoA=rhoA, rhoI1=rhoI, rhoI2=rhoI)
+    n = positive_count("n_elements", n_elements)
+    if order not in (1, 2) or isinstance(order, bool):
+        raise ValueError(f"order must be 1 or 2, got {order!r}")
+    beam = TimoshenkoBeam3D(skfem.MeshLine(np.linspace(0.0, positive_value("length", length), n + 1)), sec,
+                            order=int(order))
+    return FloatingBeam3D(beam, reference="clamped", strain=strain, orientation=HUB_FRAME, name="beam")
+
+
+def hub_frame_displacement(body, point, length):
+    """Probe of a hub beam's point: its displacement from (L, 0, 0) in the turning hub axes (x along the beam,
+    y in the plane of rotation, z the spin axis): (axial, in-plane transverse, out of plane), m."""
+    def probe(scene, t, q, v):
+        qb = scene.coordinates(body, q)
+        R = body.rotation_matrix(qb)
+        rel = point.position(qb) - qb[:3]
+        return np.array([R[:, 2] @ rel - length, -(R[:, 1] @ rel), R[:, 0] @ rel])
+    return probe
+
+
+@register(t_end=10.0, dt=0.01, omega="rad/s", length="m", EA="N", EI="N m²", GJ="N m²", kGA="N", rhoA="kg/m",
+          rhoI="kg m", n_elements="-", order="-", strain="-", perturbation="m")
+def rotating_beam_3d(omega=4.0, length=10.0, EA=2.8e7, EI=1.4e4, GJ=1.4e4, kGA=1e7, rhoA=1.2, rhoI=6e-4,
+                     n_elements=8, order=1, strain="green-lagrange", perturbation=0.01):
+    """A cantilever on a hub spinning at a constant ω about z, normal to it: the planar ``rotating_beam``'s data
+    (the same EI about both section axes) plus GJ, as a spatial floating-frame beam
+    (:class:`~skfem_flex.bodies.floating_spatial.body.FloatingBeam3D`, clamped to its frame, the frame on a
+    hinge about z with a rotation driver).
+
+    Starts in the stretched steady state (:func:`~skfem_flex.bodies.floating_spatial.rotation.steady_spin`)
+    plus the shapes of the first flapwise (along z) and lead-lag (in the plane of rotation) modes, each
+    scaled to a tip deflection of ``perturbation`` m, so that both vibrate at the frequencies
+    :func:`~skfem_flex.bodies.floating_spatial.rotation.spinning_modes` gives.
+
+    Probe ``"tip"``: the tip's displacement in the hub frame (axial, in-plane transverse, out of plane), m.
+    """
+    om = float(omega)
+    pert = float(perturbation)
+    if not (np.isfinite(om) and np.isfinite(pert)):
+        raise ValueError(f"omega and perturbation must be finite, got {omega!r} and {perturbation!r}")
+    body = floating_hub_beam_3d(length, EA, EI, GJ, kGA, rhoA, rhoI, n_elements, order, strain)
+    y = steady_spin(body, om)
+    if pert:
+        modes = spinning_modes(body, om, n_modes=4)
+        S, _ = body.shape_at(body.s_tip)
+        for flap in (True, False):
+            k = int(np.flatnonzero(modes.flapwise == flap)[0])
+            shape = modes.shapes[:, k]
+            at_tip = S[0 if flap else 1] @ shape
+            y = y + pert * np.real(shape / at_tip)
+    body.q0[12:] = y
+    body.v0[3:12] = np.cross(om * np.array([0.0, 0.0, 1.0]), HUB_FRAME.T).ravel()
+    joints = [Revolute3D(body.point(0.0), axis=(0.0, 0.0, 1.0), name="hub hinge"),
+              RotationDriver(body, None, (0.0, 0.0, 1.0), MotionLaw.constant_rate(om), name="hub drive")]
+    return Scene([body], constraints=joints, name="rotating_beam_3d",
+                 probes={"tip": hub_frame_displacement(body, body.point(body.s_tip), body.beam.length)},
+                 parameters=dict(omega=omega, length=length, EA=EA, EI=EI, GJ=GJ, kGA=kGA, rhoA=rhoA, rhoI=rhoI,
+                                 n_elements=n_elements, order=order, strain=strain, perturbation=perturbation))
