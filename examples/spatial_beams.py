@@ -8,10 +8,12 @@
   energy-momentum and the trapezoidal rule.
 * ``right_angle_frame``: the elbow's and the tip's out-of-plane displacement, their largest values and
   times, on two meshes and steps (energy-momentum).
-* The rotating cantilever (the linear ``TimoshenkoBeam3D``, nearly Euler–Bernoulli and inextensible, spinning
-  about an axis through its root): the first flapwise and lead-lag frequencies over λ = Ω √(ρA L⁴/EI) from 0
-  to 12, with and without the centrifugal stiffening, and their Campbell diagram
+* The rotating cantilever (the spatial floating-frame beam ``FloatingBeam3D``, nearly Euler–Bernoulli and
+  inextensible, linearized about its steady spin about an axis through its root): the first flapwise and
+  lead-lag frequencies over λ = Ω √(ρA L⁴/EI) from 0 to 12, with the Green–Lagrange and the linear axial
+  strain, beside the linear ``TimoshenkoBeam3D``'s spin forms, and their Campbell diagram
   (``rotating_beam_3d_campbell.png`` in OUT_DIR).
+* ``spin_up_3d`` with the floating-frame and the exact beam: the tip histories' difference.
 
 Run ``python examples/spatial_beams.py [OUT_DIR]`` (default ``examples/output/``). Importing the module computes the results. Quick mode
 (``SKFEM_FLEX_EXAMPLE_QUICK=1``, used by the tests): no bend (``tests/test_spatial_beam.py`` solves it) and
@@ -73,11 +75,22 @@ spin_section = sf.SpatialSection(EA=1e4, GA1=1e5, GA2=1e5, GJ=1.0, EI1=1.0, EI2=
                                  rhoI2=1e-6)
 spin_beam = sf.TimoshenkoBeam3D(skfem.MeshLine(np.linspace(0.0, 1.0, 9)), spin_section, order=2)
 spin_fixed = np.concatenate([spin_beam.dofs_at(0.0), spin_beam.node_dofs[:, 2]])      # clamped, inextensible
+# the floating-frame beam on the same mesh, nearly inextensible (EA = 1e7 EI/L²), about its own steady spin
+rotor_section = sf.SpatialSection(EA=1e7, GA1=1e5, GA2=1e5, GJ=1.0, EI1=1.0, EI2=1.0, rhoA=1.0, rhoI1=1e-6,
+                                  rhoI2=1e-6)
+rotor_beam = sf.TimoshenkoBeam3D(skfem.MeshLine(np.linspace(0.0, 1.0, 9)), rotor_section, order=2)
+rotors = {strain: sf.FloatingBeam3D(rotor_beam, strain=strain) for strain in ("green-lagrange", "linear")}
 campbell = {}
 for lam in LAMBDAS:
-    stiff = spin_beam.rotating_modes(spin_fixed, lam)
-    linear = spin_beam.rotating_modes(spin_fixed, lam, stiffening=False)
-    campbell[lam] = (stiff.first(True)[0], stiff.first(False)[0], linear.first(False))
+    stiff = rotors["green-lagrange"].spinning_modes(lam)
+    linear = rotors["linear"].spinning_modes(lam)
+    forms = spin_beam.rotating_modes(spin_fixed, lam)
+    campbell[lam] = (stiff.first(True)[0], stiff.first(False)[0], linear.first(False), forms.first(True)[0],
+                     forms.first(False)[0])
+
+# the spin-up with its out-of-plane tip load: floating-frame against exact beam (8 P1 elements each)
+SPIN_UP_T = 1.0 if QUICK else 15.0
+spin_up = {body: sf.simulate(sf.scenes.spin_up_3d(body=body), SPIN_UP_T, 0.01) for body in ("floating", "exact")}
 
 
 def summary():
@@ -102,11 +115,22 @@ def summary():
     for (n, dt), pk in frame.items():
         cells = [f"{pk[k][0]:.3f} ({pk[k][1]:.2f} s)" for k in ("elbow, first peak", "elbow", "tip")]
         lines.append(f"| {n} | {dt:g} | " + " | ".join(cells) + f" | {pk['wall'][0]:.1f} | {pk['wall'][1]:.2f} |")
-    lines += ["", "rotating cantilever, first frequencies ω √(ρA L⁴/EI) over λ = Ω √(ρA L⁴/EI):", "",
-              "| λ | flapwise | lead-lag | lead-lag, linear strain (growth rate if it diverges) |", "|---|---|---|---|"]
-    for lam, (flap, lag, (lin, growth)) in campbell.items():
+    lines += ["", "rotating cantilever, first frequencies ω √(ρA L⁴/EI) over λ = Ω √(ρA L⁴/EI): the floating-frame beam "
+              "about its steady spin, and the linear beam's spin forms:", "",
+              "| λ | flapwise | lead-lag | lead-lag, linear strain (growth rate if it diverges) | linear beam: flapwise, "
+              "lead-lag |", "|---|---|---|---|---|"]
+    for lam, (flap, lag, (lin, growth), f_forms, g_forms) in campbell.items():
         lin_text = f"{lin:.4f}" if growth <= 1e-6 * flap else f"diverges ({growth:.3f})"
-        lines.append(f"| {lam:g} | {flap:.4f} | {lag:.4f} | {lin_text} |")
+        lines.append(f"| {lam:g} | {flap:.4f} | {lag:.4f} | {lin_text} | {f_forms:.4f}, {g_forms:.4f} |")
+    tips = {k: r.probes["tip"] for k, r in spin_up.items()}
+    peak = np.abs(tips["exact"]).max(axis=0)
+    diff = np.abs(tips["floating"] - tips["exact"]).max(axis=0)
+    lines += ["", f"spin_up_3d, {SPIN_UP_T:g} s at Δt = 0.01 s, tip in the hub frame (axial, in plane, out of plane):",
+              "", "| | axial | in plane | out of plane | wall (s) | ms a step |", "|---|---|---|---|---|---|",
+              f"| largest, exact beam | {peak[0]:.3e} | {peak[1]:.3e} | {peak[2]:.3e} | "
+              f"{spin_up['exact'].wall_time:.1f} | {spin_up['exact'].wall_time / spin_up['exact'].steps * 1e3:.2f} |",
+              f"| floating frame − exact | {diff[0]:.1e} | {diff[1]:.1e} | {diff[2]:.1e} | "
+              f"{spin_up['floating'].wall_time:.1f} | {spin_up['floating'].wall_time / spin_up['floating'].steps * 1e3:.2f} |"]
     return "\n".join(lines)
 
 
@@ -122,7 +146,9 @@ if __name__ == "__main__":
     ax.plot(lams, lams, "k:", label="λ (once per revolution)")
     ax.set_xlabel("λ = Ω √(ρA L⁴/EI)")
     ax.set_ylabel("ω √(ρA L⁴/EI)")
-    ax.set_title("Rotating cantilever (TimoshenkoBeam3D)")
+    ax.plot(lams, [c[3] for c in campbell.values()], "k+", label="linear beam's spin forms")
+    ax.plot(lams, [c[4] for c in campbell.values()], "k+")
+    ax.set_title("Rotating cantilever (FloatingBeam3D about its steady spin)")
     ax.legend()
     fig.tight_layout()
     fig.savefig(out / "rotating_beam_3d_campbell.png", dpi=120)

@@ -19,6 +19,7 @@ from .bodies.spatial import SpatialPointMass, SpatialRigidBody
 from .fem.spatial_section import SpatialSection
 from .fem.spatial_beam import TimoshenkoBeam3D
 from .bodies.exact.spatial_body import SpatialExactBeam
+from .bodies.floating_spatial.body import FloatingBeam3D
 from .elements.constraints.quadratic import QuadraticConstraint
 from .elements.constraints.spatial_joints import (Cylindrical, Distance3D, Prismatic3D, Revolute3D, RotationDriver,
                                                   Spherical, TranslationDriver, Universal, Weld3D)

@@ -194,9 +194,12 @@ def test_spatial_beams(monkeypatch, tmp_path):
     assert p < 1e-10 * 50 and energy < 1e-10 and L < 1e-10
     assert example["flying"]["trapezoidal"][1] > 1e-6
     assert all(pk["elbow, first peak"][0] > 1.0 for pk in example["frame"].values())
-    flap, lag, (lin, growth) = example["campbell"][12.0]
+    flap, lag, (lin, growth), flap_forms, lag_forms = example["campbell"][12.0]
     assert flap == pytest.approx(13.1702, rel=5e-3) and lag == pytest.approx(5.4270, rel=5e-3) and growth > 1.0
-    assert "flying beam" in example["summary"]()
+    assert flap_forms == pytest.approx(flap, rel=1e-3) and lag_forms == pytest.approx(lag, rel=1e-3)
+    tips = {k: r.probes["tip"] for k, r in example["spin_up"].items()}
+    assert np.abs(tips["floating"] - tips["exact"]).max() <= 1e-3 * np.abs(tips["exact"]).max()
+    assert "flying beam" in example["summary"]() and "spin_up_3d" in example["summary"]()
 
 
 def test_meshed_rod(monkeypatch, tmp_path):

@@ -30,7 +30,9 @@ from ...fem.spatial_beam import FIELDS_3D, TimoshenkoBeam3D
 from ..base import Body, BodyGeometry, BodyPoint, check_finite_vector
 from ..spatial import DirectorFrame, SpatialPoint, orientation_matrix
 from . import kinetics
-from .inertia import spatial_frame_inertia
+from .inertia import projected_inertia, spatial_frame_inertia
+from .reduction import reduction_basis
+from .rotation import spinning_modes, steady_spin
 from .strain import SpatialBeamStrain
 
 __all__ = ["FloatingBeam3D", "AxisPoint"]
@@ -60,8 +62,11 @@ class FloatingBeam3D(DirectorFrame, Body):
     velocity, angular_velocity : array_like (3,)
         Initial ẋ (m/s) and frame angular velocity ω in space axes (rad/s).
     elastic, elastic_velocity : array_like (n_elastic,), optional
-        Initial y and ẏ.
+        Initial y and ẏ (η and η̇ of a reduced body).
     name : str
+    basis : array_like (n_beam_elastic, m), optional
+        A reduction basis Φ: the elastic coordinates are then η with y = Φ η, named ``"eta1", ...``
+        (``reduction.py``; :meth:`reduced` builds one).
 
     Raises
     ------
@@ -77,7 +82,7 @@ class FloatingBeam3D(DirectorFrame, Body):
 
     def __init__(self, beam, reference="clamped", strain="green-lagrange", position=(0.0, 0.0, 0.0),
                  orientation=None, velocity=(0.0, 0.0, 0.0), angular_velocity=(0.0, 0.0, 0.0), elastic=None,
-                 elastic_velocity=None, name="beam"):
+                 elastic_velocity=None, name="beam", basis=None):
         if not isinstance(beam, TimoshenkoBeam3D):
             raise ValueError(f"FloatingBeam3D needs a TimoshenkoBeam3D, got {beam!r}")
         if reference not in _REFERENCES:
@@ -88,13 +93,26 @@ class FloatingBeam3D(DirectorFrame, Body):
         fixed = np.array(sorted(int(ends[end][k]) for end, fields in _REFERENCES[reference] for k in fields))
         self.fixed_dofs = fixed
         self.free_dofs = np.setdiff1d(np.arange(beam.n_dofs), fixed)
-        self.n_elastic = self.free_dofs.size
-        self.n_dofs = 12 + self.n_elastic
-        node_of = {int(d): (node, k) for node, row in enumerate(beam.node_dofs) for k, d in enumerate(row)}
-        self._names = (("x", "y", "z") + tuple(f"d{i}{c}" for i in (1, 2, 3) for c in "xyz")
-                       + tuple(f"{FIELDS_3D[node_of[int(d)][1]]}_{node_of[int(d)][0] + 1}" for d in self.free_dofs))
         self.inertia = spatial_frame_inertia(beam, self.free_dofs)
         self.strain_energy = SpatialBeamStrain(beam, self.free_dofs, strain)
+        frame_names = ("x", "y", "z") + tuple(f"d{i}{c}" for i in (1, 2, 3) for c in "xyz")
+        if basis is None:
+            self.basis = None
+            node_of = {int(d): (node, k) for node, row in enumerate(beam.node_dofs) for k, d in enumerate(row)}
+            elastic_names = tuple(f"{FIELDS_3D[node_of[int(d)][1]]}_{node_of[int(d)][0] + 1}" for d in self.free_dofs)
+        else:
+            Phi = np.asarray(basis, dtype=float)
+            if Phi.ndim != 2 or Phi.shape[0] != self.free_dofs.size or not np.all(np.isfinite(Phi)) \
+                    or np.linalg.matrix_rank(Phi) < Phi.shape[1]:
+                raise ValueError(f"basis must be a finite ({self.free_dofs.size}, m) array of independent columns, "
+                                 f"got shape {Phi.shape}")
+            self.basis = Phi
+            self.inertia = projected_inertia(self.inertia, Phi)
+            self.strain_energy = self.strain_energy.projected(Phi)
+            elastic_names = tuple(f"eta{k + 1}" for k in range(Phi.shape[1]))
+        self.n_elastic = len(elastic_names)
+        self.n_dofs = 12 + self.n_elastic
+        self._names = frame_names + elastic_names
 
         R = np.eye(3) if orientation is None else orientation_matrix(orientation)
         omega = check_finite_vector("angular_velocity", angular_velocity, 3)
@@ -112,7 +130,9 @@ class FloatingBeam3D(DirectorFrame, Body):
 
     def elastic_vector(self, full):
         """y from a vector over all the beam's DOFs (``beam.node_dofs`` numbering); ValueError if it is not
-        zero where the reference condition eliminates a DOF."""
+        zero where the reference condition eliminates a DOF (a reduced body: ValueError)."""
+        if self.basis is not None:
+            raise ValueError(f"body {self.name!r} is reduced: its elastic coordinates are modal amplitudes")
         full = check_finite_vector("elastic field", full, self.beam.n_dofs)
         bad = np.abs(full[self.fixed_dofs])
         if bad.size and bad.max() > 1e-12 * max(1.0, np.abs(full).max()):
@@ -123,7 +143,8 @@ class FloatingBeam3D(DirectorFrame, Body):
     def full_elastic(self, q):
         """The beam's DOF vector (u₁, u₂, u₃, θ₁, θ₂, θ₃ per node, in the frame's axes) of q."""
         d = np.zeros(self.beam.n_dofs)
-        d[self.free_dofs] = np.asarray(q, dtype=float)[12:]
+        y = np.asarray(q, dtype=float)[12:]
+        d[self.free_dofs] = y if self.basis is None else self.basis @ y
         return d
 
     # ================================================================ kinetic
@@ -208,6 +229,8 @@ class FloatingBeam3D(DirectorFrame, Body):
         for k in range(6):
             full[k, field_dofs[k][pr.indices]] = pr.data
         full = full[:, self.free_dofs]
+        if self.basis is not None:
+            full = full @ self.basis
         return full[:3].copy(), full[3:].copy()
 
     def point(self, locator=None):
@@ -227,6 +250,32 @@ class FloatingBeam3D(DirectorFrame, Body):
     def spatial_momentum_layout(self):
         """Not a constant-mass body: the compiled constant-mass family does not take it."""
         raise NotImplementedError(f"body {self.name!r} has a configuration-dependent mass")
+
+    # ================================================================ reduction
+    def reduced(self, n_modes, interfaces=("root",), n_derivatives=None, centrifugal=None, name=None):
+        """This beam on a reduction basis (:func:`.reduction.reduction_basis`: Craig–Bampton for the clamped
+        frame, free-interface modes for the chord frame, with stiffening derivatives and centrifugal shapes
+        for the Green–Lagrange axis): a new :class:`FloatingBeam3D` in the same initial frame state, its
+        elastic state the M-projection of this one's."""
+        Phi = reduction_basis(self, n_modes, interfaces, n_derivatives, centrifugal)
+        M = self.mass_matrix(self.q0)[12:, 12:]
+        x, D, _ = kinetics.split(self.q0)
+        out = FloatingBeam3D(self.beam, self.reference, self.strain, position=x, orientation=D,
+                             elastic=Phi.T @ M @ self.q0[12:], elastic_velocity=Phi.T @ M @ self.v0[12:],
+                             name=self.name if name is None else name, basis=Phi)
+        out.v0[:12] = self.v0[:12]
+        return out
+
+    # ================================================================ steady spin
+    def steady_spin(self, omega, axis=(1.0, 0.0, 0.0)):
+        """The elastic state y (n_elastic,) of the beam spinning at ``omega`` (rad/s) about ``axis`` (frame axes)
+        with its frame origin fixed (:func:`.rotation.steady_spin`)."""
+        return steady_spin(self, omega, axis)
+
+    def spinning_modes(self, omega, axis=(1.0, 0.0, 0.0), n_modes=8):
+        """Modes about that steady spin in the spinning frame, flapwise along d₁
+        (:func:`.rotation.spinning_modes`; a :class:`~skfem_flex.fem.spatial_beam.RotatingModes`)."""
+        return spinning_modes(self, omega, axis, n_modes)
 
     # ================================================================ output
     def strains(self, q):

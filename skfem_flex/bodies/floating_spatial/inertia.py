@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 from skfem import BilinearForm, LinearForm, asm
 
-__all__ = ["SpatialFrameInertia", "spatial_frame_inertia", "LEVI_CIVITA"]
+__all__ = ["SpatialFrameInertia", "spatial_frame_inertia", "projected_inertia", "LEVI_CIVITA"]
 
 #: ε_ijk
 LEVI_CIVITA = np.zeros((3, 3, 3))
@@ -112,3 +112,10 @@ def spatial_frame_inertia(beam, free):
     return SpatialFrameInertia(mass=sec.rhoA * length, S0=S0, Sbar=np.ascontiguousarray(Sbar[:, free]), I0=I0,
                                P=np.ascontiguousarray(P[:, :, free]),
                                N=np.ascontiguousarray(N[:, :, free][:, :, :, free]))
+
+
+def projected_inertia(inv, basis):
+    """The invariants on reduced coordinates η, y = Φ η: S̄Φ, PΦ and ΦᵀN_ikΦ (m, S₀ and I₀ stay)."""
+    Phi = np.asarray(basis, dtype=float)
+    return SpatialFrameInertia(mass=inv.mass, S0=inv.S0, Sbar=inv.Sbar @ Phi, I0=inv.I0, P=inv.P @ Phi,
+                               N=np.einsum("am,ikab,bn->ikmn", Phi, inv.N, Phi))

@@ -25,7 +25,7 @@ from ...fem.spatial_beam import RotatingModes
 from ...numerics.newton import NewtonSettings, newton_solve
 from . import kinetics
 
-__all__ = ["steady_spin", "spinning_modes"]
+__all__ = ["steady_spin", "spinning_modes", "elastic_load_of_spin"]
 
 _EPS = np.finfo(float).eps
 
@@ -61,6 +61,13 @@ def _elastic_rows(body, q, v, acc):
     r = inertia[Y] - qv[Y] + body.potential_gradient(q)[Y]
     K = B[Y, Y] - qv_q[Y, Y] + body.potential_hessian(q)[Y, Y]
     return r, K, -qv_v[Y, Y], (inertia[Y], qv[Y])
+
+
+def elastic_load_of_spin(body, axis):
+    """The elastic rows [M a_f]_y − [Q_v]_y of the undeformed beam spinning at 1 rad/s about ``axis`` (frame
+    axes): the inertia load whose static response is the stretch of a spinning beam (N per rad²/s²)."""
+    q, v, acc = _frame_motion(body, 1.0, axis)
+    return _elastic_rows(body, q, v, acc)[0] - body.potential_gradient(q)[12:]
 
 
 def steady_spin(body, omega, axis=(1.0, 0.0, 0.0), tol=1e-12, max_iterations=50):
@@ -127,7 +134,7 @@ def spinning_modes(body, omega, axis=(1.0, 0.0, 0.0), n_modes=8, flap_axis=0):
     order = np.argsort(np.abs(lam))[:int(n_modes)]
     lam, vec = lam[order], vec[:, order]
     full = np.zeros((body.beam.n_dofs, lam.size), dtype=complex)
-    full[body.free_dofs] = vec
+    full[body.free_dofs] = vec if body.basis is None else body.basis @ vec
     nd = body.beam.node_dofs
     flap = np.abs(full[nd[:, flap_axis]]).sum(axis=0)
     other = np.abs(full[nd[:, [k for k in (0, 1) if k != flap_axis][0]]]).sum(axis=0)

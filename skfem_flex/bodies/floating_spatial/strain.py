@@ -69,6 +69,14 @@ class SpatialBeamStrain:
                                          shape=(nel * nqp, free.size)).toarray())
         self.w = sec.EA * fb.dx.ravel()
 
+    def projected(self, basis):
+        """The same energy on reduced coordinates η, y = Φ η: ΦᵀKΦ and the rows A_kΦ (a new object)."""
+        out = object.__new__(SpatialBeamStrain)
+        out.nonlinear, out.w = self.nonlinear, self.w
+        out.K = basis.T @ self.K @ basis
+        out.A = [A @ basis for A in self.A]
+        return out
+
     def strains(self, y):
         """(u' (3, n_points), ε (n_points,)) at the Gauss points."""
         up = np.stack([A @ y for A in self.A])
