@@ -40,12 +40,30 @@ class RotatingModes:
         True for a mode whose motion is mostly along the spin axis d₁ (out of the plane of rotation), False
         for a lead-lag mode (u₂, in the plane).
     shapes : ndarray (n_dofs, n), complex
+        On the beam's DOFs.
     """
 
     omega: np.ndarray
     growth: np.ndarray
     flapwise: np.ndarray
     shapes: np.ndarray
+
+    @classmethod
+    def from_eigenpairs(cls, lam, shapes, flap_rows, lag_rows):
+        """The modes of the eigenvalues ``lam`` (one of each conjugate pair, lowest first) and their ``shapes``
+        (complex columns), classified by the size of their motion on ``flap_rows`` (along the spin axis)
+        against ``lag_rows`` (in the plane of rotation). A repeated frequency (no spin and equal bending
+        stiffnesses) has any mix of its pair as a mode: the pair is turned into the one with the most and the
+        one with the least flapwise motion first."""
+        shapes = np.array(shapes, dtype=complex)
+        for k in range(lam.size - 1):
+            if abs(lam[k + 1] - lam[k]) <= 1e-8 * max(abs(lam[k]), 1e-300):
+                pair = shapes[:, k:k + 2]
+                _, _, vh = np.linalg.svd(pair[flap_rows])
+                shapes[:, k:k + 2] = pair @ vh.conj().T
+        flap = np.abs(shapes[flap_rows]).sum(axis=0)
+        lag = np.abs(shapes[lag_rows]).sum(axis=0)
+        return cls(np.abs(lam.imag), np.maximum(lam.real, 0.0), flap > lag, shapes)
 
     def first(self, flapwise):
         """(ω, growth) of the lowest flapwise (True) or lead-lag (False) mode."""
@@ -199,14 +217,4 @@ class TimoshenkoBeam3D(LinearBeamAnalyses):
         lam, vec = lam[order], vec[:, order]
         shapes = np.zeros((self.n_dofs, lam.size), dtype=complex)
         shapes[free] = vec
-        flap_rows = self.node_dofs[:, 0]
-        for k in range(lam.size - 1):
-            # a repeated frequency (no spin, equal bending stiffnesses): any mix of the pair is a mode; take
-            # the one with the most and the one with the least flapwise motion
-            if abs(lam[k + 1] - lam[k]) <= 1e-8 * max(abs(lam[k]), 1e-300):
-                pair = shapes[:, k:k + 2]
-                _, _, vh = np.linalg.svd(pair[flap_rows])
-                shapes[:, k:k + 2] = pair @ vh.conj().T
-        u1 = np.abs(shapes[flap_rows]).sum(axis=0)
-        u2 = np.abs(shapes[self.node_dofs[:, 1]]).sum(axis=0)
-        return RotatingModes(np.abs(lam.imag), np.maximum(lam.real, 0.0), u1 > u2, shapes)
+        return RotatingModes.from_eigenpairs(lam, shapes, self.node_dofs[:, 0], self.node_dofs[:, 1])

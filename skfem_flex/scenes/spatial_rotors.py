@@ -68,12 +68,10 @@ def rotating_beam_3d(omega=4.0, length=10.0, EA=2.8e7, EI=1.4e4, GJ=1.4e4, kGA=1
     y = steady_spin(body, om)
     if pert:
         modes = spinning_modes(body, om, n_modes=4)
-        S, _ = body.shape_at(body.s_tip)
+        tip = body.beam.node_dofs[-1]
         for flap in (True, False):
-            k = int(np.flatnonzero(modes.flapwise == flap)[0])
-            shape = modes.shapes[:, k]
-            at_tip = S[0 if flap else 1] @ shape
-            y = y + pert * np.real(shape / at_tip)
+            shape = modes.shapes[:, int(np.flatnonzero(modes.flapwise == flap)[0])]
+            y = y + pert * np.real(shape / shape[tip[0 if flap else 1]])[body.free_dofs]
     body.q0[12:] = y
     body.v0[3:12] = np.cross(om * np.array([0.0, 0.0, 1.0]), HUB_FRAME.T).ravel()
     joints = [Revolute3D(body.point(0.0), axis=(0.0, 0.0, 1.0), name="hub hinge"),

@@ -117,8 +117,7 @@ def spinning_modes(body, omega, axis=(1.0, 0.0, 0.0), n_modes=8, flap_axis=0):
     Returns
     -------
     RotatingModes
-        Frequencies (rad/s, ascending), growth rates (1/s), flapwise flags and the shapes on y
-        (n_elastic, n).
+        Frequencies (rad/s, ascending), growth rates (1/s), flapwise flags and the shapes on the beam's DOFs.
     """
     y = steady_spin(body, omega, axis)
     q, v, acc = _frame_motion(body, omega, axis)
@@ -136,6 +135,5 @@ def spinning_modes(body, omega, axis=(1.0, 0.0, 0.0), n_modes=8, flap_axis=0):
     full = np.zeros((body.beam.n_dofs, lam.size), dtype=complex)
     full[body.free_dofs] = vec if body.basis is None else body.basis @ vec
     nd = body.beam.node_dofs
-    flap = np.abs(full[nd[:, flap_axis]]).sum(axis=0)
-    other = np.abs(full[nd[:, [k for k in (0, 1) if k != flap_axis][0]]]).sum(axis=0)
-    return RotatingModes(np.abs(lam.imag), np.maximum(lam.real, 0.0), flap > other, vec)
+    lag_axis = [k for k in (0, 1) if k != flap_axis][0]
+    return RotatingModes.from_eigenpairs(lam, full, nd[:, flap_axis], nd[:, lag_axis])
