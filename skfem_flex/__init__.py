@@ -29,7 +29,7 @@ from .scene_initial import (InconsistentInitialConditionsError, RedundantConstra
                                  consistent_initial_state)
 from .elements.forces import ForceElement, Gravity, NonlinearSpring
 from .elements.forces import (SpatialDamper, SpatialDistributedLoad, SpatialMoment, SpatialPointForce, SpatialSpring,
-                              SpatialTorsionalDamper, SpatialTorsionalSpring)
+                              SpatialTorsionalDamper, SpatialTorsionalSpring, distributed_moments)
 from .elements.motion import MotionLaw, Prescribed, spin_up_law
 from .scene import Scene
 from .schemes import EnergyMomentum, GeneralizedAlpha, Newmark, NewtonSettings, Trapezoidal

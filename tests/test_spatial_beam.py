@@ -10,6 +10,7 @@ import skfem_flex as sf
 from skfem_flex.bodies.exact.spatial_body import SpatialExactBeam
 from skfem_flex.fem.spatial_section import SpatialSection
 from skfem_flex.io.output import VTKSeries, read_pvd
+from skfem_flex.numerics.quaternions import rotation_vector_matrix
 from skfem_flex.scenes.spatial_beams import BEND_45_REFERENCE
 
 SECTION = SpatialSection(EA=1e4, GA1=8e3, GA2=6e3, GJ=400.0, EI1=500.0, EI2=300.0, rhoA=1.0, rhoI1=10.0,
@@ -164,6 +165,65 @@ def test_distributed_load_and_gravity_against_the_linear_beam():
         tip = b.point(L)
         z = (tip.position(sf.static_equilibrium(scene).q) - tip.position(b.q0))[2]
         assert z == pytest.approx(expected, rel=1e-3)
+
+
+def test_distributed_moment_and_following_load():
+    """A uniform moment per length m about d₂ on the cantilever: no shear, tip deflection m L³/(3 EI₂) and
+    tip turn m L²/(2 EI₂). A following force per length turns with the beam (Q(R q) = R Q(q)), has the
+    resultant L Σ f_i d_i on the straight beam and, small, bends it as the same load fixed in space does."""
+    L, m = 2.0, 1e-4
+    b = SpatialExactBeam.straight(SECTION, (0.0, 0.0, 0.0), (L, 0.0, 0.0), n_elements=6, order=2,
+                                  normal=(0.0, 0.0, 1.0))
+    d2 = b.node_frames(b.q0)[0][:, 1]
+    moments = sf.distributed_moments(b, m * d2)
+    assert len(moments) == b.n_nodes
+    scene = sf.Scene([b], constraints=[sf.Weld3D(b.point(0.0))], forces=moments)
+    q = sf.static_equilibrium(scene).q
+    tip = b.point(L)
+    assert (tip.position(q) - tip.position(b.q0))[2] == pytest.approx(m * L ** 3 / (3 * 300.0), rel=1e-3)
+    d3 = b.node_frames(q)[-1][:, 2]
+    assert np.arctan2(d3[2], d3[0]) == pytest.approx(m * L ** 2 / (2 * 300.0), rel=1e-3)
+    # following: turns with the beam, resultant, and small-load agreement with the fixed load
+    f = np.array([0.3, -0.2, 0.5])
+    follow = sf.SpatialDistributedLoad(b, f, following=True)
+    Q0 = follow.generalized_force(b.q0, b.q0, 0.0)[0].reshape(-1, 3)[0::4].sum(axis=0)
+    assert np.abs(Q0 - L * b.node_frames(b.q0)[0] @ f).max() <= 1e-14
+    R = rotation_vector_matrix([0.4, -0.9, 0.3])
+    qs = states(b, seed=3)[0]
+    turned = (qs.reshape(-1, 3) @ R.T).ravel()
+    Q, Qq, _ = follow.generalized_force(qs, qs, 0.0)
+    assert np.abs(follow.generalized_force(turned, turned, 0.0)[0] - (Q.reshape(-1, 3) @ R.T).ravel()).max() \
+        <= 1e-13 * np.abs(Q).max()
+    assert np.abs(Qq @ qs - Q).max() <= 1e-14 * np.abs(Q).max()
+    small = 1e-4 * np.array([1.0, 0.0, 0.0])                   # along d₁ = z
+    ends = []
+    for load in (sf.SpatialDistributedLoad(b, small, following=True), sf.SpatialDistributedLoad(b, 1e-4 * np.array(
+            [0.0, 0.0, 1.0]))):
+        scene = sf.Scene([b], constraints=[sf.Weld3D(b.point(0.0))], forces=[load])
+        ends.append(tip.position(sf.static_equilibrium(scene).q) - tip.position(b.q0))
+    assert np.abs(ends[0] - ends[1]).max() <= 1e-3 * np.abs(ends[1]).max()
+
+
+def test_swept_section_output(tmp_path):
+    """With a section_size the VTK series holds the section's rectangle swept along the axis: a hexahedron per
+    segment, of volume w h × segment length on the straight beam, with the segments' strains."""
+    import meshio
+    b = SpatialExactBeam.straight(SECTION, (0.0, 0.0, 0.0), (2.0, 0.0, 0.0), n_elements=2, order=2,
+                                  normal=(0.0, 0.0, 1.0), section_size=(0.2, 0.1))
+    scene = sf.Scene([b], constraints=[sf.Weld3D(b.point(0.0))],
+                     forces=[sf.SpatialPointForce(b.point(2.0), (0.0, 1.0, 1.0))])
+    sf.simulate(scene, 0.02, 0.01, output=VTKSeries(tmp_path, "beam"))
+    frames = read_pvd(tmp_path / "beam.pvd")
+    mesh = meshio.read(tmp_path / frames[0][1])
+    hexes = mesh.cells_dict["hexahedron"]
+    assert hexes.shape == (b.n_nodes - 1, 8)
+    p = mesh.points[hexes]
+    # a box: edge vectors along d₁ (w), d₂ (h) and the axis (the segment)
+    vol = np.abs(np.einsum("ni,ni->n", p[:, 1] - p[:, 0], np.cross(p[:, 3] - p[:, 0], p[:, 4] - p[:, 0])))
+    assert np.allclose(vol, 0.2 * 0.1 * 0.5, rtol=1e-12)
+    assert "strains" in mesh.cell_data
+    with pytest.raises(ValueError, match="section_size"):
+        SpatialExactBeam.straight(SECTION, (0.0, 0.0, 0.0), (2.0, 0.0, 0.0), section_size=(0.2, -0.1))
 
 
 def test_bend_45_is_path_independent_and_converges_to_the_published_tip():

@@ -97,6 +97,9 @@ class SpatialExactBeam(StrainPointsPotential, Body):
         Initial coordinates and velocities (default: the reference configuration at rest); see
         :meth:`rigid_velocity`.
     name : str
+    section_size : array_like (2,), optional
+        Width along d₁ and height along d₂ (m) of a rectangle the VTK output sweeps along the axis as
+        hexahedra (besides the polyline), carrying the segments' strains and section forces.
 
     Notes
     -----
@@ -123,12 +126,20 @@ class SpatialExactBeam(StrainPointsPotential, Body):
     strain_family = "director beam"
 
     def __init__(self, section, length, placement, n_elements=10, order=1, mesh=None, q0=None, v0=None,
-                 name="spatial_beam"):
+                 name="spatial_beam", section_size=None):
         if not isinstance(section, SpatialSection):
             raise ValueError(f"section must be a skfem_flex SpatialSection, got {section!r}")
         if order not in (1, 2):
             raise ValueError(f"order must be 1 or 2, got {order!r}")
         self.section, self.order, self.name = section, int(order), str(name)
+        if section_size is not None:
+            size = check_finite_vector("section_size", section_size, 2)
+            if np.any(size <= 0.0):
+                raise ValueError(f"section_size must be two positive lengths (along d₁, d₂) in m, "
+                                 f"got {section_size!r}")
+            section_size = size
+        #: (width along d₁, height along d₂) of the rectangle the output sweeps along the axis, m, or None
+        self.section_size = section_size
         self.length = check_finite_number("length", length)
         if self.length <= 0.0:
             raise ValueError(f"length must be positive, got {length!r} m")
@@ -174,6 +185,9 @@ class SpatialExactBeam(StrainPointsPotential, Body):
         self._mass = mass.toarray() if self.dense else mass
         #: ∫ N_a ds of every node, m
         self.node_weights = np.asarray(scalar.sum(axis=1)).ravel()
+        #: ∫ N_a N_b ds of every pair of nodes (n_nodes × n_nodes, csr), m: the consistent load of a field
+        #: interpolated like the coordinates (a following force per length)
+        self.node_products = scalar.tocsr()
         self._gamma = section.rhoA * self.line_integral()
         self.total_mass = float(section.rhoA * self.length)
 
@@ -346,4 +360,28 @@ class SpatialExactBeam(StrainPointsPotential, Body):
         seg_e = seg_e.reshape(-1, self.order, 6)[by_s].reshape(-1, 6)
         seg_f = seg_f.reshape(-1, self.order, 6)[by_s].reshape(-1, 6)
         cell_data = {"strains": [seg_e], "section_forces": [seg_f]}
-        return BodyGeometry(self.node_positions(q), [("line", conn)], point_data, cell_data)
+        points, cells = self.node_positions(q), [("line", conn)]
+        if self.section_size is not None:
+            points, cells, point_data, cell_data = self._swept_section(q, v, frames, points, cells, point_data,
+                                                                        cell_data)
+        return BodyGeometry(points, cells, point_data, cell_data)
+
+    def _swept_section(self, q, v, frames, points, cells, point_data, cell_data):
+        """The geometry with the section's rectangle swept along the axis: four corners a node
+        (±w/2 d₁ ± h/2 d₂ about φ) and a hexahedron a segment, after the polyline's points and cells; the
+        corners carry their node's directors and their own velocity, the hexahedra their segment's data."""
+        half = 0.5 * self.section_size
+        signs = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]]) * half       # (4, 2)
+        rates = self.node_frames(v)
+        corners = points[:, None, :] + np.einsum("kc,nic->nki", signs, frames[:, :, :2])
+        corner_v = point_data["velocity"][:, None, :] + np.einsum("kc,nic->nki", signs, rates[:, :, :2])
+        n = self.n_nodes
+        base = n + 4 * np.arange(n - 1)
+        hexes = np.column_stack([base + k for k in range(4)] + [base + 4 + k for k in range(4)])
+        out_points = np.vstack([points, corners.reshape(-1, 3)])
+        out_data = {"velocity": np.vstack([point_data["velocity"], corner_v.reshape(-1, 3)])}
+        for key in ("d1", "d2", "d3"):
+            out_data[key] = np.vstack([point_data[key], np.repeat(point_data[key], 4, axis=0)])
+        out_cells = cells + [("hexahedron", hexes)]
+        out_cell_data = {key: blocks + [blocks[0]] for key, blocks in cell_data.items()}
+        return out_points, out_cells, out_data, out_cell_data

@@ -24,7 +24,7 @@ from .floating_beam_loads import DistributedLoad
 from .gravity import Gravity
 from .point_loads import PointForce, PointMoment, half_sine_pulse, time_function
 from .spatial import (SpatialDamper, SpatialDistributedLoad, SpatialMoment, SpatialPointForce, SpatialSpring,
-                      SpatialTorsionalDamper, SpatialTorsionalSpring)
+                      SpatialTorsionalDamper, SpatialTorsionalSpring, distributed_moments)
 from .torsion import RotationalDamper, RotationalSpring
 from .two_point import LinearDamper, LinearSpring
 
@@ -32,4 +32,4 @@ __all__ = ["ForceElement", "Gravity", "NonlinearSpring", "split_blocks", "Linear
            "RotationalSpring", "RotationalDamper", "PointForce", "PointMoment", "time_function", "half_sine_pulse",
            "DistributedLoad", "NodalLoad", "ExactDistributedLoad", "CONSERVATIVE", "MAX_SPRING_EXPONENT",
            "SpatialSpring", "SpatialDamper", "SpatialTorsionalSpring", "SpatialTorsionalDamper", "SpatialPointForce",
-           "SpatialMoment", "SpatialDistributedLoad"]
+           "SpatialMoment", "SpatialDistributedLoad", "distributed_moments"]

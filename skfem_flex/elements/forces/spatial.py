@@ -15,6 +15,7 @@ A moment M on a director body acts through the generalized forces f_{d_i} = ½ M
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sps
 
 from ...bodies.base import BodyPoint, check_finite_vector
 from ...numerics.quaternions import skew
@@ -24,8 +25,7 @@ from .base import ForceElement, check_nonnegative
 from .point_loads import time_function
 
 __all__ = ["SpatialSpring", "SpatialDamper", "SpatialTorsionalSpring", "SpatialTorsionalDamper", "SpatialPointForce",
-           "SpatialDistributedLoad",
-           "SpatialMoment"]
+           "SpatialDistributedLoad", "SpatialMoment", "distributed_moments"]
 
 
 def _spatial_point(name, point):
@@ -406,33 +406,68 @@ class SpatialMoment(ForceElement):
 
 
 class SpatialDistributedLoad(ForceElement):
-    """A force per length f(t) (N/m), fixed in space, along a spatial beam: Q = Gᵀ f with G = ∫ N_a ds on
-    every node's position (the consistent load of the beam's interpolation; its resultant is f L).
+    """A force per length f(t) (N/m) along a spatial beam, fixed in space or following its sections.
+
+    Fixed in space: Q = Gᵀ f with G = ∫ N_a ds on every node's position (the consistent load of the beam's
+    interpolation; its resultant is f L). Following: f = Σ_i f_i d_i(s) with the interpolated directors, so
+    the load on node b's position is Σ_a (∫ N_b N_a ds) Σ_i f_i d_i^a, linear in q (Q = Σ_i f_i C_i q).
 
     Parameters
     ----------
     beam : SpatialExactBeam
     force : array_like (3,) or callable t -> (3,)
-        N/m, in space axes.
+        N/m, in space axes, or with ``following=True`` in the section's axes (d₁, d₂, d₃).
+    following : bool
     name : str
     """
 
     conservative = False
 
-    def __init__(self, beam, force, name="distributed load"):
+    def __init__(self, beam, force, following=False, name="distributed load"):
         if not callable(getattr(beam, "line_integral", None)):
             raise ValueError(f"a distributed load needs a spatial beam (SpatialExactBeam), got {beam!r}")
         self.force = time_function(force, 3, "force")
+        self.following = bool(following)
         self.bodies = (beam,)
         self.G = beam.line_integral()
+        if self.following:
+            # C_i = P ⊗ E_i: node a's director d_i onto node b's position, weighted by P_ba = ∫ N_b N_a ds
+            self._C = []
+            for i in range(3):
+                E = np.zeros((12, 12))
+                E[0:3, 3 + 3 * i:6 + 3 * i] = np.eye(3)
+                self._C.append(sps.kron(beam.node_products, E, format="csr"))
         self.name = name
 
     def generalized_force(self, q, v, t):
         n = self.G.shape[1]
-        return self.G.T @ self.force(t), np.zeros((n, n)), np.zeros((n, n))
+        if not self.following:
+            return self.G.T @ self.force(t), np.zeros((n, n)), np.zeros((n, n))
+        C = sum(fi * Ci for fi, Ci in zip(self.force(t), self._C))
+        return C @ q, C, None
 
     def compiled_form(self):
-        """("generalized force", G, f): the point-load family."""
-        if type(self).generalized_force is not SpatialDistributedLoad.generalized_force:
+        """("generalized force", G, f): the point-load family (fixed in space); following: None (Python)."""
+        if type(self).generalized_force is not SpatialDistributedLoad.generalized_force or self.following:
             return None
         return "generalized force", self.G, self.force
+
+
+def distributed_moments(beam, moment, following=False, name="distributed moment"):
+    """A moment per length m(t) (N m/m) along a spatial beam, as one :class:`SpatialMoment` per node carrying
+    ∫ N_a ds · m (its consistent share of a uniform field). Returns the list of those force elements.
+
+    Parameters
+    ----------
+    beam : SpatialExactBeam
+    moment : array_like (3,) or callable t -> (3,)
+        N m/m, in space axes, or with ``following=True`` in each node's section axes.
+    following : bool
+    name : str
+    """
+    if not callable(getattr(beam, "line_integral", None)):
+        raise ValueError(f"a distributed moment needs a spatial beam (SpatialExactBeam), got {beam!r}")
+    field = time_function(moment, 3, "moment")
+    return [SpatialMoment(beam.point(float(s)), lambda t, w=float(w): w * field(t), following=following,
+                          name=f"{name} at node {k}")
+            for k, (s, w) in enumerate(zip(beam.s_nodes, beam.node_weights))]
