@@ -1,0 +1,175 @@
+r"""The generic spatial floating-frame body: a director frame plus elastic coordinates on inertia invariants.
+
+:class:`FloatingFrame3D` holds what every spatial floating-frame body shares, whatever its elastic model:
+the coordinates q = (x, d₁, d₂, d₃, y) (the frame of a spatial rigid body, :class:`~..spatial.DirectorFrame`,
+and the elastic coordinates y), the kinetic energy on the invariants of :class:`~.inertia.SpatialFrameInertia`
+(``kinetics.py``), the strain energy of an object with ``energy``, ``gradient``, ``hessian`` and
+``discrete_gradient`` on y, gravity −g·(m x + D s(y)), the momenta, and the points of the body
+(:class:`ElasticPoint`: r = x + D(X₀ + S y), quadratic in q). A subclass (the beam, ``body.py``; the meshed
+solid, ``solid.py``) builds the invariants, the strain energy and its points, and calls
+:meth:`FloatingFrame3D.set_initial_state`.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..base import Body, BodyPoint, check_finite_vector
+from ..spatial import DirectorFrame, SpatialPoint, orientation_matrix
+from . import kinetics
+
+__all__ = ["FloatingFrame3D", "ElasticPoint"]
+
+
+class FloatingFrame3D(DirectorFrame, Body):
+    """Base of the spatial floating-frame bodies (module docstring).
+
+    A subclass sets ``inertia`` (:class:`~.inertia.SpatialFrameInertia` on y), ``strain_energy``,
+    ``n_elastic``, ``n_dofs = 12 + n_elastic``, ``name`` and the initial state.
+    """
+
+    constant_mass = False
+    has_potential = True
+    dimension = 3
+    directors = (3, 6, 9)
+
+    def set_initial_state(self, position, orientation, velocity, angular_velocity, elastic, elastic_velocity):
+        """q0 and v0 from the frame's origin (m), orientation (Euler parameters or a rotation matrix), velocity
+        (m/s), angular velocity in space axes (rad/s) and the elastic y, ẏ (zero when None)."""
+        R = np.eye(3) if orientation is None else orientation_matrix(orientation)
+        omega = check_finite_vector("angular_velocity", angular_velocity, 3)
+        y0 = np.zeros(self.n_elastic) if elastic is None else check_finite_vector("elastic", elastic, self.n_elastic)
+        w0 = (np.zeros(self.n_elastic) if elastic_velocity is None
+              else check_finite_vector("elastic_velocity", elastic_velocity, self.n_elastic))
+        self.q0 = np.concatenate([check_finite_vector("position", position, 3), R.T.ravel(), y0])
+        self.v0 = np.concatenate([check_finite_vector("velocity", velocity, 3), np.cross(omega, R.T).ravel(), w0])
+
+    # ================================================================ kinetic
+    def mass_matrix(self, q):
+        return kinetics.mass_matrix(self.inertia, q)
+
+    def momentum_jacobian(self, q, v):
+        return kinetics.momentum_jacobian(self.inertia, q, v)
+
+    def quadratic_velocity_force(self, q, v):
+        return kinetics.quadratic_velocity_force(self.inertia, q, v)
+
+    def kinetic_discrete_gradient(self, q0, q1, v0, v1):
+        return kinetics.kinetic_discrete_gradient(self.inertia, q0, q1, v0, v1)
+
+    def linear_momentum(self, q, v):
+        """m ẋ + Σ_i s_i ḋ_i + D S̄ ẏ (the x rows of M(q) v), kg m/s."""
+        return self.momentum(q, v)[:3]
+
+    def angular_momentum(self, q, v):
+        """L = x × p_x + Σ_i d_i × p_{d_i} about the origin (p = M(q) v; Noether's momentum of the turning
+        invariance), kg m²/s."""
+        p = self.momentum(q, v)
+        q = np.asarray(q, dtype=float)
+        return sum(np.cross(q[3 * k:3 * k + 3], p[3 * k:3 * k + 3]) for k in range(4))
+
+    # ================================================================ strain and gravity
+    def potential_energy(self, q):
+        return self.strain_energy.energy(np.asarray(q, dtype=float)[12:])
+
+    def potential_gradient(self, q):
+        g = np.zeros(self.n_dofs)
+        g[12:] = self.strain_energy.gradient(np.asarray(q, dtype=float)[12:])
+        return g
+
+    def potential_hessian(self, q):
+        H = np.zeros((self.n_dofs, self.n_dofs))
+        H[12:, 12:] = self.strain_energy.hessian(np.asarray(q, dtype=float)[12:])
+        return H
+
+    def potential_discrete_gradient(self, q0, q1):
+        g = np.zeros(self.n_dofs)
+        H = np.zeros((self.n_dofs, self.n_dofs))
+        g[12:], H[12:, 12:] = self.strain_energy.discrete_gradient(np.asarray(q0, dtype=float)[12:],
+                                                                   np.asarray(q1, dtype=float)[12:])
+        return g, H
+
+    def gravity_potential(self, q, g):
+        """V = −g · (m x + D s(y)), s = S₀ + S̄ y (quadratic in q); (V, ∇V, ∇²V)."""
+        g = np.asarray(g, dtype=float)
+        x, D, y = kinetics.split(q)
+        inv = self.inertia
+        s = inv.S0 + inv.Sbar @ y
+        grad = np.zeros(self.n_dofs)
+        grad[:3] = -inv.mass * g
+        grad[3:12] = -np.outer(s, g).ravel()
+        grad[12:] = -inv.Sbar.T @ (D.T @ g)
+        H = np.zeros((self.n_dofs, self.n_dofs))
+        for i in range(3):
+            H[3 + 3 * i:6 + 3 * i, 12:] = -np.outer(g, inv.Sbar[i])
+        H[12:, 3:12] = H[3:12, 12:].T
+        return -float(g @ (inv.mass * x + D @ s)), grad, H
+
+    def gravity_discrete_gradient(self, q0, q1, g):
+        """The gradient at the mid-point (exact: the potential is quadratic) and half the Hessian."""
+        _, grad, H = self.gravity_potential(0.5 * (np.asarray(q0, dtype=float) + np.asarray(q1, dtype=float)), g)
+        return grad, 0.5 * H
+
+    def frame_point(self, s):
+        """The point at frame coordinates ``s`` (3,), m: it moves with the frame, not with the elastic body."""
+        return SpatialPoint(self, check_finite_vector("frame point", s, 3))
+
+    def spatial_momentum_layout(self):
+        """Not a constant-mass body: the compiled constant-mass family does not take it."""
+        raise NotImplementedError(f"body {self.name!r} has a configuration-dependent mass")
+
+
+class ElasticPoint(BodyPoint):
+    """A material point of a floating-frame body: r = x + D(X₀ + S y), quadratic in q.
+
+    Its Jacobian [I, ρ₁I, ρ₂I, ρ₃I, D S] (ρ = X₀ + S y) at the mid-point is its exact discrete gradient.
+
+    Parameters
+    ----------
+    body : FloatingFrame3D
+    X0 : array_like (3,)
+        The point in the frame's axes, undeformed, m.
+    S : ndarray (3, n_elastic)
+        Its elastic displacement per unit y, in the frame's axes.
+    """
+
+    dimension = 3
+    triad = None
+
+    def __init__(self, body, X0, S):
+        self.body, self.X0, self.S = body, np.asarray(X0, dtype=float), np.asarray(S, dtype=float)
+
+    def position(self, q):
+        x, D, y = kinetics.split(q)
+        return x + D @ (self.X0 + self.S @ y)
+
+    def velocity(self, q, v):
+        _, D, y = kinetics.split(q)
+        vx, V, vy = kinetics.split(v)
+        return vx + V @ (self.X0 + self.S @ y) + D @ (self.S @ vy)
+
+    def position_jacobian(self, q):
+        _, D, y = kinetics.split(q)
+        rho = self.X0 + self.S @ y
+        J = np.zeros((3, self.body.n_dofs))
+        J[:, :3] = np.eye(3)
+        for i in range(3):
+            J[:, 3 + 3 * i:6 + 3 * i] = rho[i] * np.eye(3)
+        J[:, 12:] = D @ self.S
+        return J
+
+    def position_hessian_product(self, q, f):
+        f = np.asarray(f, dtype=float)
+        H = np.zeros((self.body.n_dofs, self.body.n_dofs))
+        for i in range(3):
+            H[3 + 3 * i:6 + 3 * i, 12:] = np.outer(f, self.S[i])
+        H[12:, 3:12] = H[3:12, 12:].T
+        return H
+
+    def position_discrete_gradient(self, q0, q1):
+        return self.position_jacobian(0.5 * (np.asarray(q0, dtype=float) + np.asarray(q1, dtype=float)))
+
+    def position_discrete_gradient_jacobian(self, q0, q1, f):
+        return 0.5 * self.position_hessian_product(q0, f)
+
+    def compiled_map(self):
+        return None
