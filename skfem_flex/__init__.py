@@ -20,6 +20,8 @@ from .fem.spatial_section import SpatialSection
 from .fem.spatial_beam import TimoshenkoBeam3D
 from .bodies.exact.spatial_body import SpatialExactBeam
 from .bodies.floating_spatial.body import FloatingBeam3D
+from .bodies.floating_spatial.solid import FloatingSolid3D
+from .fem.elasticity3d import ElasticSolid3D
 from .elements.constraints.quadratic import QuadraticConstraint
 from .elements.constraints.spatial_joints import (Cylindrical, Distance3D, Prismatic3D, Revolute3D, RotationDriver,
                                                   Spherical, TranslationDriver, Universal, Weld3D)

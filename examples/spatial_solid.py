@@ -1,0 +1,107 @@
+"""A meshed steel bar as a spatial floating-frame body: Craig–Bampton reduction and stresses in a spin-up.
+
+* The bar (1 × 0.1 × 0.1 m, P2 tetrahedra, E = 200 GPa, ν = 0.3, ρ = 7800 kg/m³) clamped to its frame at
+  x = 0, with its tip face as a rigid interface: the relative error of the first six natural frequencies of
+  the reduced body against the full mesh (the same rigid tip, solved by ``eigsh``) for 6, 12, 20 and 30
+  fixed-interface modes, and the reduction's time.
+* The reduced bar (20 modes) on a hub turning about z, spun up to 20 rad/s in 0.05 s by a rotation driver on
+  its frame, a force of 10 kN along z on its tip: the largest von Mises stress over the run and the VTK
+  series of the mesh with its cell stresses (``solid.pvd`` in OUT_DIR).
+
+Run ``python examples/spatial_solid.py [OUT_DIR]`` (default ``examples/output/``). Importing the module computes
+the results. Quick mode (``SKFEM_FLEX_EXAMPLE_QUICK=1``, used by the tests): a coarse mesh, two mode counts and
+a short run.
+"""
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import scipy.linalg
+import scipy.sparse as sps
+import scipy.sparse.linalg as spla
+import skfem
+
+import skfem_flex as sf
+from skfem_flex.elements.motion import spin_up_law
+from skfem_flex.fem.elasticity3d import von_mises_3d
+from skfem_flex.io.output import VTKSeries
+
+QUICK = os.environ.get("SKFEM_FLEX_EXAMPLE_QUICK", "") not in ("", "0")
+NX = 6 if QUICK else 20
+MODE_COUNTS = (6, 12) if QUICK else (6, 12, 20, 30)
+T_END, DT = (0.004, 1e-3) if QUICK else (0.1, 5e-4)
+L, H = 1.0, 0.1
+
+mesh = skfem.MeshHex.init_tensor(np.linspace(0, L, NX + 1), np.linspace(0, H, 3), np.linspace(0, H, 3)).to_meshtet()
+solid = sf.ElasticSolid3D(mesh, E=2e11, nu=0.3, rho=7800.0)
+
+
+def root(X):
+    return np.isclose(X[0], 0.0)
+
+
+def tip(X):
+    return np.isclose(X[0], L)
+
+
+def full_frequencies(n):
+    """The full mesh clamped at the root with its tip face rigid: the lowest n natural frequencies, rad/s."""
+    nodes = solid.nodes(tip)
+    dofs, R = solid.rigid_map(nodes, solid.node_positions[nodes].mean(axis=0))
+    tied = np.concatenate([solid.component_dofs[:, solid.nodes(root)].ravel(), dofs])
+    interior = np.setdiff1d(np.arange(solid.n_dofs), tied)
+    rr, cc = np.nonzero(R)
+    T = sps.csr_matrix((np.r_[np.ones(interior.size), R[rr, cc]],
+                        (np.r_[interior, dofs[rr]], np.r_[np.arange(interior.size), interior.size + cc])),
+                       shape=(solid.n_dofs, interior.size + 6))
+    lam = spla.eigsh((T.T @ solid.stiffness @ T).tocsc(), n, (T.T @ solid.mass @ T).tocsc(), sigma=0.0,
+                     which="LM")[0]
+    return np.sqrt(np.sort(lam))
+
+
+full = full_frequencies(6)
+reduction = {}
+for n_modes in MODE_COUNTS:
+    start = time.perf_counter()
+    body = sf.FloatingSolid3D(solid, root, n_modes, interfaces={"tip": tip})
+    seconds = time.perf_counter() - start
+    M, K = body.mass_matrix(body.q0)[12:, 12:], body.strain_energy.K
+    reduced = np.sqrt(scipy.linalg.eigh(K, M, eigvals_only=True)[:6])
+    reduction[n_modes] = (reduced / full - 1.0, seconds)
+
+# the spin-up of the reduced bar with a tip force, its stresses written to VTK
+bar = sf.FloatingSolid3D(solid, root, MODE_COUNTS[-1] if QUICK else 20, interfaces={"tip": tip}, name="bar")
+scene = sf.Scene([bar], constraints=[sf.Revolute3D(bar.point("frame"), axis=(0.0, 0.0, 1.0), name="hub"),
+                                     sf.RotationDriver(bar, None, (0.0, 0.0, 1.0), spin_up_law(20.0, 0.05),
+                                                       name="drive")],
+                 forces=[sf.SpatialPointForce(bar.point("tip"), (0.0, 0.0, 1e4), name="tip force")],
+                 name="spinning bar")
+
+
+def run(out):
+    res = sf.simulate(scene, T_END, DT, scheme="energy-momentum", output=VTKSeries(out, "solid"))
+    return res, max(float(von_mises_3d(bar.stresses(q)).max()) for q in res.q)
+
+
+def summary(res, vm):
+    lines = [f"steel bar, {solid.n_dofs} DOFs ({mesh.t.shape[1]} P2 tetrahedra), clamped at x = 0, rigid tip face:",
+             "", "| fixed-interface modes | coordinates | reduction (s) | relative error of the first six frequencies |",
+             "|---|---|---|---|"]
+    for n_modes, (err, seconds) in reduction.items():
+        lines.append(f"| {n_modes} | {n_modes + 6} | {seconds:.2f} | " + ", ".join(f"{e:.1e}" for e in err) + " |")
+    lines += ["", "full mesh: " + ", ".join(f"{f / (2 * np.pi):.2f}" for f in full) + " Hz", "",
+              f"spin-up to 20 rad/s with 10 kN on the tip, {T_END:g} s at Δt = {DT:g} s: largest von Mises stress "
+              f"{vm / 1e6:.1f} MPa, energy balance error {res.relative_energy_error(np.max(np.abs(res.external_work))):.1e}, "
+              f"{res.wall_time:.1f} s ({res.run_path['loop']} loop, Python elements: "
+              f"{len(res.run_path['python_elements'])})"]
+    return "\n".join(lines)
+
+
+out_dir = Path(sys.argv[1]) if __name__ == "__main__" and len(sys.argv) > 1 else Path(__file__).parent / "output"
+result, von_mises = run(out_dir)
+
+if __name__ == "__main__":
+    print(summary(result, von_mises))
+    print(f"wrote {out_dir / 'solid.pvd'}")

@@ -1,0 +1,249 @@
+r"""A meshed 3D solid in the spatial floating frame, reduced by Craig–Bampton: :class:`FloatingSolid3D`.
+
+The solid (:class:`~skfem_flex.fem.elasticity3d.ElasticSolid3D`) is clamped to the body frame at one node set,
+the ``frame`` interface, held rigidly (an RBE2 connection: its nodes move as the frame does, so they have no
+elastic displacement); the frame's origin is that set's centre and its axes the mesh's axes. Further
+``interfaces`` are node sets tied rigidly to an interface point at their centre, with six DOFs each (a small
+translation t and rotation θ: u = t + θ × (X − centre) on the set).
+
+**Craig–Bampton.** With the frame set removed and every interface set replaced by its six DOFs (u = T w),
+the reduction basis on w is
+
+.. math::  Φ_w = \begin{bmatrix} Φ_i & Ψ \\ 0 & I \end{bmatrix},\qquad Ψ = −K_{ii}^{-1} K_{ib},
+
+Φ_i the lowest ``n_modes`` fixed-interface modes (every interface held), Ψ the static constraint modes of
+the interface DOFs (sparse LU and ``eigsh`` in shift-invert mode: the reduction stays sparse), and Φ = T Φ_w
+on the mesh's DOFs. The elastic coordinates are η = (modal amplitudes, interface DOFs): the interface
+DOFs are coordinates of their own, so an interface point's displacement is three of them.
+
+**Invariants.** With X₀ the node positions from the origin, Φ_k the rows of Φ on the u_k DOFs and M_s the
+scalar mass ∫ρN_aN_b, the floating-frame invariants (``inertia.py``, ``kinetics.py``) are
+m = 1ᵀM_s1, S₀ = 1ᵀM_sX₀, S̄_k = 1ᵀM_sΦ_k, I₀ = X₀ᵀM_sX₀, P_ik = X₀ᵢᵀM_sΦ_k and N_ik = Φ_iᵀM_sΦ_k, exact for
+the mesh's interpolation, computed once from sparse products.
+
+**Strain and stress.** The strain energy is ½ηᵀΦᵀKΦη (linear elasticity in the body frame: a finite rigid
+motion strains nothing). Stresses come back per cell from η: σ = C ε̄ with the cell-mean strains ε̄ of the
+modes, precomputed; von Mises from σ. Geometric stiffening (the Green–Lagrange terms) is not in this body.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sps
+import scipy.sparse.linalg as spla
+
+from ...fem.elasticity3d import ElasticSolid3D, von_mises_3d
+from ..base import BodyGeometry, check_finite_vector
+from ..spatial import SpatialPoint
+from . import kinetics
+from .frame import ElasticPoint, FloatingFrame3D
+from .inertia import SpatialFrameInertia
+
+__all__ = ["FloatingSolid3D", "QuadraticEnergy"]
+
+#: VTK's hexahedron corner order as indices into scikit-fem's (``skfem.io.meshio``'s mapping)
+_HEX_TO_VTK = (0, 3, 6, 2, 1, 5, 7, 4)
+
+
+class QuadraticEnergy:
+    """V(η) = ½ ηᵀ K η with a constant K: its gradient, Hessian and (exact, mid-point) discrete gradient."""
+
+    nonlinear = False
+
+    def __init__(self, K):
+        self.K = np.asarray(K, dtype=float)
+
+    def energy(self, y):
+        return 0.5 * float(y @ (self.K @ y))
+
+    def gradient(self, y):
+        return self.K @ y
+
+    def hessian(self, y):
+        return self.K.copy()
+
+    def discrete_gradient(self, y0, y1):
+        return self.K @ (0.5 * (y0 + y1)), 0.5 * self.K
+
+
+def _interface_sets(solid, frame, interfaces):
+    """{name: nodes} of the frame set and the interfaces; ValueError for overlapping sets."""
+    sets = {"frame": solid.nodes(frame)}
+    for name, spec in (interfaces or {}).items():
+        if name == "frame":
+            raise ValueError("'frame' names the frame's own interface: give the others other names")
+        sets[name] = solid.nodes(spec)
+    seen = {}
+    for name, nodes in sets.items():
+        for other, prev in seen.items():
+            common = np.intersect1d(nodes, prev)
+            if common.size:
+                raise ValueError(f"interfaces {other!r} and {name!r} share {common.size} node(s): give disjoint sets")
+        seen[name] = nodes
+    return sets
+
+
+class FloatingSolid3D(FloatingFrame3D):
+    """A Craig–Bampton reduced 3D solid in the spatial floating frame (module docstring).
+
+    Coordinates q = (x, d₁, d₂, d₃, η): the frame (origin at the centre of the ``frame`` node set, axes the
+    mesh's) and η = (``n_modes`` fixed-interface amplitudes, then t_x, t_y, t_z, θ_x, θ_y, θ_z of each
+    interface, in the frame's axes).
+
+    Parameters
+    ----------
+    solid : ElasticSolid3D
+    frame : str, callable or array of int
+        The node set clamped to the frame (a boundary name, a predicate on node positions or node indices).
+    n_modes : int
+        Fixed-interface modes kept.
+    interfaces : dict of str to node-set spec, optional
+        Further rigid interfaces.
+    position, orientation, velocity, angular_velocity :
+        The frame's initial state (as :class:`~skfem_flex.bodies.spatial.SpatialRigidBody`).
+    name : str
+
+    Attributes
+    ----------
+    frequencies : ndarray (n_modes,)
+        The fixed-interface modes' natural frequencies, rad/s (the first mode left out sets the cut-off).
+
+    Raises
+    ------
+    ValueError
+        A solid that is not an ElasticSolid3D, empty, unknown or overlapping node sets, or more modes than
+        the interior has DOFs.
+    """
+
+    def __init__(self, solid, frame, n_modes, interfaces=None, position=(0.0, 0.0, 0.0), orientation=None,
+                 velocity=(0.0, 0.0, 0.0), angular_velocity=(0.0, 0.0, 0.0), name=None):
+        if not isinstance(solid, ElasticSolid3D):
+            raise ValueError(f"FloatingSolid3D needs an ElasticSolid3D, got {solid!r}")
+        self.solid, self.name = solid, solid.name if name is None else name
+        sets = _interface_sets(solid, frame, interfaces)
+        X = solid.node_positions
+        self.origin = X[sets["frame"]].mean(axis=0)
+        self.centres = {k: X[v].mean(axis=0) - self.origin for k, v in sets.items()}
+        self.interface_names = tuple(k for k in sets if k != "frame")
+        self.basis, self.frequencies = self._craig_bampton(solid, sets, n_modes)
+        self.n_modes = int(n_modes)
+        self.n_elastic = self.basis.shape[1]
+        self.n_dofs = 12 + self.n_elastic
+        self.inertia = self._invariants(solid, self.basis, X - self.origin)
+        self.strain_energy = QuadraticEnergy(self.basis.T @ (solid.stiffness @ self.basis))
+        strain = (solid.cell_strain_operator() @ self.basis).reshape(-1, 6, self.n_elastic)
+        self._stress_modes = np.einsum("ab,cbm->cam", solid.material, strain)
+        self._names = (("x", "y", "z") + tuple(f"d{i}{c}" for i in (1, 2, 3) for c in "xyz")
+                       + tuple(f"eta{k + 1}" for k in range(self.n_modes))
+                       + tuple(f"{itf}_{c}" for itf in self.interface_names
+                               for c in ("tx", "ty", "tz", "rx", "ry", "rz")))
+        self.set_initial_state(position, orientation, velocity, angular_velocity, None, None)
+
+    # ---------------------------------------------------------------- reduction
+    @staticmethod
+    def _craig_bampton(solid, sets, n_modes):
+        n = solid.n_dofs
+        frame_dofs = solid.component_dofs[:, sets["frame"]].ravel()
+        itf_dofs, maps = [], []
+        for name, nodes in sets.items():
+            if name != "frame":
+                dofs, R = solid.rigid_map(nodes, solid.node_positions[nodes].mean(axis=0))
+                itf_dofs.append(dofs)
+                maps.append(R)
+        tied = np.concatenate([frame_dofs] + itf_dofs)
+        interior = np.setdiff1d(np.arange(n), tied)
+        nb = 6 * len(maps)
+        n_modes = int(n_modes) if not isinstance(n_modes, bool) and int(n_modes) == n_modes else -1
+        if not 1 <= n_modes < interior.size - 1:
+            raise ValueError(f"n_modes must be an integer in [1, {interior.size - 2}] for this mesh and these "
+                             f"interfaces, got {n_modes!r}")
+        # u = T w, w = (interior DOFs, interface DOFs)
+        data_r, data_c, data_v = [interior], [np.arange(interior.size)], [np.ones(interior.size)]
+        for k, (dofs, R) in enumerate(zip(itf_dofs, maps)):
+            rr, cc = np.nonzero(R)
+            data_r.append(dofs[rr])
+            data_c.append(interior.size + 6 * k + cc)
+            data_v.append(R[rr, cc])
+        T = sps.csr_matrix((np.concatenate(data_v), (np.concatenate(data_r), np.concatenate(data_c))),
+                           shape=(n, interior.size + nb))
+        K = solid.stiffness[interior][:, interior].tocsc()
+        M = solid.mass[interior][:, interior].tocsc()
+        lam, vec = spla.eigsh(K, k=n_modes, M=M, sigma=0.0, which="LM")
+        order = np.argsort(lam)
+        lam, vec = lam[order], vec[:, order]
+        blocks = [np.vstack([vec, np.zeros((nb, n_modes))])]
+        if nb:
+            Kw = (T.T @ solid.stiffness @ T).tocsr()
+            Kib = Kw[:interior.size][:, interior.size:].toarray()
+            psi = -spla.splu(K).solve(Kib)
+            blocks.append(np.vstack([psi, np.eye(nb)]))
+        return T @ np.hstack(blocks), np.sqrt(np.maximum(lam, 0.0))
+
+    @staticmethod
+    def _invariants(solid, Phi, X0):
+        Ms = solid.scalar_mass
+        ones = np.ones(X0.shape[0])
+        Phis = [Phi[solid.component_dofs[k]] for k in range(3)]          # (n_nodes, m) each
+        MsX = Ms @ X0
+        MsPhi = [Ms @ P for P in Phis]
+        m = Phi.shape[1]
+        N = np.zeros((3, 3, m, m))
+        P = np.zeros((3, 3, m))
+        for i in range(3):
+            for k in range(3):
+                N[i, k] = Phis[i].T @ MsPhi[k]
+                P[i, k] = X0[:, i] @ MsPhi[k]
+        return SpatialFrameInertia(mass=float(ones @ (Ms @ ones)), S0=ones @ MsX,
+                                   Sbar=np.array([ones @ MsPhi[k] for k in range(3)]), I0=X0.T @ MsX, P=P, N=N)
+
+    # ---------------------------------------------------------------- state and points
+    @property
+    def coordinate_names(self):
+        return self._names
+
+    def displacement_field(self, q):
+        """The elastic displacement of every node in the frame's axes, (n_nodes, 3), m."""
+        u = self.basis @ np.asarray(q, dtype=float)[12:]
+        return np.stack([u[self.solid.component_dofs[k]] for k in range(3)], axis=1)
+
+    def point(self, locator="frame"):
+        """A point of the body: an interface by name (``"frame"``: the frame's own point, affine in q with the
+        frame's orientation, so spatial joints take it; another interface: its centre, moving with its three
+        translation DOFs), or the mesh node nearest to a position (3,) given in the mesh's axes."""
+        if isinstance(locator, str):
+            if locator == "frame":
+                return SpatialPoint(self, self.centres["frame"])
+            if locator not in self.interface_names:
+                raise ValueError(f"body {self.name!r} has no interface {locator!r}; it has "
+                                 f"{['frame', *self.interface_names]}")
+            S = np.zeros((3, self.n_elastic))
+            start = self.n_modes + 6 * self.interface_names.index(locator)
+            S[:, start:start + 3] = np.eye(3)
+            return ElasticPoint(self, self.centres[locator], S)
+        X = check_finite_vector("point", locator, 3)
+        node = int(np.argmin(np.sum((self.solid.node_positions - X) ** 2, axis=1)))
+        S = np.stack([self.basis[self.solid.component_dofs[k, node]] for k in range(3)])
+        return ElasticPoint(self, self.solid.node_positions[node] - self.origin, S)
+
+    def stresses(self, q):
+        """Cell stresses (n_cells, 6) = (σ_xx, σ_yy, σ_zz, σ_yz, σ_xz, σ_xy) in the frame's axes, Pa."""
+        return self._stress_modes @ np.asarray(q, dtype=float)[12:]
+
+    def geometry(self, q, v):
+        """The mesh's vertices moved (x + D(X₀ + u)) with their displacement from the initial state and velocity;
+        per cell the stresses and von Mises."""
+        x, D, _ = kinetics.split(q)
+        vx, V, _ = kinetics.split(v)
+        nv = self.solid.mesh.p.shape[1]
+        X0 = self.solid.node_positions[:nv] - self.origin
+        u = self.displacement_field(q)[:nv]
+        du = self.displacement_field(v)[:nv]
+        pts = x + (X0 + u) @ D.T
+        x0, D0, _ = kinetics.split(self.q0)
+        ref = x0 + (X0 + self.displacement_field(self.q0)[:nv]) @ D0.T
+        vel = vx + (X0 + u) @ V.T + du @ D.T
+        sigma = self.stresses(q)
+        t = self.solid.mesh.t
+        # scikit-fem numbers a hexahedron's corners in its own order; VTK's is this permutation of it
+        cells = ("tetra", t.T.copy()) if t.shape[0] == 4 else ("hexahedron", t[list(_HEX_TO_VTK)].T.copy())
+        return BodyGeometry(pts, [cells], {"displacement": pts - ref, "velocity": vel},
+                            {"stress": [sigma], "von_mises": [von_mises_3d(sigma)]})

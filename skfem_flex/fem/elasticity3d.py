@@ -1,0 +1,183 @@
+r"""Linear 3D elasticity on a scikit-fem mesh: the elastic model behind a spatial floating-frame solid.
+
+:class:`ElasticSolid3D` assembles once, with scikit-fem, the stiffness
+(``skfem.models.elasticity.linear_elasticity`` with the Lamé parameters of E and ν) and the consistent mass
+∫ρ u·v of a vector field on a ``MeshTet`` (P1 or P2) or ``MeshHex`` (Q1), and gives
+
+* node sets (a named boundary of the mesh, a predicate on the node positions, or node indices) for
+  interfaces;
+* the cell-mean strain operator (Voigt: ε_xx, ε_yy, ε_zz, 2ε_yz, 2ε_xz, 2ε_xy per cell) and the material
+  matrix C, so that a reduced body recovers stresses σ = C ε and von Mises per cell from its modal
+  amplitudes;
+* the scalar mass ∫ρ N_a N_b and the node positions, from which the floating-frame invariants are taken.
+
+Every figure is in SI units (m, Pa, kg/m³).
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sps
+import skfem
+from skfem import Basis, BilinearForm, ElementHex1, ElementTetP1, ElementTetP2, ElementVector, asm
+from skfem.helpers import dot
+from skfem.models.elasticity import lame_parameters, linear_elasticity
+
+__all__ = ["ElasticSolid3D", "von_mises_3d"]
+
+_ELEMENTS = {(skfem.MeshTet1, 1): ElementTetP1, (skfem.MeshTet1, 2): ElementTetP2, (skfem.MeshHex1, 1): ElementHex1}
+
+
+@BilinearForm
+def _vector_mass(u, v, w):
+    return w.rho * dot(u, v)
+
+
+@BilinearForm
+def _scalar_mass(u, v, w):
+    return w.rho * u * v
+
+
+def von_mises_3d(stress):
+    """Von Mises stress of Voigt stresses (…, 6) = (σ_xx, σ_yy, σ_zz, σ_yz, σ_xz, σ_xy), Pa."""
+    s = np.asarray(stress, dtype=float)
+    sx, sy, sz, syz, sxz, sxy = (s[..., k] for k in range(6))
+    return np.sqrt(0.5 * ((sx - sy) ** 2 + (sy - sz) ** 2 + (sz - sx) ** 2) + 3.0 * (syz ** 2 + sxz ** 2 + sxy ** 2))
+
+
+def _positive(name, value):
+    if isinstance(value, bool) or not np.isscalar(value) or not np.isfinite(value) or value <= 0:
+        raise ValueError(f"{name} must be a finite positive number, got {value!r}")
+    return float(value)
+
+
+def _check_elements(mesh):
+    """ValueError naming the first degenerate tetrahedron (zero volume; either node order is fine, scikit-fem
+    integrates with |det J|) or inverted hexahedron (det J changes sign or vanishes inside it)."""
+    if isinstance(mesh, skfem.MeshTet1):
+        p = mesh.p[:, mesh.t]                                        # (3, 4, n_el)
+        det = np.einsum("ik,ik->k", np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0], axis=0), p[:, 3] - p[:, 0])
+        size = float(np.ptp(mesh.p, axis=1).max()) ** 3
+        bad = np.flatnonzero(np.abs(det) <= 1e-14 * size)
+    else:
+        corners = np.array([[i, j, k] for i in (0.0, 1.0) for j in (0.0, 1.0) for k in (0.0, 1.0)]).T
+        det = mesh.mapping().detDF(np.hstack([corners, np.full((3, 1), 0.5)]))      # (n_el, 9)
+        bad = np.flatnonzero(~(np.all(det > 0, axis=1) | np.all(det < 0, axis=1)))
+    if bad.size:
+        raise ValueError(f"the mesh has {bad.size} inverted or degenerate element(s), the first element "
+                         f"{int(bad[0])}: fix its node order or shape")
+
+
+class ElasticSolid3D:
+    """A linear-elastic solid on a 3D scikit-fem mesh (module docstring).
+
+    Parameters
+    ----------
+    mesh : skfem.MeshTet or skfem.MeshHex
+        Positions in the body frame, m.
+    E : float
+        Young's modulus, Pa.
+    nu : float
+        Poisson's ratio, −1 < ν < 0.5.
+    rho : float
+        Density, kg/m³.
+    order : {1, 2}
+        P1 or P2 tetrahedra (default 2: P1 tetrahedra lock in bending); Q1 only on hexahedra.
+    name : str
+
+    Attributes
+    ----------
+    stiffness, mass : csr_matrix (n_dofs, n_dofs)
+    component_dofs : ndarray (3, n_nodes)
+        The DOFs of u_x, u_y, u_z of every node (P2 mid-edge nodes included).
+    node_positions : ndarray (n_nodes, 3)
+    scalar_mass : csr_matrix (n_nodes, n_nodes)
+        ∫ρ N_a N_b, kg.
+
+    Raises
+    ------
+    ValueError
+        A mesh that is not a 3D tetrahedral or hexahedral one, a degenerate or inverted element, ν outside (−1, 0.5),
+        non-positive E or ρ, or an order the mesh has no element for.
+    """
+
+    def __init__(self, mesh, E, nu, rho, order=2, name="solid"):
+        if not isinstance(mesh, (skfem.MeshTet1, skfem.MeshHex1)) or mesh.p.shape[0] != 3:
+            raise ValueError(f"ElasticSolid3D needs a 3D skfem.MeshTet or skfem.MeshHex, got {mesh!r}")
+        self.E, self.rho = _positive("E", E), _positive("rho", rho)
+        if isinstance(nu, bool) or not np.isscalar(nu) or not np.isfinite(nu) or not -1.0 < nu < 0.5:
+            raise ValueError(f"Poisson's ratio nu must lie in (-1, 0.5), got {nu!r}")
+        key = (type(mesh), order)
+        if isinstance(order, bool) or key not in _ELEMENTS:
+            raise ValueError(f"order {order!r} is not available on a {type(mesh).__name__} (P1, P2 on tetrahedra; "
+                             f"Q1 on hexahedra)")
+        _check_elements(mesh)
+        self.nu, self.order, self.mesh, self.name = float(nu), int(order), mesh, name
+        scalar = _ELEMENTS[key]()
+        self.basis = Basis(mesh, ElementVector(scalar))
+        self.scalar_basis = Basis(mesh, scalar)
+        lam, mu = lame_parameters(self.E, self.nu)
+        self.stiffness = asm(linear_elasticity(lam, mu), self.basis).tocsr()
+        self.mass = asm(_vector_mass, self.basis, rho=self.rho).tocsr()
+        self.scalar_mass = asm(_scalar_mass, self.scalar_basis, rho=self.rho).tocsr()
+        self.n_dofs = self.basis.N
+        self.component_dofs = np.array(self.basis.split_indices())
+        self.node_positions = self.scalar_basis.doflocs.T.copy()
+        self.material = lam * np.outer(np.r_[1.0, 1.0, 1.0, 0.0, 0.0, 0.0], np.r_[1.0, 1.0, 1.0, 0.0, 0.0, 0.0]) \
+            + mu * np.diag([2.0, 2.0, 2.0, 1.0, 1.0, 1.0])
+
+    @property
+    def volume(self):
+        """∫ dV, m³."""
+        return float(self.basis.dx.sum())
+
+    def nodes(self, spec):
+        """Node indices of a boundary name, a predicate ``X (3, n) -> bool mask`` on the node positions, or an
+        index array; ValueError for an unknown name, indices out of range or an empty set."""
+        if isinstance(spec, str):
+            bnd = self.mesh.boundaries or {}
+            if spec not in bnd:
+                raise ValueError(f"mesh of body {self.name!r} has no boundary {spec!r}; it has {sorted(bnd)}")
+            dofs = self.scalar_basis.get_dofs(bnd[spec]).all()
+            nodes = np.unique(dofs)
+        elif callable(spec):
+            nodes = np.flatnonzero(np.asarray(spec(self.node_positions.T), dtype=bool))
+        else:
+            nodes = np.unique(np.asarray(spec, dtype=int).ravel())
+            if nodes.size and (nodes.min() < 0 or nodes.max() >= self.node_positions.shape[0]):
+                raise ValueError(f"node indices {spec!r} outside 0..{self.node_positions.shape[0] - 1}")
+        if nodes.size == 0:
+            raise ValueError(f"node set {spec!r} selects no nodes of body {self.name!r}")
+        return nodes
+
+    def rigid_map(self, nodes, centre):
+        """(dofs, R): the displacement DOFs of ``nodes`` and the (3k, 6) map of a small rigid motion
+        (translation t, rotation θ about ``centre``) onto them, u = t + θ × (X − centre) (k nodes)."""
+        r = self.node_positions[nodes] - np.asarray(centre, dtype=float)
+        k = len(nodes)
+        R = np.zeros((3, k, 6))
+        for c in range(3):
+            R[c, :, c] = 1.0
+        # θ × r: x: θ_y r_z − θ_z r_y; y: θ_z r_x − θ_x r_z; z: θ_x r_y − θ_y r_x
+        R[0, :, 4], R[0, :, 5] = r[:, 2], -r[:, 1]
+        R[1, :, 5], R[1, :, 3] = r[:, 0], -r[:, 2]
+        R[2, :, 3], R[2, :, 4] = r[:, 1], -r[:, 0]
+        return self.component_dofs[:, nodes].ravel(), R.reshape(3 * k, 6)
+
+    def cell_strain_operator(self):
+        """(n_cells · 6, n_dofs) csr: the cell-mean strains (Voigt, engineering shear) of a displacement vector."""
+        b = self.basis
+        nloc = b.element_dofs.shape[0]
+        dx = b.dx                                                       # (n_cells, n_qp)
+        vol = dx.sum(axis=1)
+        rows, cols, vals = [], [], []
+        voigt = ((0, 0), (1, 1), (2, 2), (1, 2), (0, 2), (0, 1))
+        for a in range(nloc):
+            grad = b.basis[a][0].grad                                   # (3 comp, 3 dir, n_cells, n_qp)
+            mean = np.einsum("ijkq,kq->ijk", grad, dx) / vol            # (3, 3, n_cells)
+            for v, (i, j) in enumerate(voigt):
+                val = mean[i, j] if i == j else mean[i, j] + mean[j, i]
+                rows.append(6 * np.arange(b.nelems) + v)
+                cols.append(b.element_dofs[a])
+                vals.append(val)
+        return sps.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                              shape=(6 * b.nelems, self.n_dofs))

@@ -1,0 +1,152 @@
+"""A meshed 3D solid in the spatial floating frame (fem/elasticity3d.py, bodies/floating_spatial/solid.py):
+the Craig–Bampton reduction against the full mesh and beam theory, energy conservation of a free tumbling
+reduced body, stresses against beam theory and under rigid motion, and clear errors for bad input."""
+import functools
+
+import numpy as np
+import pytest
+import scipy.linalg
+import scipy.sparse as sps
+import scipy.sparse.linalg as spla
+import skfem
+
+import skfem_flex as sf
+from skfem_flex.bodies.floating_spatial.solid import FloatingSolid3D
+from skfem_flex.fem.elasticity3d import ElasticSolid3D
+from skfem_flex.numerics.quaternions import rotation_vector_matrix
+
+E, NU, RHO, L, H = 2e11, 0.3, 7800.0, 1.0, 0.1
+
+
+def root(X):
+    return np.isclose(X[0], 0.0)
+
+
+def tip(X):
+    return np.isclose(X[0], L)
+
+
+@functools.lru_cache(maxsize=2)
+def bar(nx=20):
+    """A steel bar 1 × 0.1 × 0.1 m of P2 tetrahedra (hexahedra split in six)."""
+    mesh = skfem.MeshHex.init_tensor(np.linspace(0, L, nx + 1), np.linspace(0, H, 3), np.linspace(0, H, 3))
+    return ElasticSolid3D(mesh.to_meshtet(), E, NU, RHO)
+
+
+def rigid_tip_frequencies(solid, n):
+    """The full mesh clamped at the root with its tip face tied rigidly to six DOFs: the lowest n, rad/s."""
+    nodes = solid.nodes(tip)
+    dofs, R = solid.rigid_map(nodes, solid.node_positions[nodes].mean(axis=0))
+    interior = np.setdiff1d(np.arange(solid.n_dofs), np.concatenate([solid.component_dofs[:, solid.nodes(root)].ravel(),
+                                                                    dofs]))
+    rr, cc = np.nonzero(R)
+    T = sps.csr_matrix((np.r_[np.ones(interior.size), R[rr, cc]],
+                        (np.r_[interior, dofs[rr]], np.r_[np.arange(interior.size), interior.size + cc])),
+                       shape=(solid.n_dofs, interior.size + 6))
+    lam = spla.eigsh((T.T @ solid.stiffness @ T).tocsc(), n, (T.T @ solid.mass @ T).tocsc(), sigma=0.0,
+                     which="LM")[0]
+    return np.sqrt(np.sort(lam))
+
+
+def test_craig_bampton_against_the_full_mesh_and_beam_theory():
+    """20 fixed-interface modes and the tip's six constraint modes: the two first bending pairs, the first
+    torsion and the first axial frequencies within 1e-3 of the full mesh with the same rigid tip (measured
+    ≤ 4e-4); the first bending frequency within 1 % of our linear Timoshenko beam's (k = 5/6)."""
+    solid = bar()
+    body = FloatingSolid3D(solid, root, 20, interfaces={"tip": tip})
+    M, K = body.mass_matrix(body.q0)[12:, 12:], body.strain_energy.K
+    reduced = np.sqrt(scipy.linalg.eigh(K, M, eigvals_only=True)[:6])
+    full = rigid_tip_frequencies(solid, 6)
+    assert np.abs(reduced / full - 1.0).max() <= 1e-3
+    G = E / (2 * (1 + NU))
+    A, I = H * H, H ** 4 / 12
+    sec = sf.SpatialSection(EA=E * A, GA1=5 / 6 * G * A, GA2=5 / 6 * G * A, GJ=G * 0.1406 * H ** 4, EI1=E * I,
+                            EI2=E * I, rhoA=RHO * A, rhoI1=RHO * I, rhoI2=RHO * I)
+    beam = sf.TimoshenkoBeam3D(skfem.MeshLine(np.linspace(0, L, 21)), sec, order=2)
+    timoshenko = beam.modes(fixed=beam.dofs_at(0.0), n_modes=1)[0][0]
+    assert reduced[0] == pytest.approx(timoshenko, rel=1e-2)
+    # the invariants: the mass and the first moment of the bar about the root's centre
+    assert body.inertia.mass == pytest.approx(RHO * L * H * H, rel=1e-12)
+    assert np.allclose(body.inertia.S0, [RHO * H * H * L * L / 2, 0.0, 0.0], rtol=1e-12, atol=1e-9)
+
+
+def test_free_tumbling_reduced_solid_keeps_its_energy():
+    solid = bar(6)
+    body = FloatingSolid3D(solid, root, 4, interfaces={"tip": tip}, angular_velocity=(3.0, 20.0, 5.0))
+    res = sf.simulate(sf.Scene([body], name="tumbling"), 0.02, 2e-4, scheme="energy-momentum")
+    e = np.asarray(res.total_energy)
+    assert np.ptp(e) <= 1e-9 * np.abs(e).max()
+    assert np.abs(np.asarray(res.q)[:, 12:]).max() > 0.0                 # it does deform as it tumbles
+
+
+def test_stresses_against_beam_theory_and_under_rigid_motion():
+    """A tip force F along z on the clamped bar (static): σ_xx in the cells between x = 0.3 and 0.7 m equals
+    F (L − x) z / I at their centroids within 2 %; the same deformation with the frame moved anywhere has the
+    same stresses, and the undeformed body none at all."""
+    solid = bar()
+    body = FloatingSolid3D(solid, root, 20, interfaces={"tip": tip})
+    F = 1e4
+    scene = sf.Scene([body], constraints=[sf.Weld3D(body.point("frame"))],
+                     forces=[sf.SpatialPointForce(body.point("tip"), (0.0, 0.0, F))])
+    q = sf.static_equilibrium(scene).q
+    sigma = body.stresses(q)
+    centroids = solid.mesh.p[:, solid.mesh.t].mean(axis=1).T
+    x, z = centroids[:, 0], centroids[:, 2] - H / 2
+    mid = (x > 0.3) & (x < 0.7) & (np.abs(z) > 0.02)
+    beam = F * (L - x[mid]) * (-z[mid]) / (H ** 4 / 12)
+    assert np.abs(sigma[mid, 0] - beam).max() <= 0.02 * np.abs(beam).max()
+    moved = q.copy()
+    R = rotation_vector_matrix([0.7, -1.2, 0.4])
+    moved[:3] = [3.0, -2.0, 5.0]
+    moved[3:12] = (R @ q[3:12].reshape(3, 3).T).T.ravel()
+    assert np.abs(body.stresses(moved) - sigma).max() <= 1e-9 * np.abs(sigma).max()
+    assert np.abs(body.stresses(body.q0)).max() == 0.0
+
+
+def test_vtk_series_of_the_mesh_with_its_stresses(tmp_path):
+    """The series holds the mesh's vertices and cells, moved with the body, and the cell stresses; hexahedra in
+    VTK's corner order (every cell of a box mesh keeps a positive volume in the file)."""
+    import meshio
+
+    from skfem_flex.io.output import VTKSeries, read_pvd
+    hexes = ElasticSolid3D(skfem.MeshHex.init_tensor(np.linspace(0, L, 5), np.linspace(0, H, 2), np.linspace(0, H, 2)),
+                           E, NU, RHO, order=1)
+    for solid, cell in ((bar(6), "tetra"), (hexes, "hexahedron")):
+        body = FloatingSolid3D(solid, root, 3, angular_velocity=(0.0, 0.0, 2.0))
+        sf.simulate(sf.Scene([body], forces=[sf.SpatialPointForce(body.point((L, H, H)), (0.0, 0.0, 1e5))]),
+                    2e-3, 1e-3, output=VTKSeries(tmp_path / cell, "solid"))
+        frames = read_pvd(tmp_path / cell / "solid.pvd")
+        mesh = meshio.read(tmp_path / cell / frames[-1][1])
+        assert mesh.cells_dict[cell].shape[0] == solid.mesh.t.shape[1]
+        assert mesh.points.shape[0] == solid.mesh.p.shape[1]
+        assert np.abs(mesh.cell_data["von_mises"][0]).max() > 0.0
+        if cell == "hexahedron":
+            p = mesh.points[mesh.cells_dict[cell]]
+            vol = np.einsum("ni,ni->n", p[:, 1] - p[:, 0], np.cross(p[:, 3] - p[:, 0], p[:, 4] - p[:, 0]))
+            assert np.all(vol > 0)
+
+
+def test_bad_input():
+    mesh = skfem.MeshTet()
+    with pytest.raises(ValueError, match="Poisson's ratio"):
+        ElasticSolid3D(mesh, E, 0.5, RHO)
+    with pytest.raises(ValueError, match="E must be"):
+        ElasticSolid3D(mesh, -1.0, NU, RHO)
+    flat = skfem.MeshTet(np.array([[0.0, 1.0, 0.0, 1.0], [0.0, 0.0, 1.0, 1.0], [0.0, 0.0, 0.0, 0.0]]),
+                         np.array([[0], [1], [2], [3]]))
+    with pytest.raises(ValueError, match="degenerate"):
+        ElasticSolid3D(flat, E, NU, RHO)
+    with pytest.raises(ValueError, match="3D skfem.MeshTet"):
+        ElasticSolid3D(skfem.MeshTri(), E, NU, RHO)
+    solid = bar(6)
+    with pytest.raises(ValueError, match="selects no nodes"):
+        FloatingSolid3D(solid, lambda X: X[0] > 5.0, 2)
+    with pytest.raises(ValueError, match="no boundary"):
+        FloatingSolid3D(solid, "left", 2)
+    with pytest.raises(ValueError, match="share"):
+        FloatingSolid3D(solid, root, 2, interfaces={"tip": lambda X: X[0] < 0.2})
+    with pytest.raises(ValueError, match="n_modes must be"):
+        FloatingSolid3D(solid, root, 10 ** 6)
+    body = FloatingSolid3D(solid, root, 2, interfaces={"tip": tip})
+    with pytest.raises(ValueError, match="no interface"):
+        body.point("middle")
