@@ -19,8 +19,6 @@ from pathlib import Path
 
 import numpy as np
 import scipy.linalg
-import scipy.sparse as sps
-import scipy.sparse.linalg as spla
 import skfem
 
 import skfem_flex as sf
@@ -46,22 +44,7 @@ def tip(X):
     return np.isclose(X[0], L)
 
 
-def full_frequencies(n):
-    """The full mesh clamped at the root with its tip face rigid: the lowest n natural frequencies, rad/s."""
-    nodes = solid.nodes(tip)
-    dofs, R = solid.rigid_map(nodes, solid.node_positions[nodes].mean(axis=0))
-    tied = np.concatenate([solid.component_dofs[:, solid.nodes(root)].ravel(), dofs])
-    interior = np.setdiff1d(np.arange(solid.n_dofs), tied)
-    rr, cc = np.nonzero(R)
-    T = sps.csr_matrix((np.r_[np.ones(interior.size), R[rr, cc]],
-                        (np.r_[interior, dofs[rr]], np.r_[np.arange(interior.size), interior.size + cc])),
-                       shape=(solid.n_dofs, interior.size + 6))
-    lam = spla.eigsh((T.T @ solid.stiffness @ T).tocsc(), n, (T.T @ solid.mass @ T).tocsc(), sigma=0.0,
-                     which="LM")[0]
-    return np.sqrt(np.sort(lam))
-
-
-full = full_frequencies(6)
+full = solid.natural_frequencies(6, solid.nodes(root), [solid.nodes(tip)])
 reduction = {}
 for n_modes in MODE_COUNTS:
     start = time.perf_counter()

@@ -45,6 +45,16 @@ def relerr(a, b):
     return np.abs(a - b).max() / max(np.abs(b).max(), 1e-300)
 
 
+def central_jacobian(fun, x, h=1e-6):
+    """∂fun/∂x by central differences: columns (fun(x + h e_k) − fun(x − h e_k)) / 2h."""
+    cols = []
+    for k in range(x.size):
+        e = np.zeros_like(x)
+        e[k] = h
+        cols.append((np.atleast_1d(fun(x + e)) - np.atleast_1d(fun(x - e))) / (2 * h))
+    return np.array(cols).T
+
+
 def crossing_times(t, x, xdot):
     """Times where x crosses 0 upwards, located by cubic Hermite interpolation on each step (O(dt⁴))."""
     out = []

@@ -15,7 +15,7 @@ import skfem_flex as sf
 from skfem_flex.bodies.floating.body import FloatingBeam
 from skfem_flex.elements.forces import DistributedLoad
 
-from helpers import SPIN_UP_SECTION as SEC, dense, relerr
+from helpers import SPIN_UP_SECTION as SEC, central_jacobian, dense, relerr
 
 L = 10.0
 # λ = ω √(ρA L⁴/EI) for the default section
@@ -25,15 +25,6 @@ LAMBDA_SCALE = math.sqrt(SEC["rhoA"] * L ** 4 / SEC["EI"])
 def make_beam(n=4, order=1, section=None, length=L):
     sec = sf.Section(**(section or SEC))
     return sf.TimoshenkoBeam(skfem.MeshLine(np.linspace(0.0, length, n + 1)), sec, order=order)
-
-
-def fd_jacobian(fun, x, h=1e-6):
-    cols = []
-    for i in range(x.size):
-        e = np.zeros_like(x)
-        e[i] = h
-        cols.append((np.atleast_1d(fun(x + e)) - np.atleast_1d(fun(x - e))) / (2 * h))
-    return np.array(cols).T
 
 
 # --------------------------------------------------------------------------- inertia
@@ -93,50 +84,50 @@ def test_analytic_tangents_match_finite_differences(case):
     q1, v1 = q0 + rng.normal(size=n) * 0.4, rng.normal(size=n)
     tol = 1e-7
     # B = ∂(M a)/∂q
-    assert relerr(body.momentum_jacobian(q0, a), fd_jacobian(lambda x: dense(body.mass_matrix(x)) @ a, q0)) < tol
+    assert relerr(body.momentum_jacobian(q0, a), central_jacobian(lambda x: dense(body.mass_matrix(x)) @ a, q0)) < tol
     # Q_v = ∂T/∂q − Ṁ v (eq. 26) and its derivatives
-    dT = fd_jacobian(lambda x: body.kinetic_energy(x, v0), q0)[0]
-    mdot = fd_jacobian(lambda x: dense(body.mass_matrix(x)) @ v0, q0) @ v0
+    dT = central_jacobian(lambda x: body.kinetic_energy(x, v0), q0)[0]
+    mdot = central_jacobian(lambda x: dense(body.mass_matrix(x)) @ v0, q0) @ v0
     f, fq, fv = body.quadratic_velocity_force(q0, v0)
     assert relerr(f, dT - mdot) < tol
-    assert relerr(fq, fd_jacobian(lambda x: body.quadratic_velocity_force(x, v0)[0], q0)) < tol
-    assert relerr(fv, fd_jacobian(lambda y: body.quadratic_velocity_force(q0, y)[0], v0)) < tol
+    assert relerr(fq, central_jacobian(lambda x: body.quadratic_velocity_force(x, v0)[0], q0)) < tol
+    assert relerr(fv, central_jacobian(lambda y: body.quadratic_velocity_force(q0, y)[0], v0)) < tol
     # kinetic discrete gradient: exact and with exact derivatives (sinc/cos terms included)
     G = lambda x: 0.5 * v0 @ dense(body.mass_matrix(x)) @ v1      # noqa: E731
     g, gq, gv = body.kinetic_discrete_gradient(q0, q1, v0, v1)
     assert abs(g @ (q1 - q0) - (G(q1) - G(q0))) <= 1e-12 * max(abs(G(q1)), abs(G(q0)))
-    assert relerr(gq, fd_jacobian(lambda x: body.kinetic_discrete_gradient(q0, x, v0, v1)[0], q1)) < tol
-    assert relerr(gv, fd_jacobian(lambda y: body.kinetic_discrete_gradient(q0, q1, v0, y)[0], v1)) < tol
+    assert relerr(gq, central_jacobian(lambda x: body.kinetic_discrete_gradient(q0, x, v0, v1)[0], q1)) < tol
+    assert relerr(gv, central_jacobian(lambda y: body.kinetic_discrete_gradient(q0, q1, v0, y)[0], v1)) < tol
     # strain energy
     V = body.potential_energy
-    assert relerr(body.potential_gradient(q0), fd_jacobian(V, q0)[0]) < tol
-    assert relerr(body.potential_hessian(q0), fd_jacobian(body.potential_gradient, q0)) < tol
+    assert relerr(body.potential_gradient(q0), central_jacobian(V, q0)[0]) < tol
+    assert relerr(body.potential_hessian(q0), central_jacobian(body.potential_gradient, q0)) < tol
     g, gq = body.potential_discrete_gradient(q0, q1)
     assert abs(g @ (q1 - q0) - (V(q1) - V(q0))) <= 1e-12 * max(V(q1), V(q0))
-    assert relerr(gq, fd_jacobian(lambda x: body.potential_discrete_gradient(q0, x)[0], q1)) < tol
+    assert relerr(gq, central_jacobian(lambda x: body.potential_discrete_gradient(q0, x)[0], q1)) < tol
     # gravity
     grav = np.array([0.4, -9.81])
     Vg = lambda x: body.gravity_potential(x, grav)[0]             # noqa: E731
     _, gg, gh = body.gravity_potential(q0, grav)
-    assert relerr(gg, fd_jacobian(Vg, q0)[0]) < tol
-    assert relerr(gh, fd_jacobian(lambda x: body.gravity_potential(x, grav)[1], q0)) < tol
+    assert relerr(gg, central_jacobian(Vg, q0)[0]) < tol
+    assert relerr(gh, central_jacobian(lambda x: body.gravity_potential(x, grav)[1], q0)) < tol
     dg, dgq = body.gravity_discrete_gradient(q0, q1, grav)
     assert abs(dg @ (q1 - q0) - (Vg(q1) - Vg(q0))) <= 1e-12 * abs(Vg(q0))
-    assert relerr(dgq, fd_jacobian(lambda x: body.gravity_discrete_gradient(q0, x, grav)[0], q1)) < tol
+    assert relerr(dgq, central_jacobian(lambda x: body.gravity_discrete_gradient(q0, x, grav)[0], q1)) < tol
     # body point (joints, probes)
     p, f2 = body.point(7.3), np.array([0.7, -1.1])
-    assert relerr(p.position_jacobian(q0), fd_jacobian(p.position, q0)) < tol
-    assert relerr(p.position_hessian_product(q0, f2), fd_jacobian(lambda x: p.position_jacobian(x).T @ f2, q0)) < tol
+    assert relerr(p.position_jacobian(q0), central_jacobian(p.position, q0)) < tol
+    assert relerr(p.position_hessian_product(q0, f2), central_jacobian(lambda x: p.position_jacobian(x).T @ f2, q0)) < tol
     D = p.position_discrete_gradient(q0, q1)
     np.testing.assert_allclose(D @ (q1 - q0), p.position(q1) - p.position(q0), atol=1e-13)
     assert relerr(p.position_discrete_gradient_jacobian(q0, q1, f2),
-                  fd_jacobian(lambda x: p.position_discrete_gradient(q0, x).T @ f2, q1)) < tol
-    np.testing.assert_allclose(p.angle_jacobian(q0), fd_jacobian(p.angle, q0)[0], atol=1e-8)
+                  central_jacobian(lambda x: p.position_discrete_gradient(q0, x).T @ f2, q1)) < tol
+    np.testing.assert_allclose(p.angle_jacobian(q0), central_jacobian(p.angle, q0)[0], atol=1e-8)
     # loads
     for frame in ("body", "global"):
         load = DistributedLoad(body, f=lambda x: 0.1 * x, p=2.0, Q=(5.0, 3.0), M=(3.0, 2.0), frame=frame)
         _, lq, _ = load.generalized_force(q0, v0, 0.0)
-        assert relerr(lq, fd_jacobian(lambda x: load.generalized_force(x, v0, 0.0)[0], q0)) < tol
+        assert relerr(lq, central_jacobian(lambda x: load.generalized_force(x, v0, 0.0)[0], q0)) < tol
 
 
 @pytest.mark.parametrize("frame", ["body", "global"])

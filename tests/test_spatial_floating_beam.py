@@ -16,7 +16,7 @@ from skfem_flex.bodies.floating_spatial.rotation import spinning_modes, steady_s
 from skfem_flex.elements.forces.spatial import SpatialPointForce
 from skfem_flex.fem.spatial_beam import TimoshenkoBeam3D
 from skfem_flex.fem.spatial_section import SpatialSection
-from helpers import ROTATING_TABLE, relerr
+from helpers import ROTATING_TABLE, central_jacobian, relerr
 
 SECTION = SpatialSection(EA=1e4, GA1=8e3, GA2=6e3, GJ=400.0, EI1=500.0, EI2=300.0, rhoA=1.3, rhoI1=2.0, rhoI2=1.0)
 
@@ -24,16 +24,6 @@ SECTION = SpatialSection(EA=1e4, GA1=8e3, GA2=6e3, GJ=400.0, EI1=500.0, EI2=300.
 def small_body(reference="clamped", strain="green-lagrange", order=2, n=3, **kw):
     beam = TimoshenkoBeam3D(skfem.MeshLine(np.linspace(0.0, 2.0, n + 1)), SECTION, order=order)
     return FloatingBeam3D(beam, reference=reference, strain=strain, **kw)
-
-
-def central(f, x, h=1e-6):
-    """Columns (f(x + h e_k) − f(x − h e_k)) / 2h."""
-    cols = []
-    for k in range(x.size):
-        e = np.zeros_like(x)
-        e[k] = h
-        cols.append((np.atleast_1d(f(x + e)) - np.atleast_1d(f(x - e))) / (2 * h))
-    return np.array(cols).T
 
 
 def turned(R, z):
@@ -53,22 +43,22 @@ def test_kinetic_terms_are_the_derivatives_of_the_mass_matrix(reference):
     M = body.mass_matrix(q)
     assert np.abs(M - M.T).max() <= 1e-14 * np.abs(M).max()
     B = body.momentum_jacobian(q, a)
-    assert relerr(B, central(lambda z: body.mass_matrix(z) @ a, q)) <= 1e-8
+    assert relerr(B, central_jacobian(lambda z: body.mass_matrix(z) @ a, q)) <= 1e-8
     H = kinetics.kinetic_hessian(inv, a, b)
-    assert relerr(H, central(lambda z: body.momentum_jacobian(z, a).T @ b, q)) <= 1e-8
+    assert relerr(H, central_jacobian(lambda z: body.momentum_jacobian(z, a).T @ b, q)) <= 1e-8
     f, fq, fv = body.quadratic_velocity_force(q, a)
-    dT = central(lambda z: 0.5 * a @ body.mass_matrix(z) @ a, q).ravel()
+    dT = central_jacobian(lambda z: 0.5 * a @ body.mass_matrix(z) @ a, q).ravel()
     assert relerr(f, dT - B @ a) <= 1e-8                       # Q_v = ∂T/∂q − Ṁ v
-    assert relerr(fq, central(lambda z: body.quadratic_velocity_force(z, a)[0], q)) <= 1e-8
-    assert relerr(fv, central(lambda z: body.quadratic_velocity_force(q, z)[0], a)) <= 1e-8
+    assert relerr(fq, central_jacobian(lambda z: body.quadratic_velocity_force(z, a)[0], q)) <= 1e-8
+    assert relerr(fv, central_jacobian(lambda z: body.quadratic_velocity_force(q, z)[0], a)) <= 1e-8
     # the mid-point gradient of ½ v₀ᵀ M(q) v₁ is exact, and so are its derivatives
     g, gq, gv = body.kinetic_discrete_gradient(q, q1, a, b)
 
     def G(z):
         return 0.5 * a @ body.mass_matrix(z) @ b
     assert abs(g @ (q1 - q) - (G(q1) - G(q))) <= 1e-13 * abs(G(q1) - G(q)) + 1e-13
-    assert relerr(gq, central(lambda z: body.kinetic_discrete_gradient(q, z, a, b)[0], q1)) <= 1e-8
-    assert relerr(gv, central(lambda z: body.kinetic_discrete_gradient(q, q1, a, z)[0], b)) <= 1e-8
+    assert relerr(gq, central_jacobian(lambda z: body.kinetic_discrete_gradient(q, z, a, b)[0], q1)) <= 1e-8
+    assert relerr(gv, central_jacobian(lambda z: body.kinetic_discrete_gradient(q, q1, a, z)[0], b)) <= 1e-8
     # turning x, the directors and both velocities together changes nothing
     R = Rotation.from_rotvec([0.3, -1.1, 0.7]).as_matrix()
     assert abs(turned(R, a) @ body.mass_matrix(turned(R, q)) @ turned(R, b) - a @ M @ b) <= 1e-12 * abs(a @ M @ b)
@@ -97,11 +87,11 @@ def test_strain_energy_gradient_hessian_and_exact_discrete_gradient(strain):
     q0, q1 = body.q0.copy(), body.q0.copy()
     q0[12:], q1[12:] = (0.05 * rng.standard_normal(body.n_elastic) for _ in range(2))
     V = body.potential_energy
-    assert relerr(body.potential_gradient(q0), central(V, q0, 1e-5).ravel()) <= 1e-7
-    assert relerr(body.potential_hessian(q0), central(body.potential_gradient, q0, 1e-6)) <= 1e-7
+    assert relerr(body.potential_gradient(q0), central_jacobian(V, q0, 1e-5).ravel()) <= 1e-7
+    assert relerr(body.potential_hessian(q0), central_jacobian(body.potential_gradient, q0, 1e-6)) <= 1e-7
     g, jac = body.potential_discrete_gradient(q0, q1)
     assert abs(g @ (q1 - q0) - (V(q1) - V(q0))) <= 1e-12 * max(V(q0), V(q1))
-    assert relerr(jac, central(lambda z: body.potential_discrete_gradient(q0, z)[0], q1, 1e-6)) <= 1e-7
+    assert relerr(jac, central_jacobian(lambda z: body.potential_discrete_gradient(q0, z)[0], q1, 1e-6)) <= 1e-7
     if strain == "linear":
         K = body.beam.stiffness().toarray()[np.ix_(body.free_dofs, body.free_dofs)]
         assert V(q0) == pytest.approx(0.5 * q0[12:] @ K @ q0[12:], rel=1e-13)
@@ -179,8 +169,8 @@ def test_a_point_force_on_the_axis_is_the_gradient_of_its_work():
     F = np.array([0.3, -1.0, 2.0])
     point = body.point(1.3)
     Q, Qq, _ = SpatialPointForce(point, F).generalized_force(q, np.zeros(body.n_dofs), 0.0)
-    assert relerr(Q, central(lambda z: F @ point.position(z), q).ravel()) <= 1e-9
-    assert relerr(Qq, central(lambda z: SpatialPointForce(point, F).generalized_force(z, 0 * z, 0.0)[0], q)) <= 1e-8
+    assert relerr(Q, central_jacobian(lambda z: F @ point.position(z), q).ravel()) <= 1e-9
+    assert relerr(Qq, central_jacobian(lambda z: SpatialPointForce(point, F).generalized_force(z, 0 * z, 0.0)[0], q)) <= 1e-8
     # the clamped root is the frame's own point: affine, with the frame's orientation
     assert hasattr(small_body("clamped").point(0.0), "G")
 
@@ -214,7 +204,7 @@ def test_reduced_beam_keeps_the_stiffening_and_follows_the_full_one():
     chord = small_body("chord").reduced(4)
     rng = np.random.default_rng(7)
     q, a = chord.q0 + 0.1 * rng.standard_normal(chord.n_dofs), rng.standard_normal(chord.n_dofs)
-    assert relerr(chord.momentum_jacobian(q, a), central(lambda z: chord.mass_matrix(z) @ a, q)) <= 1e-8
+    assert relerr(chord.momentum_jacobian(q, a), central_jacobian(lambda z: chord.mass_matrix(z) @ a, q)) <= 1e-8
     with pytest.raises(ValueError, match="already reduced"):
         red.reduced(2)
     with pytest.raises(ValueError, match="n_modes must be"):

@@ -17,10 +17,13 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sps
+import scipy.sparse.linalg as spla
 import skfem
 from skfem import Basis, BilinearForm, ElementHex1, ElementTetP1, ElementTetP2, ElementVector, asm
 from skfem.helpers import dot
 from skfem.models.elasticity import lame_parameters, linear_elasticity
+
+from .node_sets import select_nodes
 
 __all__ = ["ElasticSolid3D", "von_mises_3d"]
 
@@ -132,22 +135,9 @@ class ElasticSolid3D:
 
     def nodes(self, spec):
         """Node indices of a boundary name, a predicate ``X (3, n) -> bool mask`` on the node positions, or an
-        index array; ValueError for an unknown name, indices out of range or an empty set."""
-        if isinstance(spec, str):
-            bnd = self.mesh.boundaries or {}
-            if spec not in bnd:
-                raise ValueError(f"mesh of body {self.name!r} has no boundary {spec!r}; it has {sorted(bnd)}")
-            dofs = self.scalar_basis.get_dofs(bnd[spec]).all()
-            nodes = np.unique(dofs)
-        elif callable(spec):
-            nodes = np.flatnonzero(np.asarray(spec(self.node_positions.T), dtype=bool))
-        else:
-            nodes = np.unique(np.asarray(spec, dtype=int).ravel())
-            if nodes.size and (nodes.min() < 0 or nodes.max() >= self.node_positions.shape[0]):
-                raise ValueError(f"node indices {spec!r} outside 0..{self.node_positions.shape[0] - 1}")
-        if nodes.size == 0:
-            raise ValueError(f"node set {spec!r} selects no nodes of body {self.name!r}")
-        return nodes
+        index array (:func:`~skfem_flex.fem.node_sets.select_nodes`)."""
+        return select_nodes(spec, self.node_positions, self.mesh.boundaries or {},
+                            lambda facets: self.scalar_basis.get_dofs(facets).all(), self.name)
 
     def rigid_map(self, nodes, centre):
         """(dofs, R): the displacement DOFs of ``nodes`` and the (3k, 6) map of a small rigid motion
@@ -162,6 +152,32 @@ class ElasticSolid3D:
         R[1, :, 5], R[1, :, 3] = r[:, 0], -r[:, 2]
         R[2, :, 3], R[2, :, 4] = r[:, 1], -r[:, 0]
         return self.component_dofs[:, nodes].ravel(), R.reshape(3 * k, 6)
+
+    def tie(self, clamped, rigid_sets):
+        """(T, n_free): u = T w, w = (the free DOFs, then six DOFs (t, θ) of each rigid node set about its centre),
+        with the ``clamped`` nodes' DOFs held at zero; ``n_free`` the number of free DOFs (csr T)."""
+        held = [self.component_dofs[:, np.asarray(clamped, dtype=int)].ravel()]
+        rows, cols, vals = [], [], []
+        for k, nodes in enumerate(rigid_sets):
+            dofs, R = self.rigid_map(nodes, self.node_positions[nodes].mean(axis=0))
+            held.append(dofs)
+            rr, cc = np.nonzero(R)
+            rows.append(dofs[rr])
+            cols.append(6 * k + cc)
+            vals.append(R[rr, cc])
+        free = np.setdiff1d(np.arange(self.n_dofs), np.concatenate(held))
+        rows = np.concatenate([free] + rows)
+        cols = np.concatenate([np.arange(free.size)] + [free.size + c for c in cols])
+        vals = np.concatenate([np.ones(free.size)] + vals)
+        return sps.csr_matrix((vals, (rows, cols)), shape=(self.n_dofs, free.size + 6 * len(rigid_sets))), free.size
+
+    def natural_frequencies(self, n, clamped, rigid_sets=()):
+        """The n lowest natural frequencies (rad/s) of the mesh with the ``clamped`` nodes held and each rigid
+        node set tied to six DOFs (:meth:`tie`): sparse, ``eigsh`` in shift-invert mode about zero."""
+        T, _ = self.tie(clamped, rigid_sets)
+        lam = spla.eigsh((T.T @ self.stiffness @ T).tocsc(), int(n), (T.T @ self.mass @ T).tocsc(), sigma=0.0,
+                         which="LM")[0]
+        return np.sqrt(np.maximum(np.sort(lam), 0.0))
 
     def cell_strain_operator(self):
         """(n_cells · 6, n_dofs) csr: the cell-mean strains (Voigt, engineering shear) of a displacement vector."""

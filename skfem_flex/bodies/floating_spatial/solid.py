@@ -28,7 +28,6 @@ modes, precomputed; von Mises from σ. Geometric stiffening (the Green–Lagrang
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sps
 import scipy.sparse.linalg as spla
 
 from ...fem.elasticity3d import ElasticSolid3D, von_mises_3d
@@ -141,40 +140,22 @@ class FloatingSolid3D(FloatingFrame3D):
     # ---------------------------------------------------------------- reduction
     @staticmethod
     def _craig_bampton(solid, sets, n_modes):
-        n = solid.n_dofs
-        frame_dofs = solid.component_dofs[:, sets["frame"]].ravel()
-        itf_dofs, maps = [], []
-        for name, nodes in sets.items():
-            if name != "frame":
-                dofs, R = solid.rigid_map(nodes, solid.node_positions[nodes].mean(axis=0))
-                itf_dofs.append(dofs)
-                maps.append(R)
-        tied = np.concatenate([frame_dofs] + itf_dofs)
-        interior = np.setdiff1d(np.arange(n), tied)
-        nb = 6 * len(maps)
+        rigid = [nodes for name, nodes in sets.items() if name != "frame"]
+        T, n_free = solid.tie(sets["frame"], rigid)
+        nb = 6 * len(rigid)
         n_modes = int(n_modes) if not isinstance(n_modes, bool) and int(n_modes) == n_modes else -1
-        if not 1 <= n_modes < interior.size - 1:
-            raise ValueError(f"n_modes must be an integer in [1, {interior.size - 2}] for this mesh and these "
+        if not 1 <= n_modes < n_free - 1:
+            raise ValueError(f"n_modes must be an integer in [1, {n_free - 2}] for this mesh and these "
                              f"interfaces, got {n_modes!r}")
-        # u = T w, w = (interior DOFs, interface DOFs)
-        data_r, data_c, data_v = [interior], [np.arange(interior.size)], [np.ones(interior.size)]
-        for k, (dofs, R) in enumerate(zip(itf_dofs, maps)):
-            rr, cc = np.nonzero(R)
-            data_r.append(dofs[rr])
-            data_c.append(interior.size + 6 * k + cc)
-            data_v.append(R[rr, cc])
-        T = sps.csr_matrix((np.concatenate(data_v), (np.concatenate(data_r), np.concatenate(data_c))),
-                           shape=(n, interior.size + nb))
-        K = solid.stiffness[interior][:, interior].tocsc()
-        M = solid.mass[interior][:, interior].tocsc()
+        Kw = (T.T @ solid.stiffness @ T).tocsc()
+        Mw = (T.T @ solid.mass @ T).tocsc()
+        K, M = Kw[:n_free, :n_free], Mw[:n_free, :n_free]
         lam, vec = spla.eigsh(K, k=n_modes, M=M, sigma=0.0, which="LM")
         order = np.argsort(lam)
         lam, vec = lam[order], vec[:, order]
         blocks = [np.vstack([vec, np.zeros((nb, n_modes))])]
         if nb:
-            Kw = (T.T @ solid.stiffness @ T).tocsr()
-            Kib = Kw[:interior.size][:, interior.size:].toarray()
-            psi = -spla.splu(K).solve(Kib)
+            psi = -spla.splu(K.tocsc()).solve(Kw[:n_free, n_free:].toarray())
             blocks.append(np.vstack([psi, np.eye(nb)]))
         return T @ np.hstack(blocks), np.sqrt(np.maximum(lam, 0.0))
 

@@ -30,6 +30,7 @@ from skfem import Basis, BilinearForm, ElementVector, asm
 from skfem.helpers import dot
 from skfem.models.elasticity import linear_elasticity, plane_stress
 
+from ...fem.node_sets import select_nodes
 from ..base import check_finite_vector
 from .body import ElasticModel, Interface
 from .stiffening import GreenLagrange
@@ -191,24 +192,11 @@ class PlaneStress:
 
     # ------------------------------------------------------------- interfaces
     def nodes(self, spec):
-        """Node indices (into ``dof_positions``) of a boundary name, predicate or index array."""
-        b = self.basis
-        if isinstance(spec, str):
-            bnd = self.mesh.boundaries or {}
-            if spec not in bnd:
-                raise ValueError(f"mesh of body {self.name!r} has no boundary {spec!r}; it has {sorted(bnd)}")
-            dofs = b.get_dofs(bnd[spec]).all()
-            nodes = np.nonzero(np.isin(self.xdofs, dofs))[0]
-        elif callable(spec):
-            mask = np.asarray(spec(self.dof_positions.T), dtype=bool)
-            nodes = np.nonzero(mask)[0]
-        else:
-            nodes = np.unique(np.asarray(spec, dtype=int).ravel())
-            if nodes.size and (nodes.min() < 0 or nodes.max() >= self.dof_positions.shape[0]):
-                raise ValueError(f"node indices {spec!r} outside 0..{self.dof_positions.shape[0] - 1}")
-        if nodes.size == 0:
-            raise ValueError(f"interface spec {spec!r} selects no nodes of body {self.name!r}")
-        return nodes
+        """Node indices (into ``dof_positions``) of a boundary name, predicate or index array
+        (:func:`~skfem_flex.fem.node_sets.select_nodes`)."""
+        return select_nodes(spec, self.dof_positions, self.mesh.boundaries or {},
+                            lambda facets: np.nonzero(np.isin(self.xdofs, self.basis.get_dofs(facets).all()))[0],
+                            self.name)
 
     def add_interface(self, key, spec, coupling="rigid"):
         """Add the interface ``key`` (spec as in the class docstring); returns it.
