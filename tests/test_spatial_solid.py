@@ -113,7 +113,7 @@ def test_bad_input():
     mesh = skfem.MeshTet()
     with pytest.raises(ValueError, match="Poisson's ratio"):
         ElasticSolid3D(mesh, E, 0.5, RHO)
-    with pytest.raises(ValueError, match="E must be"):
+    with pytest.raises(ValueError, match="E must be positive"):
         ElasticSolid3D(mesh, -1.0, NU, RHO)
     flat = skfem.MeshTet(np.array([[0.0, 1.0, 0.0, 1.0], [0.0, 0.0, 1.0, 1.0], [0.0, 0.0, 0.0, 0.0]]),
                          np.array([[0], [1], [2], [3]]))

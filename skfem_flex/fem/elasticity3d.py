@@ -24,6 +24,7 @@ from skfem.helpers import dot
 from skfem.models.elasticity import lame_parameters, linear_elasticity
 
 from .node_sets import select_nodes
+from .section import positive_number
 
 __all__ = ["ElasticSolid3D", "von_mises_3d"]
 
@@ -45,12 +46,6 @@ def von_mises_3d(stress):
     s = np.asarray(stress, dtype=float)
     sx, sy, sz, syz, sxz, sxy = (s[..., k] for k in range(6))
     return np.sqrt(0.5 * ((sx - sy) ** 2 + (sy - sz) ** 2 + (sz - sx) ** 2) + 3.0 * (syz ** 2 + sxz ** 2 + sxy ** 2))
-
-
-def _positive(name, value):
-    if isinstance(value, bool) or not np.isscalar(value) or not np.isfinite(value) or value <= 0:
-        raise ValueError(f"{name} must be a finite positive number, got {value!r}")
-    return float(value)
 
 
 def _check_elements(mesh):
@@ -106,7 +101,7 @@ class ElasticSolid3D:
     def __init__(self, mesh, E, nu, rho, order=2, name="solid"):
         if not isinstance(mesh, (skfem.MeshTet1, skfem.MeshHex1)) or mesh.p.shape[0] != 3:
             raise ValueError(f"ElasticSolid3D needs a 3D skfem.MeshTet or skfem.MeshHex, got {mesh!r}")
-        self.E, self.rho = _positive("E", E), _positive("rho", rho)
+        self.E, self.rho = positive_number("E", E), positive_number("rho", rho)
         if isinstance(nu, bool) or not np.isscalar(nu) or not np.isfinite(nu) or not -1.0 < nu < 0.5:
             raise ValueError(f"Poisson's ratio nu must lie in (-1, 0.5), got {nu!r}")
         key = (type(mesh), order)
