@@ -211,6 +211,34 @@ def test_reduced_beam_keeps_the_stiffening_and_follows_the_full_one():
         full.reduced(0)
 
 
+def test_spherical_joint_at_a_point_of_the_axis():
+    """A clamped–pinned (propped) cantilever: the frame welded to the ground at the root, the tip held by a
+    spherical joint at a point of the elastic axis (its position is quadratic in q), a force P at mid-span:
+    the deflection there is 7 P L³/(768 EI) (linear strain, nearly Euler–Bernoulli); the joint's reaction is
+    the propped end's 5P/16; and a free swing on the joint keeps its energy and the joint."""
+    sec = SpatialSection(EA=1e9, GA1=1e9, GA2=1e9, GJ=1e3, EI1=1e3, EI2=1e3, rhoA=1.0, rhoI1=1e-4, rhoI2=1e-4)
+    beam = TimoshenkoBeam3D(skfem.MeshLine(np.linspace(0.0, 2.0, 9)), sec, order=2)
+    body = FloatingBeam3D(beam, strain="linear")
+    P, L = 1e-3, 2.0
+    pin = sf.Spherical(body.point(L), name="prop")
+    scene = sf.Scene([body], constraints=[sf.Weld3D(body.point(0.0)), pin],
+                     forces=[SpatialPointForce(body.point(1.0), (P, 0.0, 0.0))])
+    state = sf.static_equilibrium(scene)
+    mid = body.point(1.0)
+    assert (mid.position(state.q) - mid.position(body.q0))[0] == pytest.approx(7 * P * L ** 3 / (768 * 1e3), rel=1e-3)
+    force = pin.reaction(state.q, state.lam[scene.constraint_layout[-1][1]])[:3]
+    assert force[0] == pytest.approx(-5 * P / 16, rel=1e-3)
+    # a pendulum: the frame free, the tip pinned to the ground, released under gravity
+    swing = FloatingBeam3D(beam, reference="chord", strain="linear", velocity=(0.0, 0.0, 0.0))
+    scene = sf.Scene([swing], constraints=[sf.Spherical(swing.point(L))], forces=[sf.Gravity((-9.81, 0.0, 0.0))])
+    res = sf.simulate(scene, 0.2, 0.01)
+    swung = np.asarray(res.kinetic).max()
+    assert swung > 1e-3                                        # it does swing (T reaches m g Δh)
+    assert np.ptp(np.asarray(res.total_energy)) <= 1e-9 * swung and np.max(res.constraint_residual) <= 1e-9
+    with pytest.raises(ValueError, match="orientation of its own"):
+        sf.Revolute3D(body.point(1.0), axis=(1.0, 0.0, 0.0))
+
+
 def test_bad_input():
     beam = small_body().beam
     with pytest.raises(ValueError, match="TimoshenkoBeam3D"):

@@ -165,6 +165,20 @@ class ElasticPoint(BodyPoint):
         H[12:, 3:12] = H[3:12, 12:].T
         return H
 
+    def quadratic(self):
+        """(H (3, n, n), A (3, n), a (3,)) with r_c = ½ qᵀ H_c q + A_c·q + a_c: the products d_i[c] S_ij y_j make
+        H, x and X₀ make A (a = 0). Spatial joints that need only positions (``Spherical``) take it."""
+        n = self.body.n_dofs
+        H = np.zeros((3, n, n))
+        A = np.zeros((3, n))
+        for c in range(3):
+            A[c, c] = 1.0
+            for i in range(3):
+                A[c, 3 + 3 * i + c] = self.X0[i]
+                H[c, 3 + 3 * i + c, 12:] = self.S[i]
+                H[c, 12:, 3 + 3 * i + c] = self.S[i]
+        return H, A, np.zeros(3)
+
     def position_discrete_gradient(self, q0, q1):
         return self.position_jacobian(0.5 * (np.asarray(q0, dtype=float) + np.asarray(q1, dtype=float)))
 

@@ -71,11 +71,13 @@ def perpendiculars(e):
 
 
 class Affine:
-    """u(q) = A q + a, a 3-vector affine in the local coordinates (A (3, n), a (3,))."""
+    """u(q) = A q + a, a 3-vector affine in the local coordinates (A (3, n), a (3,)); with ``H`` (3, n, n) the
+    quadratic u_c(q) = ½ qᵀ H_c q + A_c·q + a_c (a point of a floating-frame body, x + D(X₀ + S y))."""
 
-    def __init__(self, A, a):
+    def __init__(self, A, a, H=None):
         self.A = np.asarray(A, dtype=float)
         self.a = np.asarray(a, dtype=float).reshape(3)
+        self.H = None if H is None else np.asarray(H, dtype=float)
 
     @classmethod
     def constant(cls, vec, n):
@@ -84,26 +86,44 @@ class Affine:
 
     @classmethod
     def of(cls, body_affine, where, n):
-        """A body point's or axis' (A_b, a_b) (``.affine()``, body-local) placed at ``where`` of n columns."""
-        A_b, a_b = body_affine.affine()
+        """A body point's or axis' (A_b, a_b) (``.affine()``, body-local) placed at ``where`` of n columns; a
+        point whose position is quadratic in q gives (H_b, A_b, a_b) by ``.quadratic()`` instead."""
+        quadratic = getattr(body_affine, "quadratic", None)
+        if quadratic is None:
+            H_b = None
+            A_b, a_b = body_affine.affine()
+        else:
+            H_b, A_b, a_b = quadratic()
         A = np.zeros((3, n))
         A[:, where] = A_b
-        return cls(A, a_b)
+        if H_b is None:
+            return cls(A, a_b)
+        H = np.zeros((3, n, n))
+        H[:, where, where] = H_b
+        return cls(A, a_b, H)
+
+    def _second(self, n):
+        return np.zeros((3, n, n)) if self.H is None else self.H
 
     def __sub__(self, other):
-        return Affine(self.A - other.A, self.a - other.a)
+        H = None if self.H is None and other.H is None else self._second(self.A.shape[1]) - other._second(
+            other.A.shape[1])
+        return Affine(self.A - other.A, self.a - other.a, H)
 
     def value(self, q):
-        return self.A @ q + self.a
+        out = self.A @ q + self.a
+        return out if self.H is None else out + 0.5 * np.einsum("cij,i,j->c", self.H, q, q)
 
     def equals(self, other):
-        """Three linear equations u − w = 0: (H, b, c) stacks."""
+        """Three equations u − w = 0 (linear, or quadratic for quadratic points): (H, b, c) stacks."""
         d = self - other
-        n = d.A.shape[1]
-        return np.zeros((3, n, n)), d.A.copy(), d.a.copy()
+        return d._second(d.A.shape[1]).copy(), d.A.copy(), d.a.copy()
 
     def dot(self, other, value=0.0):
-        """One equation u·w − value = 0 as (H, b, c) with one row."""
+        """One equation u·w − value = 0 as (H, b, c) with one row (both u and w affine: the product is quadratic)."""
+        if self.H is not None or other.H is not None:
+            raise ValueError("a dot product of a quadratic point would be quartic: joints with axes need points "
+                             "affine in q (rigid bodies, beam nodes, a floating frame's own points)")
         H = self.A.T @ other.A + other.A.T @ self.A
         b = self.a @ other.A + other.a @ self.A
         return H[None], b[None], np.array([self.a @ other.a - float(value)])
@@ -265,7 +285,7 @@ def spatial_reaction(constraint, body, where, point, q, lam):
     F = np.zeros((q.shape[0], 3))
     for o in directors:
         M += _cross(qb[:, o:o + 3], f[:, o:o + 3])
-    r = qb @ point.G.T + point.a
+    r = qb @ point.G.T + point.a if hasattr(point, "G") else np.array([point.position(row) for row in qb])
     for o in positions:
         F += f[:, o:o + 3]
         M += _cross(qb[:, o:o + 3] - r, f[:, o:o + 3])
