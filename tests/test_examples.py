@@ -211,6 +211,8 @@ def test_spatial_solid(monkeypatch, tmp_path):
     res = example["result"]
     assert res.relative_energy_error(np.max(np.abs(res.external_work))) <= 1e-9
     assert example["von_mises"] > 1e6 and (tmp_path / "solid.pvd").exists()
+    flap, lag = example["spinning"]["green-lagrange", 3.0]
+    assert flap == pytest.approx(4.7973, rel=2e-2) and lag == pytest.approx(3.7435, rel=2e-2)
 
 
 def test_meshed_rod(monkeypatch, tmp_path):

@@ -166,6 +166,18 @@ class FloatingBeam3D(FloatingFrame3D):
             return SpatialPoint(self, np.array([0.0, 0.0, float(s)]))
         return ElasticPoint(self, np.array([0.0, 0.0, float(s)]), S)
 
+    def mesh_shapes(self, vectors):
+        """Columns on the elastic coordinates as columns on the beam's DOFs (zero where the reference condition
+        holds them)."""
+        vectors = np.asarray(vectors)
+        out = np.zeros((self.beam.n_dofs,) + vectors.shape[1:], dtype=vectors.dtype)
+        out[self.free_dofs] = vectors if self.basis is None else self.basis @ vectors
+        return out
+
+    def motion_rows(self, axis):
+        """The beam DOFs of the displacement along frame axis ``axis`` (0, 1, 2) at every node."""
+        return self.beam.node_dofs[:, int(axis)]
+
     # ================================================================ reduction
     def reduced(self, n_modes, interfaces=("root",), n_derivatives=None, centrifugal=None, name=None):
         """This beam on a reduction basis (:func:`.reduction.reduction_basis`: Craig–Bampton for the clamped
@@ -188,9 +200,9 @@ class FloatingBeam3D(FloatingFrame3D):
         return steady_spin(self, omega, axis)
 
     def spinning_modes(self, omega, axis=(1.0, 0.0, 0.0), n_modes=8):
-        """Modes about that steady spin in the spinning frame, flapwise along d₁
+        """Modes about that steady spin in the spinning frame, flapwise along d₁, lead-lag along d₂
         (:func:`.rotation.spinning_modes`; a :class:`~skfem_flex.fem.spatial_beam.RotatingModes`)."""
-        return spinning_modes(self, omega, axis, n_modes)
+        return spinning_modes(self, omega, axis, n_modes, flap_axis=0, lag_axis=1)
 
     # ================================================================ output
     def strains(self, q):

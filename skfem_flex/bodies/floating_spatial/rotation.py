@@ -100,7 +100,7 @@ def steady_spin(body, omega, axis=(1.0, 0.0, 0.0), tol=1e-12, max_iterations=50)
                         f"omega = {float(omega):.6g} rad/s")[0].copy()
 
 
-def spinning_modes(body, omega, axis=(1.0, 0.0, 0.0), n_modes=8, flap_axis=0):
+def spinning_modes(body, omega, axis=(1.0, 0.0, 0.0), n_modes=8, flap_axis=0, lag_axis=1):
     """Modes about the steady spin, in the spinning frame (module docstring).
 
     Parameters
@@ -111,13 +111,15 @@ def spinning_modes(body, omega, axis=(1.0, 0.0, 0.0), n_modes=8, flap_axis=0):
     axis : array_like (3,)
         The spin axis in the frame's axes.
     n_modes : int
-    flap_axis : int
-        The frame axis (0, 1, 2) along which a mode's displacement counts as flapwise.
+    flap_axis, lag_axis : int
+        The frame axes (0, 1, 2) along which a mode's displacement counts as flapwise (along the spin axis)
+        and as lead-lag (in the plane of rotation, across the body).
 
     Returns
     -------
     RotatingModes
-        Frequencies (rad/s, ascending), growth rates (1/s), flapwise flags and the shapes on the beam's DOFs.
+        Frequencies (rad/s, ascending), growth rates (1/s), flapwise flags and the shapes on the body's mesh
+        (``body.mesh_shapes``: the beam's or the solid's DOFs).
     """
     y = steady_spin(body, omega, axis)
     q, v, acc = _frame_motion(body, omega, axis)
@@ -132,8 +134,5 @@ def spinning_modes(body, omega, axis=(1.0, 0.0, 0.0), n_modes=8, flap_axis=0):
     lam, vec = lam[keep], vec[:n, keep]
     order = np.argsort(np.abs(lam))[:int(n_modes)]
     lam, vec = lam[order], vec[:, order]
-    full = np.zeros((body.beam.n_dofs, lam.size), dtype=complex)
-    full[body.free_dofs] = vec if body.basis is None else body.basis @ vec
-    nd = body.beam.node_dofs
-    lag_axis = [k for k in (0, 1) if k != flap_axis][0]
-    return RotatingModes.from_eigenpairs(lam, full, nd[:, flap_axis], nd[:, lag_axis])
+    return RotatingModes.from_eigenpairs(lam, body.mesh_shapes(vec), body.motion_rows(flap_axis),
+                                         body.motion_rows(lag_axis))

@@ -36,6 +36,7 @@ from ..spatial import SpatialPoint
 from . import kinetics
 from .frame import ElasticPoint, FloatingFrame3D
 from .inertia import SpatialFrameInertia
+from .solid_strain import SolidGreenLagrange, stiffening_loads
 
 __all__ = ["FloatingSolid3D", "QuadraticEnergy"]
 
@@ -100,6 +101,15 @@ class FloatingSolid3D(FloatingFrame3D):
     position, orientation, velocity, angular_velocity :
         The frame's initial state (as :class:`~skfem_flex.bodies.spatial.SpatialRigidBody`).
     name : str
+    strain : {"linear", "green-lagrange"}
+        Linear elasticity (default), or the Green–Lagrange strain on the reduced coordinates
+        (``solid_strain.py``), with which a tension stiffens the body (a spinning blade).
+    n_derivatives : int, optional
+        With the Green–Lagrange strain: the modal derivatives of every pair of the lowest ``n_derivatives``
+        fixed-interface modes join the basis (default min(3, n_modes)).
+    centrifugal : bool, optional
+        With the Green–Lagrange strain: the static responses to a unit spin about each frame axis join the
+        basis (default True).
 
     Attributes
     ----------
@@ -114,7 +124,8 @@ class FloatingSolid3D(FloatingFrame3D):
     """
 
     def __init__(self, solid, frame, n_modes, interfaces=None, position=(0.0, 0.0, 0.0), orientation=None,
-                 velocity=(0.0, 0.0, 0.0), angular_velocity=(0.0, 0.0, 0.0), name=None):
+                 velocity=(0.0, 0.0, 0.0), angular_velocity=(0.0, 0.0, 0.0), name=None, strain="linear",
+                 n_derivatives=None, centrifugal=None):
         if not isinstance(solid, ElasticSolid3D):
             raise ValueError(f"FloatingSolid3D needs an ElasticSolid3D, got {solid!r}")
         self.solid, self.name = solid, solid.name if name is None else name
@@ -123,18 +134,33 @@ class FloatingSolid3D(FloatingFrame3D):
         self.origin = X[sets["frame"]].mean(axis=0)
         self.centres = {k: X[v].mean(axis=0) - self.origin for k, v in sets.items()}
         self.interface_names = tuple(k for k in sets if k != "frame")
-        self.basis, self.frequencies = self._craig_bampton(solid, sets, n_modes)
+        if strain not in ("linear", "green-lagrange"):
+            raise ValueError(f"strain must be 'linear' or 'green-lagrange', got {strain!r}")
+        self.strain = strain
+        self.basis, self.frequencies, tie = self._craig_bampton(solid, sets, n_modes)
         self.n_modes = int(n_modes)
+        n_extra = 0
+        if strain == "green-lagrange":
+            nd = min(3, self.n_modes) if n_derivatives is None else n_derivatives
+            if isinstance(nd, bool) or int(nd) != nd or not 0 <= nd <= self.n_modes:
+                raise ValueError(f"n_derivatives must be an integer in [0, {self.n_modes}], got {n_derivatives!r}")
+            extra = self._stiffening_vectors(solid, tie, self.basis[:, :int(nd)], self.origin,
+                                             True if centrifugal is None else bool(centrifugal),
+                                             self.basis[:, :self.n_modes])
+            n_extra = extra.shape[1]
+            self.basis = np.hstack([self.basis, extra])
         self.n_elastic = self.basis.shape[1]
         self.n_dofs = 12 + self.n_elastic
         self.inertia = self._invariants(solid, self.basis, X - self.origin)
-        self.strain_energy = QuadraticEnergy(self.basis.T @ (solid.stiffness @ self.basis))
+        self.strain_energy = (SolidGreenLagrange(solid, self.basis) if strain == "green-lagrange"
+                              else QuadraticEnergy(self.basis.T @ (solid.stiffness @ self.basis)))
         strain = (solid.cell_strain_operator() @ self.basis).reshape(-1, 6, self.n_elastic)
         self._stress_modes = np.einsum("ab,cbm->cam", solid.material, strain)
         self._names = (("x", "y", "z") + tuple(f"d{i}{c}" for i in (1, 2, 3) for c in "xyz")
                        + tuple(f"eta{k + 1}" for k in range(self.n_modes))
                        + tuple(f"{itf}_{c}" for itf in self.interface_names
-                               for c in ("tx", "ty", "tz", "rx", "ry", "rz")))
+                               for c in ("tx", "ty", "tz", "rx", "ry", "rz"))
+                       + tuple(f"xi{k + 1}" for k in range(n_extra)))
         self.set_initial_state(position, orientation, velocity, angular_velocity, None, None)
 
     # ---------------------------------------------------------------- reduction
@@ -157,7 +183,26 @@ class FloatingSolid3D(FloatingFrame3D):
         if nb:
             psi = -spla.splu(K.tocsc()).solve(Kw[:n_free, n_free:].toarray())
             blocks.append(np.vstack([psi, np.eye(nb)]))
-        return T @ np.hstack(blocks), np.sqrt(np.maximum(lam, 0.0))
+        return T @ np.hstack(blocks), np.sqrt(np.maximum(lam, 0.0)), (T, n_free, spla.splu(K.tocsc()))
+
+    @staticmethod
+    def _stiffening_vectors(solid, tie, modes, origin, spins, kept):
+        """The static responses, interfaces held, to the stiffening loads (``solid_strain.stiffening_loads``),
+        made M-orthogonal to the ``kept`` modes and to each other; the ones already spanned dropped."""
+        T, n_free, lu = tie
+        loads = stiffening_loads(solid, modes, origin, pairs=modes.shape[1] > 0, spins=spins)
+        if loads.shape[1] == 0:
+            return np.zeros((solid.n_dofs, 0))
+        size = np.abs(loads).max(axis=0)
+        # modes bending in different planes do not couple: their third derivative is round-off
+        loads = loads[:, size > 1e-8 * size.max()]
+        w = -lu.solve(np.asarray((T.T @ loads)[:n_free]))
+        vectors = T[:, :n_free] @ w
+        vectors = vectors - kept @ (kept.T @ (solid.mass @ vectors))
+        gram = vectors.T @ (solid.mass @ vectors)
+        vals, vecs = np.linalg.eigh(gram)
+        keep = vals > 1e-10 * vals.max()
+        return vectors @ (vecs[:, keep] / np.sqrt(vals[keep]))
 
     @staticmethod
     def _invariants(solid, Phi, X0):
@@ -204,6 +249,14 @@ class FloatingSolid3D(FloatingFrame3D):
         node = int(np.argmin(np.sum((self.solid.node_positions - X) ** 2, axis=1)))
         S = np.stack([self.basis[self.solid.component_dofs[k, node]] for k in range(3)])
         return ElasticPoint(self, self.solid.node_positions[node] - self.origin, S)
+
+    def mesh_shapes(self, vectors):
+        """Columns on η as columns on the mesh's displacement DOFs (Φ · columns)."""
+        return self.basis @ np.asarray(vectors)
+
+    def motion_rows(self, axis):
+        """The mesh DOFs of the displacement along frame axis ``axis`` (0, 1, 2) at every node."""
+        return self.solid.component_dofs[int(axis)]
 
     def stresses(self, q):
         """Cell stresses (n_cells, 6) = (σ_xx, σ_yy, σ_zz, σ_yz, σ_xz, σ_xy) in the frame's axes, Pa."""
