@@ -6,6 +6,7 @@ import numpy as np
 
 from ..bodies.probes import PointProbe
 from ..bodies.spatial import SpatialRigidBody
+from ..elements.constraints.quadratic import perpendiculars
 from ..elements.constraints.spatial_joints import Revolute3D
 from ..elements.forces import Gravity
 from ..numerics.quaternions import rotation_vector_matrix
@@ -151,8 +152,8 @@ SLIDER_CRANK_REFERENCE = {0.1: (0.226787189, 0.560031482), 0.5: (0.184952630, 5.
                           3.0: (0.228484813, 32.008327751)}
 
 
-@register(t_end=5.0, dt=1e-3, omega="rad/s")
-def spatial_slider_crank(omega=6.0):
+@register(t_end=5.0, dt=1e-3, omega="rad/s", body="-", n_modes="-")
+def spatial_slider_crank(omega=6.0, body="rigid", n_modes=6):
     """The IFToMM benchmark "spatial rigid slider–crank mechanism": a crank (0.08 m, 0.12 kg) hinged about x
     at A = (0, 0.1, 0.12) m, a rod (0.3 m, 0.5 kg) on a ball joint at the crank's end B and a cross (universal)
     joint at C on a slider (2 kg) that slides along the x axis; gravity 9.81 m/s² along −z; the crank starts
@@ -163,6 +164,11 @@ def spatial_slider_crank(omega=6.0):
     slider arm is along x (the rod's arm perpendicular to the rod and to x): the published data leave these
     two choices open. Probes: ``"slider"`` (x_C, m) and ``"crank angle"`` (θ, rad, in (−π, π]);
     :data:`SLIDER_CRANK_REFERENCE` (for omega = 6 rad/s).
+
+    ``body="solid-modal"`` makes the rod a meshed steel bar (:func:`meshed_rod_3d`: 0.3 m, square section of
+    the rod's mass, P2 tetrahedra) reduced by Craig–Bampton to ``n_modes`` modes: its frame is clamped at the
+    C end, where the cross joint needs an orientation, and the ball joint holds its B end face (a rigid
+    interface). Its inertia is the bar's, not the benchmark's rod's.
     """
     from ..elements.constraints.spatial_joints import Prismatic3D, Spherical, Universal
 
@@ -175,16 +181,23 @@ def spatial_slider_crank(omega=6.0):
     crank = SpatialRigidBody(0.12, [1e-4, 1e-4, 1e-5], position=0.5 * (A + B), velocity=np.cross(omega, 0.5 * (B - A)),
                              angular_velocity=omega, size=[0.01, 0.01, 0.08], name="crank")
     e = (C - B) / np.linalg.norm(C - B)
-    rod = SpatialRigidBody(0.5, 4e-3 * np.eye(3) + (4e-4 - 4e-3) * np.outer(e, e), position=0.5 * (B + C),
-                           velocity=scale * np.array([0.12, -0.24, 0.0]),
-                           angular_velocity=scale * np.array([1.92, -0.96, 0.48]), name="rod")
+    rod_velocity, rod_omega = scale * np.array([0.12, -0.24, 0.0]), scale * np.array([1.92, -0.96, 0.48])
+    if body not in ("rigid", "solid-modal"):
+        raise ValueError(f"body must be 'rigid' or 'solid-modal', got {body!r}")
+    if body == "rigid":
+        rod = SpatialRigidBody(0.5, 4e-3 * np.eye(3) + (4e-4 - 4e-3) * np.outer(e, e), position=0.5 * (B + C),
+                               velocity=rod_velocity, angular_velocity=rod_omega, name="rod")
+        rod_b, rod_c = rod.point(rod.body_coordinates(B)), rod.point(rod.body_coordinates(C))
+    else:
+        rod = meshed_rod_3d(C, B, n_modes, velocity=rod_velocity + np.cross(rod_omega, C - 0.5 * (B + C)),
+                            angular_velocity=rod_omega)
+        rod_b, rod_c = rod.point("B"), rod.point("frame")
     slider = SpatialRigidBody(2.0, [1e-4, 1e-4, 1e-4], position=C, velocity=[0.24 * scale, 0.0, 0.0], size=[0.05] * 3,
                               name="slider")
     cross = np.cross(e, [1.0, 0.0, 0.0])
     joints = [Revolute3D(crank.point(crank.body_coordinates(A)), None, axis=(1.0, 0.0, 0.0), name="crank hinge"),
-              Spherical(crank.point(crank.body_coordinates(B)), rod.point(rod.body_coordinates(B)), name="ball"),
-              Universal(rod.point(rod.body_coordinates(C)), slider.point(), axis_a=cross, axis_b=(1.0, 0.0, 0.0),
-                        name="cross"),
+              Spherical(crank.point(crank.body_coordinates(B)), rod_b, name="ball"),
+              Universal(rod_c, slider.point(), axis_a=cross, axis_b=(1.0, 0.0, 0.0), name="cross"),
               Prismatic3D(slider.point(), None, axis=(1.0, 0.0, 0.0), name="guide")]
 
     def crank_angle(scene, t, q, v):
@@ -193,4 +206,30 @@ def spatial_slider_crank(omega=6.0):
 
     return Scene([crank, rod, slider], joints, [Gravity((0.0, 0.0, -9.81))], name="spatial_slider_crank",
                  probes={"slider": lambda scene, t, q, v: float(scene.coordinates(slider, q)[0]),
-                         "crank angle": crank_angle}, parameters=dict(omega=rate))
+                         "crank angle": crank_angle}, parameters=dict(omega=rate, body=body, n_modes=n_modes))
+
+
+def meshed_rod_3d(start, end, n_modes, velocity=(0.0, 0.0, 0.0), angular_velocity=(0.0, 0.0, 0.0), mass=0.5,
+                  n_elements=12):
+    """A steel bar from ``start`` to ``end`` (m) of square section with the given ``mass`` (kg), P2 tetrahedra
+    (``n_elements`` hexahedra along, each split in six), reduced by Craig–Bampton (``n_modes``) to a
+    :class:`~skfem_flex.bodies.floating_spatial.solid.FloatingSolid3D`: its frame clamped at the ``start`` face
+    (its origin the face's centre), the ``end`` face the rigid interface ``"B"``; the frame's first axis along
+    the bar. ``velocity`` is the start face centre's, ``angular_velocity`` the bar's (space axes)."""
+    import skfem
+
+    from ..bodies.floating_spatial.solid import FloatingSolid3D
+    from ..fem.elasticity3d import ElasticSolid3D
+    start, end = np.asarray(start, dtype=float), np.asarray(end, dtype=float)
+    length = float(np.linalg.norm(end - start))
+    rho = 7800.0
+    side = np.sqrt(mass / (rho * length))
+    mesh = skfem.MeshHex.init_tensor(np.linspace(0.0, length, n_elements + 1), np.linspace(-side / 2, side / 2, 2),
+                                     np.linspace(-side / 2, side / 2, 2)).to_meshtet()
+    solid = ElasticSolid3D(mesh, E=2e11, nu=0.3, rho=rho, name="rod")
+    axis = (end - start) / length
+    R = np.column_stack([axis, *perpendiculars(axis)])
+    return FloatingSolid3D(solid, lambda X: np.isclose(X[0], 0.0), int(n_modes),
+                           interfaces={"B": lambda X: np.isclose(X[0], length)}, position=start, orientation=R,
+                           velocity=velocity, angular_velocity=angular_velocity, name="rod")
+
