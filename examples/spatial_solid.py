@@ -72,7 +72,11 @@ for strain in ("green-lagrange", "linear"):
     rotor = sf.FloatingSolid3D(slender, root, 6 if QUICK else 12, strain=strain, n_derivatives=4)
     for lam, _, _ in (SPIN_TABLE if strain == "green-lagrange" else [(3.0, None, None)]):
         modes = spinning_modes(rotor, lam * spin_ref, axis=(0.0, 0.0, 1.0), n_modes=6, flap_axis=2, lag_axis=1)
-        spinning[strain, lam] = (modes.first(True)[0] / spin_ref, modes.first(False)[0] / spin_ref)
+        if lam == 0.0:
+            # at rest the square bar's two bending modes are one pair (the mesh splits it by 3e-4): report both
+            spinning[strain, lam] = tuple(np.sort(modes.omega[:2]) / spin_ref)
+        else:
+            spinning[strain, lam] = (modes.first(True)[0] / spin_ref, modes.first(False)[0] / spin_ref)
 
 # the spin-up of the reduced bar with a tip force, its stresses written to VTK
 bar = sf.FloatingSolid3D(solid, root, MODE_COUNTS[-1] if QUICK else 20, interfaces={"tip": tip}, name="bar")
@@ -99,7 +103,8 @@ def summary(res, vm):
               "| λ | flapwise | lead-lag |", "|---|---|---|"]
     for lam, flap, lag in SPIN_TABLE:
         f, g = spinning["green-lagrange", lam]
-        lines.append(f"| {lam:g} | {f:.4f} ({flap:.4f}) | {g:.4f} ({lag:.4f}) |")
+        pair = " (the pair at rest)" if lam == 0.0 else ""
+        lines.append(f"| {lam:g}{pair} | {f:.4f} ({flap:.4f}) | {g:.4f} ({lag:.4f}) |")
     f, g = spinning["linear", 3.0]
     lines += [f"| 3, linear strain | {f:.4f} | {g:.4f} (√(ω̄₀² − λ²) = 1.8335) |", "",
               f"spin-up to 20 rad/s with 10 kN on the tip, {T_END:g} s at Δt = {DT:g} s: largest von Mises stress "

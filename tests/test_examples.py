@@ -215,6 +215,16 @@ def test_spatial_solid(monkeypatch, tmp_path):
     assert flap == pytest.approx(4.7973, rel=2e-2) and lag == pytest.approx(3.7435, rel=2e-2)
 
 
+def test_bracket(monkeypatch, tmp_path):
+    """The bracket read from its gmsh file: the reduced body's static load-face displacement is the full
+    mesh's (a static interface load is the reduction's exact case), stresses are written."""
+    example = run_example("bracket", monkeypatch, tmp_path)
+    reduced, full = example["reduced"], example["full"]
+    assert np.abs(reduced - full).max() <= 1e-8 * np.abs(full).max() and np.abs(full).max() > 1e-6
+    assert example["von_mises"].max() > 1e6 and (tmp_path / "bracket.pvd").exists()
+    assert set(example["mesh"].boundaries) >= {"bolts", "load"}
+
+
 def test_meshed_rod(monkeypatch, tmp_path):
     """The coarse rod's slider–crank: joints hold and the energy balance closes; finite stresses are written."""
     example = run_example("meshed_rod", monkeypatch, tmp_path)

@@ -23,10 +23,11 @@ from skfem import Basis, BilinearForm, ElementHex1, ElementTetP1, ElementTetP2, 
 from skfem.helpers import dot
 from skfem.models.elasticity import lame_parameters, linear_elasticity
 
+from .mesh_files import read_mesh_file
 from .node_sets import select_nodes
 from .section import positive_number
 
-__all__ = ["ElasticSolid3D", "von_mises_3d"]
+__all__ = ["ElasticSolid3D", "von_mises_3d", "load_mesh_3d"]
 
 _ELEMENTS = {(skfem.MeshTet1, 1): ElementTetP1, (skfem.MeshTet1, 2): ElementTetP2, (skfem.MeshHex1, 1): ElementHex1}
 
@@ -63,6 +64,47 @@ def _check_elements(mesh):
     if bad.size:
         raise ValueError(f"the mesh has {bad.size} inverted or degenerate element(s), the first element "
                          f"{int(bad[0])}: fix its node order or shape")
+
+
+def load_mesh_3d(path):
+    """A ``MeshTet`` or ``MeshHex`` from a mesh file (gmsh ``.msh`` …) read by meshio, its physical groups of
+    triangles or quadrilaterals as named boundaries (``mesh.boundaries``: interface and clamp candidates).
+
+    Raises
+    ------
+    ValueError
+        The file does not exist or is no mesh meshio can read (the message names it), or it holds no
+        tetrahedra or hexahedra (first order).
+    """
+    raw = read_mesh_file(path)
+    cells = {c.type: c.data for c in raw.cells}
+    if "tetra" in cells:
+        kind, t, facet_type = skfem.MeshTet, cells["tetra"].T, "triangle"
+    elif "hexahedron" in cells:
+        # meshio's (VTK's) corner order to scikit-fem's
+        kind, t, facet_type = skfem.MeshHex, cells["hexahedron"][:, [0, 4, 3, 1, 7, 5, 2, 6]].T, "quad"
+    else:
+        raise ValueError(f"mesh {str(path)!r} has no tetrahedra or hexahedra (cells: {sorted(cells)})")
+    pts = np.asarray(raw.points, dtype=float)
+    used = np.unique(t)
+    new = -np.ones(pts.shape[0], dtype=np.int64)
+    new[used] = np.arange(used.size)                  # drop gmsh's geometry-only points
+    mesh = kind(np.ascontiguousarray(pts[used].T), np.ascontiguousarray(new[t]))
+    names = {int(tag): name for name, (tag, dim) in raw.field_data.items() if dim == 2}
+    groups = {}
+    for block, tags in zip(raw.cells, raw.cell_data.get("gmsh:physical", [None] * len(raw.cells))):
+        if block.type != facet_type or tags is None:
+            continue
+        for tag in np.unique(tags):
+            nodes = new[block.data[tags == tag].ravel()]
+            groups.setdefault(names.get(int(tag), f"group{int(tag)}"), []).append(nodes[nodes >= 0])
+    if not groups:
+        return mesh
+    facets = {}
+    for name, parts in groups.items():
+        nodes = np.unique(np.concatenate(parts))
+        facets[name] = np.flatnonzero(np.all(np.isin(mesh.facets, nodes), axis=0))
+    return kind(mesh.p, mesh.t, _boundaries={k: np.asarray(v, dtype=np.int64) for k, v in facets.items()})
 
 
 class ElasticSolid3D:

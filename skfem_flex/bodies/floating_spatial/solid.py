@@ -176,7 +176,9 @@ class FloatingSolid3D(FloatingFrame3D):
         Kw = (T.T @ solid.stiffness @ T).tocsc()
         Mw = (T.T @ solid.mass @ T).tocsc()
         K, M = Kw[:n_free, :n_free], Mw[:n_free, :n_free]
-        lam, vec = spla.eigsh(K, k=n_modes, M=M, sigma=0.0, which="LM")
+        # a fixed start vector: the same basis on every run (ARPACK's default start is random, and a nearly
+        # repeated pair of modes would come out mixed differently each time)
+        lam, vec = spla.eigsh(K, k=n_modes, M=M, sigma=0.0, which="LM", v0=np.ones(n_free))
         order = np.argsort(lam)
         lam, vec = lam[order], vec[:, order]
         blocks = [np.vstack([vec, np.zeros((nb, n_modes))])]

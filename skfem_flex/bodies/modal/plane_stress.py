@@ -30,6 +30,7 @@ from skfem import Basis, BilinearForm, ElementVector, asm
 from skfem.helpers import dot
 from skfem.models.elasticity import linear_elasticity, plane_stress
 
+from ...fem.mesh_files import read_mesh_file
 from ...fem.node_sets import select_nodes
 from ..base import check_finite_vector
 from .body import ElasticModel, Interface
@@ -76,19 +77,7 @@ def load_mesh(path):
         The file does not exist or cannot be read as a mesh (the message names it), it has no
         triangles or quadrilaterals, or the mesh is not planar.
     """
-    import os
-
-    import meshio
-    if not os.path.isfile(path):
-        why = "is a directory, not a mesh file" if os.path.isdir(path) else "does not exist"
-        raise ValueError(f"mesh file {str(path)!r} {why}")
-    try:
-        raw = meshio.read(path)
-    except OSError as exc:
-        raise ValueError(f"mesh file {str(path)!r} cannot be read: {exc.strerror or exc}") from None
-    except Exception as exc:   # noqa: BLE001  meshio's readers fail with many types on a file that is no mesh
-        raise ValueError(f"mesh file {str(path)!r} is not a mesh meshio can read "
-                         f"({type(exc).__name__}: {' '.join(str(exc).split())})") from None
+    raw = read_mesh_file(path)
     pts = np.asarray(raw.points, dtype=float)
     if pts.shape[1] == 3:
         if np.abs(pts[:, 2]).max() > 1e-12 * max(np.abs(pts).max(), 1.0):
