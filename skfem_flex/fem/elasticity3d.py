@@ -190,6 +190,14 @@ class ElasticSolid3D:
         R[2, :, 3], R[2, :, 4] = r[:, 1], -r[:, 0]
         return self.component_dofs[:, nodes].ravel(), R.reshape(3 * k, 6)
 
+    def average_map(self, nodes):
+        """(dofs, P): the displacement DOFs of ``nodes`` and the (6, 3k) least-squares rigid motion of the set
+        about its centre, w = (RᵀR)⁻¹Rᵀ u (R of :meth:`rigid_map`): the mean displacement and the rotation
+        J⁻¹ Σ r × u, J = Σ (‖r‖²I − r rᵀ). The set itself stays free to deform (an averaging, RBE3-like
+        connection); a rotation the set cannot show (nodes on one line) is left at zero."""
+        dofs, R = self.rigid_map(nodes, self.node_positions[nodes].mean(axis=0))
+        return dofs, np.linalg.pinv(R.T @ R) @ R.T
+
     def tie(self, clamped, rigid_sets):
         """(T, n_free): u = T w, w = (the free DOFs, then six DOFs (t, θ) of each rigid node set about its centre),
         with the ``clamped`` nodes' DOFs held at zero; ``n_free`` the number of free DOFs (csr T)."""

@@ -65,10 +65,24 @@ class QuadraticEnergy:
         return self.K @ (0.5 * (y0 + y1)), 0.5 * self.K
 
 
+def _m_complement(vectors, kept, mass):
+    """Columns spanning what ``vectors`` add to the span of ``kept``, M-orthonormal and M-orthogonal to ``kept``
+    (kept's columns are M-orthogonalized against first; the ones already spanned are dropped). A basis of such
+    columns keeps every static shape it was given while staying well conditioned."""
+    q, _ = np.linalg.qr(kept)
+    vectors = vectors - q @ (q.T @ vectors)                  # in the Euclidean sense first: removes the bulk
+    Mk = mass @ kept
+    vectors = vectors - kept @ np.linalg.solve(kept.T @ Mk, Mk.T @ vectors)
+    gram = vectors.T @ (mass @ vectors)
+    vals, vecs = np.linalg.eigh(0.5 * (gram + gram.T))
+    keep = vals > 1e-10 * vals.max()
+    return vectors @ (vecs[:, keep] / np.sqrt(vals[keep]))
+
+
 def _interface_sets(solid, frame, interfaces):
-    """{name: nodes} of the frame set and the interfaces; ValueError for overlapping sets."""
+    """{name: nodes} of the frame set and the interfaces (rigid and averaged); ValueError for overlapping sets."""
     sets = {"frame": solid.nodes(frame)}
-    for name, spec in (interfaces or {}).items():
+    for name, spec in interfaces.items():
         if name == "frame":
             raise ValueError("'frame' names the frame's own interface: give the others other names")
         sets[name] = solid.nodes(spec)
@@ -98,6 +112,11 @@ class FloatingSolid3D(FloatingFrame3D):
         Fixed-interface modes kept.
     interfaces : dict of str to node-set spec, optional
         Further rigid interfaces.
+    averaged : dict of str to node-set spec, optional
+        Averaging (RBE3-like) interfaces: a point at the set's centre that moves with the set's mean
+        displacement (:meth:`~skfem_flex.fem.elasticity3d.ElasticSolid3D.average_map`) while the set deforms
+        freely; six attachment modes each (the static responses to unit loads spread over the set) join the
+        basis, so a static load there is reproduced exactly.
     position, orientation, velocity, angular_velocity :
         The frame's initial state (as :class:`~skfem_flex.bodies.spatial.SpatialRigidBody`).
     name : str
@@ -125,19 +144,29 @@ class FloatingSolid3D(FloatingFrame3D):
 
     def __init__(self, solid, frame, n_modes, interfaces=None, position=(0.0, 0.0, 0.0), orientation=None,
                  velocity=(0.0, 0.0, 0.0), angular_velocity=(0.0, 0.0, 0.0), name=None, strain="linear",
-                 n_derivatives=None, centrifugal=None):
+                 n_derivatives=None, centrifugal=None, averaged=None):
         if not isinstance(solid, ElasticSolid3D):
             raise ValueError(f"FloatingSolid3D needs an ElasticSolid3D, got {solid!r}")
         self.solid, self.name = solid, solid.name if name is None else name
-        sets = _interface_sets(solid, frame, interfaces)
+        averaged = dict(averaged or {})
+        both = set(interfaces or {}) & set(averaged)
+        if both:
+            raise ValueError(f"interfaces {sorted(both)} are given as rigid and as averaged: give each once")
+        sets = _interface_sets(solid, frame, {**(interfaces or {}), **averaged})
         X = solid.node_positions
         self.origin = X[sets["frame"]].mean(axis=0)
         self.centres = {k: X[v].mean(axis=0) - self.origin for k, v in sets.items()}
-        self.interface_names = tuple(k for k in sets if k != "frame")
+        self.interface_names = tuple(k for k in sets if k != "frame" and k not in averaged)
+        self.averaged_names = tuple(averaged)
         if strain not in ("linear", "green-lagrange"):
             raise ValueError(f"strain must be 'linear' or 'green-lagrange', got {strain!r}")
         self.strain = strain
-        self.basis, self.frequencies, tie = self._craig_bampton(solid, sets, n_modes)
+        self.basis, self.frequencies, tie = self._craig_bampton(
+            solid, {k: v for k, v in sets.items() if k not in averaged}, n_modes)
+        self._averages = {k: solid.average_map(sets[k]) for k in averaged}
+        if averaged:
+            attach = np.hstack([self._attachment_modes(solid, tie, *self._averages[k]) for k in averaged])
+            self.basis = np.hstack([self.basis, _m_complement(attach, self.basis, solid.mass)])
         self.n_modes = int(n_modes)
         n_extra = 0
         if strain == "green-lagrange":
@@ -145,8 +174,7 @@ class FloatingSolid3D(FloatingFrame3D):
             if isinstance(nd, bool) or int(nd) != nd or not 0 <= nd <= self.n_modes:
                 raise ValueError(f"n_derivatives must be an integer in [0, {self.n_modes}], got {n_derivatives!r}")
             extra = self._stiffening_vectors(solid, tie, self.basis[:, :int(nd)], self.origin,
-                                             True if centrifugal is None else bool(centrifugal),
-                                             self.basis[:, :self.n_modes])
+                                             True if centrifugal is None else bool(centrifugal), self.basis)
             n_extra = extra.shape[1]
             self.basis = np.hstack([self.basis, extra])
         self.n_elastic = self.basis.shape[1]
@@ -160,6 +188,7 @@ class FloatingSolid3D(FloatingFrame3D):
                        + tuple(f"eta{k + 1}" for k in range(self.n_modes))
                        + tuple(f"{itf}_{c}" for itf in self.interface_names
                                for c in ("tx", "ty", "tz", "rx", "ry", "rz"))
+                       + tuple(f"{itf}_a{k + 1}" for itf in self.averaged_names for k in range(6))
                        + tuple(f"xi{k + 1}" for k in range(n_extra)))
         self.set_initial_state(position, orientation, velocity, angular_velocity, None, None)
 
@@ -188,9 +217,17 @@ class FloatingSolid3D(FloatingFrame3D):
         return T @ np.hstack(blocks), np.sqrt(np.maximum(lam, 0.0)), (T, n_free, spla.splu(K.tocsc()))
 
     @staticmethod
+    def _attachment_modes(solid, tie, dofs, P):
+        """The six static responses (rigid interfaces held) to unit loads spread over an averaged set, Pᵀe_k."""
+        T, n_free, lu = tie
+        loads = np.zeros((solid.n_dofs, 6))
+        loads[dofs] = P.T
+        return T[:, :n_free] @ lu.solve(np.asarray((T.T @ loads)[:n_free]))
+
+    @staticmethod
     def _stiffening_vectors(solid, tie, modes, origin, spins, kept):
         """The static responses, interfaces held, to the stiffening loads (``solid_strain.stiffening_loads``),
-        made M-orthogonal to the ``kept`` modes and to each other; the ones already spanned dropped."""
+        made M-orthogonal to the ``kept`` basis and to each other; the ones already spanned dropped."""
         T, n_free, lu = tie
         loads = stiffening_loads(solid, modes, origin, pairs=modes.shape[1] > 0, spins=spins)
         if loads.shape[1] == 0:
@@ -199,12 +236,7 @@ class FloatingSolid3D(FloatingFrame3D):
         # modes bending in different planes do not couple: their third derivative is round-off
         loads = loads[:, size > 1e-8 * size.max()]
         w = -lu.solve(np.asarray((T.T @ loads)[:n_free]))
-        vectors = T[:, :n_free] @ w
-        vectors = vectors - kept @ (kept.T @ (solid.mass @ vectors))
-        gram = vectors.T @ (solid.mass @ vectors)
-        vals, vecs = np.linalg.eigh(gram)
-        keep = vals > 1e-10 * vals.max()
-        return vectors @ (vecs[:, keep] / np.sqrt(vals[keep]))
+        return _m_complement(T[:, :n_free] @ w, kept, solid.mass)
 
     @staticmethod
     def _invariants(solid, Phi, X0):
@@ -240,9 +272,12 @@ class FloatingSolid3D(FloatingFrame3D):
         if isinstance(locator, str):
             if locator == "frame":
                 return SpatialPoint(self, self.centres["frame"])
+            if locator in self.averaged_names:
+                dofs, P = self._averages[locator]
+                return ElasticPoint(self, self.centres[locator], P[:3] @ self.basis[dofs])
             if locator not in self.interface_names:
                 raise ValueError(f"body {self.name!r} has no interface {locator!r}; it has "
-                                 f"{['frame', *self.interface_names]}")
+                                 f"{['frame', *self.interface_names, *self.averaged_names]}")
             S = np.zeros((3, self.n_elastic))
             start = self.n_modes + 6 * self.interface_names.index(locator)
             S[:, start:start + 3] = np.eye(3)
