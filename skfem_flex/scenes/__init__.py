@@ -11,10 +11,10 @@ from .mechanisms import double_pendulum, flexible_pendulum, free_beam, slider_cr
 from .rotating import hub_beam, rotating_beam, rotating_beam_frequencies, spin_up_beam
 from .spatial import bricard, heavy_top, rigid_chain, spatial_slider_crank
 from .spatial_beams import bend_45, flying_spaghetti_3d, right_angle_frame, spin_up_3d
-from .spatial_rotors import rotating_beam_3d
+from .spatial_rotors import rotating_beam_3d, rotor_3d
 
 __all__ = ["CATALOGUE", "get", "parameters", "register", "pendulum", "spring_mass", "exact_spin_up_beam",
            "flying_beam", "very_flexible_pendulum", "double_pendulum", "flexible_pendulum", "free_beam",
            "slider_crank", "spin_up_pinned", "hub_beam", "rotating_beam", "rotating_beam_frequencies",
            "spin_up_beam", "heavy_top", "rigid_chain", "bricard", "spatial_slider_crank", "bend_45",
-           "right_angle_frame", "flying_spaghetti_3d", "spin_up_3d", "rotating_beam_3d"]
+           "right_angle_frame", "flying_spaghetti_3d", "spin_up_3d", "rotating_beam_3d", "rotor_3d"]
