@@ -258,3 +258,5 @@ def test_bad_input():
         steady_spin(body, np.nan)
     with pytest.raises(ValueError, match="body must be"):
         sf.scenes.spin_up_3d(body="modal")
+    with pytest.raises(ValueError, match="no vibrating lead-lag mode"):
+        sf.scenes.rotating_beam_3d(strain="linear", omega=30.0, n_elements=4)

@@ -71,7 +71,12 @@ def rotating_beam_3d(omega=4.0, length=10.0, EA=2.8e7, EI=1.4e4, GJ=1.4e4, kGA=1
         modes = spinning_modes(body, om, n_modes=4)
         tip = body.beam.node_dofs[-1]
         for flap in (True, False):
-            shape = modes.shapes[:, int(np.flatnonzero(modes.flapwise == flap)[0])]
+            found = np.flatnonzero((modes.flapwise == flap) & (modes.omega > 0.0))
+            if found.size == 0:
+                raise ValueError(f"omega = {om!r} rad/s: the spinning beam has no vibrating "
+                                 f"{'flapwise' if flap else 'lead-lag'} mode to perturb (it diverges at this "
+                                 f"spin); give perturbation=0 or a smaller omega")
+            shape = modes.shapes[:, int(found[0])]
             y = y + pert * np.real(shape / shape[tip[0 if flap else 1]])[body.free_dofs]
     body.q0[12:] = y
     body.v0[3:12] = np.cross(om * np.array([0.0, 0.0, 1.0]), HUB_FRAME.T).ravel()

@@ -70,7 +70,7 @@ def elastic_load_of_spin(body, axis):
     return _elastic_rows(body, q, v, acc)[0] - body.potential_gradient(q)[12:]
 
 
-def steady_spin(body, omega, axis=(1.0, 0.0, 0.0), tol=1e-12, max_iterations=50):
+def steady_spin(body, omega, axis=(1.0, 0.0, 0.0), tol=1e-12, max_iterations=25):
     """The elastic state y_s (n_elastic,) of ``body`` spinning at ``omega`` (rad/s) about ``axis`` (frame axes).
 
     Newton (:func:`~skfem_flex.numerics.newton.newton_solve`) from y = 0 on the elastic rows (module
