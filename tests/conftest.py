@@ -3,10 +3,10 @@ import os
 import sys
 import time
 
-# The suite runs on three pytest-xdist workers on the 2-core machine it is sized for: many tests wait on
-# processes they start (the command line, examples, sweep clusters, kill-and-resume runs), and a third
-# worker fills those waits (docs/performance.md, "The test suite", has the measured times). A
-# second compile process per worker (skfem_flex.compiled.ahead) would only oversubscribe the cores.
+# The suite runs on two pytest-xdist workers, one per core of the 2-core machine it is sized for (a third
+# was tried: no faster, and the sweep tests' bit-for-bit comparisons of Dask-worker runs with in-process runs
+# then failed now and then; docs/performance.md, "The test suite"). A second compile process per worker
+# (skfem_flex.compiled.ahead) would only oversubscribe the cores.
 # tests/test_compile_ahead.py sets it to 2 where it tests that path.
 os.environ.setdefault("SKFEM_FLEX_COMPILE_PROCESSES", "1")
 
