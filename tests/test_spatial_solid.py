@@ -12,6 +12,7 @@ import skfem
 import skfem_flex as sf
 from skfem_flex.bodies.floating_spatial.rotation import spinning_modes
 from skfem_flex.bodies.floating_spatial.solid import FloatingSolid3D
+from skfem_flex.bodies.floating_spatial.solid_strain import SolidGreenLagrange
 from skfem_flex.fem.elasticity3d import ElasticSolid3D
 from skfem_flex.numerics.quaternions import rotation_vector_matrix
 from helpers import ROTATING_TABLE, central_jacobian, relerr
@@ -131,6 +132,16 @@ def test_green_lagrange_energy_of_the_reduced_solid():
     assert relerr(jac, central_jacobian(lambda z: V.discrete_gradient(y0, z)[0], y1, 1e-3 * scale)) <= 1e-6
     K = body.basis.T @ (solid.stiffness @ body.basis)
     assert relerr(V.hessian(np.zeros(body.n_elastic)), K) <= 1e-10
+    # a finite rigid turn as a displacement field, u = (R − I) X: the Green–Lagrange energy is zero (round-off),
+    # the linear energy of the same field is not
+    R = rotation_vector_matrix([0.4, -0.3, 0.8])
+    u = (solid.node_positions @ (R - np.eye(3)).T)
+    turn = np.zeros((solid.n_dofs, 1))
+    for k in range(3):
+        turn[solid.component_dofs[k], 0] = u[:, k]
+    linear = 0.5 * float(turn[:, 0] @ (solid.stiffness @ turn[:, 0]))
+    assert linear > 0.0
+    assert abs(SolidGreenLagrange(solid, turn).energy(np.ones(1))) <= 1e-12 * linear
 
 
 @pytest.mark.parametrize("lam, flap, lag", ROTATING_TABLE[::2] + [ROTATING_TABLE[-1]])

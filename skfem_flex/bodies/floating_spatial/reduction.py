@@ -23,15 +23,15 @@ shorten the axis, and a tension that cannot build up stiffens nothing:
 - the **centrifugal shapes**: the static response K⁻¹ f to the inertia load f of a unit spin about each
   section axis d₁, d₂ (the stretch of a spinning blade).
 
-The columns are made M-orthonormal (``eigh`` on the projected mass), and the ones the others already span
-are dropped.
+The modes come M-orthonormal from ``eigh``; the other columns are made M-orthogonal to them and M-orthonormal
+among themselves (:func:`m_complement`), the ones already spanned dropped.
 """
 from __future__ import annotations
 
 import numpy as np
 import scipy.linalg
 
-__all__ = ["reduction_basis"]
+__all__ = ["reduction_basis", "m_complement"]
 
 
 def _count(name, value, low, high):
@@ -82,13 +82,23 @@ def _centrifugal_shapes(body, K):
                             for axis in ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0))])
 
 
-def _m_orthonormal(basis, M, rtol=1e-10):
-    """Columns spanning ``basis`` that are M-orthonormal, the dependent ones dropped."""
-    scale = np.sqrt(np.einsum("ij,ij->j", basis, M @ basis))
-    basis = basis / np.where(scale > 0, scale, 1.0)
-    vals, vecs = np.linalg.eigh(basis.T @ M @ basis)
+def m_complement(vectors, kept, mass, rtol=1e-10):
+    """Columns spanning what ``vectors`` add to the span of ``kept``: M-orthogonal to ``kept`` and M-orthonormal
+    among themselves, the ones already spanned dropped. A basis [kept, m_complement(...)] keeps every shape it
+    was given and stays well conditioned; with M-orthonormal ``kept`` it is M-orthonormal as a whole."""
+    if vectors.shape[1] == 0:
+        return np.zeros((vectors.shape[0], 0))
+    size = np.abs(vectors).max(axis=0)
+    vectors = vectors / np.where(size > 0, size, 1.0)       # derivatives and static shapes differ by decades
+    q, _ = np.linalg.qr(kept)
+    vectors = vectors - q @ (q.T @ vectors)                  # in the Euclidean sense first: removes the bulk
+    Mk = mass @ kept
+    for _ in range(2):                                       # twice: once leaves round-off of the bulk behind
+        vectors = vectors - kept @ np.linalg.solve(kept.T @ Mk, Mk.T @ vectors)
+    gram = vectors.T @ (mass @ vectors)
+    vals, vecs = np.linalg.eigh(0.5 * (gram + gram.T))
     keep = vals > rtol * vals.max()
-    return basis @ (vecs[:, keep] / np.sqrt(vals[keep]))
+    return vectors @ (vecs[:, keep] / np.sqrt(vals[keep]))
 
 
 def reduction_basis(body, n_modes, interfaces=("root",), n_derivatives=None, centrifugal=None):
@@ -138,10 +148,10 @@ def reduction_basis(body, n_modes, interfaces=("root",), n_derivatives=None, cen
         keep = inner
     elif body.reference == "chord" and tuple(interfaces) != ("root",):
         raise ValueError("the chord frame reduces by free-interface modes: give no interfaces beyond 'root'")
-    modes = _modes(K, M, keep, n_modes)
-    cols.insert(0, modes)
+    modes = _modes(K, M, keep, n_modes)                       # M-orthonormal (eigh)
     if n_derivatives:
         cols.append(_stiffening_derivatives(body, K, modes[:, :n_derivatives]))
     if centrifugal:
         cols.append(_centrifugal_shapes(body, K))
-    return _m_orthonormal(np.column_stack(cols), M)
+    extra = np.column_stack(cols) if cols else np.zeros((nf, 0))
+    return np.hstack([modes, m_complement(extra, modes, M)])

@@ -18,6 +18,8 @@ body's own kinetic and strain terms: nothing here is a second model of the beam.
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 import scipy.linalg
 
@@ -51,23 +53,37 @@ def _frame_motion(body, omega, axis):
     return q, v, acc
 
 
+class ElasticRows(NamedTuple):
+    """The elastic rows at rest in the spinning frame (module docstring) and their parts."""
+
+    residual: np.ndarray        #: [M a_f]_y − [Q_v]_y + ∇V
+    stiffness: np.ndarray       #: ∂residual/∂y
+    damping: np.ndarray         #: C = −∂Q_v,y/∂ẏ
+    inertia: np.ndarray         #: [M a_f]_y
+    velocity_force: np.ndarray  #: [Q_v]_y
+    gradient: np.ndarray        #: ∇V
+    hessian: np.ndarray         #: ∇²V
+
+
 def _elastic_rows(body, q, v, acc):
-    """(r, ∂r/∂y, C) of the elastic rows at rest in the spinning frame (module docstring)."""
+    """The :class:`ElasticRows` at (q, v_f, a_f)."""
     inv = body.inertia
     Y = slice(12, body.n_dofs)
     qv, qv_q, qv_v = kinetics.quadratic_velocity_force(inv, q, v)
     inertia = kinetics.mass_matrix(inv, q) @ acc
     B = kinetics.momentum_jacobian(inv, q, acc)
-    r = inertia[Y] - qv[Y] + body.potential_gradient(q)[Y]
-    K = B[Y, Y] - qv_q[Y, Y] + body.potential_hessian(q)[Y, Y]
-    return r, K, -qv_v[Y, Y], (inertia[Y], qv[Y])
+    grad, hess = body.potential_gradient(q)[Y], body.potential_hessian(q)[Y, Y]
+    r = inertia[Y] - qv[Y] + grad
+    K = B[Y, Y] - qv_q[Y, Y] + hess
+    return ElasticRows(r, K, -qv_v[Y, Y], inertia[Y], qv[Y], grad, hess)
 
 
 def elastic_load_of_spin(body, axis):
     """The elastic rows [M a_f]_y − [Q_v]_y of the undeformed beam spinning at 1 rad/s about ``axis`` (frame
     axes): the inertia load whose static response is the stretch of a spinning beam (N per rad²/s²)."""
     q, v, acc = _frame_motion(body, 1.0, axis)
-    return _elastic_rows(body, q, v, acc)[0] - body.potential_gradient(q)[12:]
+    rows = _elastic_rows(body, q, v, acc)
+    return rows.residual - rows.gradient
 
 
 def steady_spin(body, omega, axis=(1.0, 0.0, 0.0), tol=1e-12, max_iterations=25):
@@ -89,12 +105,11 @@ def steady_spin(body, omega, axis=(1.0, 0.0, 0.0), tol=1e-12, max_iterations=25)
 
     def fun(y):
         q[12:] = y
-        r, K, _, (inertia, qv) = _elastic_rows(body, q, v, acc)
-        grad = body.potential_gradient(q)[12:]
-        scale = max(float(np.abs(inertia).max()), float(np.abs(qv).max()), float(np.abs(grad).max()))
-        floor = float(np.max(np.abs(body.potential_hessian(q)[12:, 12:]) @ np.abs(y), initial=0.0))
-        err = float(np.abs(r).max()) / (settings.rtol * scale + 16 * _EPS * floor + 1e-300)
-        return r, K, err
+        rows = _elastic_rows(body, q, v, acc)
+        scale = max(float(np.abs(part).max()) for part in (rows.inertia, rows.velocity_force, rows.gradient))
+        floor = float(np.max(np.abs(rows.hessian) @ np.abs(y), initial=0.0))
+        err = float(np.abs(rows.residual).max()) / (settings.rtol * scale + 16 * _EPS * floor + 1e-300)
+        return rows.residual, rows.stiffness, err
 
     return newton_solve(fun, np.zeros(body.n_elastic), settings, "steady spin",
                         f"omega = {float(omega):.6g} rad/s")[0].copy()
@@ -124,7 +139,8 @@ def spinning_modes(body, omega, axis=(1.0, 0.0, 0.0), n_modes=8, flap_axis=0, la
     y = steady_spin(body, omega, axis)
     q, v, acc = _frame_motion(body, omega, axis)
     q[12:] = y
-    _, K, C, _ = _elastic_rows(body, q, v, acc)
+    rows = _elastic_rows(body, q, v, acc)
+    K, C = rows.stiffness, rows.damping
     M = kinetics.mass_matrix(body.inertia, q)[12:, 12:]
     n = M.shape[0]
     A = np.block([[np.zeros((n, n)), np.eye(n)], [-np.linalg.solve(M, K), -np.linalg.solve(M, C)]])

@@ -36,6 +36,7 @@ from ..spatial import SpatialPoint
 from . import kinetics
 from .frame import ElasticPoint, FloatingFrame3D
 from .inertia import SpatialFrameInertia
+from .reduction import m_complement
 from .solid_strain import SolidGreenLagrange, stiffening_loads
 
 __all__ = ["FloatingSolid3D", "QuadraticEnergy"]
@@ -63,20 +64,6 @@ class QuadraticEnergy:
 
     def discrete_gradient(self, y0, y1):
         return self.K @ (0.5 * (y0 + y1)), 0.5 * self.K
-
-
-def _m_complement(vectors, kept, mass):
-    """Columns spanning what ``vectors`` add to the span of ``kept``, M-orthonormal and M-orthogonal to ``kept``
-    (kept's columns are M-orthogonalized against first; the ones already spanned are dropped). A basis of such
-    columns keeps every static shape it was given while staying well conditioned."""
-    q, _ = np.linalg.qr(kept)
-    vectors = vectors - q @ (q.T @ vectors)                  # in the Euclidean sense first: removes the bulk
-    Mk = mass @ kept
-    vectors = vectors - kept @ np.linalg.solve(kept.T @ Mk, Mk.T @ vectors)
-    gram = vectors.T @ (mass @ vectors)
-    vals, vecs = np.linalg.eigh(0.5 * (gram + gram.T))
-    keep = vals > 1e-10 * vals.max()
-    return vectors @ (vecs[:, keep] / np.sqrt(vals[keep]))
 
 
 def _interface_sets(solid, frame, interfaces):
@@ -166,7 +153,7 @@ class FloatingSolid3D(FloatingFrame3D):
         self._averages = {k: solid.average_map(sets[k]) for k in averaged}
         if averaged:
             attach = np.hstack([self._attachment_modes(solid, tie, *self._averages[k]) for k in averaged])
-            self.basis = np.hstack([self.basis, _m_complement(attach, self.basis, solid.mass)])
+            self.basis = np.hstack([self.basis, m_complement(attach, self.basis, solid.mass)])
         self.n_modes = int(n_modes)
         n_extra = 0
         if strain == "green-lagrange":
@@ -211,10 +198,10 @@ class FloatingSolid3D(FloatingFrame3D):
         order = np.argsort(lam)
         lam, vec = lam[order], vec[:, order]
         blocks = [np.vstack([vec, np.zeros((nb, n_modes))])]
+        lu = spla.splu(K.tocsc())                       # one factorization: constraint modes and every load later
         if nb:
-            psi = -spla.splu(K.tocsc()).solve(Kw[:n_free, n_free:].toarray())
-            blocks.append(np.vstack([psi, np.eye(nb)]))
-        return T @ np.hstack(blocks), np.sqrt(np.maximum(lam, 0.0)), (T, n_free, spla.splu(K.tocsc()))
+            blocks.append(np.vstack([-lu.solve(Kw[:n_free, n_free:].toarray()), np.eye(nb)]))
+        return T @ np.hstack(blocks), np.sqrt(np.maximum(lam, 0.0)), (T, n_free, lu)
 
     @staticmethod
     def _attachment_modes(solid, tie, dofs, P):
@@ -236,7 +223,7 @@ class FloatingSolid3D(FloatingFrame3D):
         # modes bending in different planes do not couple: their third derivative is round-off
         loads = loads[:, size > 1e-8 * size.max()]
         w = -lu.solve(np.asarray((T.T @ loads)[:n_free]))
-        return _m_complement(T[:, :n_free] @ w, kept, solid.mass)
+        return m_complement(T[:, :n_free] @ w, kept, solid.mass)
 
     @staticmethod
     def _invariants(solid, Phi, X0):
