@@ -48,8 +48,11 @@ Two more tables:
   the Simo–Wong top (2 s, exudyn's trapezoidal rule at 1e-3), the rigid chain of 10 and 400 bodies (0.2 s,
   1e-3), Bricard's mechanism (2 s, 1e-3) and the spatial slider–crank (5 s, 1e-3; the slider's position),
   each against our energy-momentum run at a step 20× smaller,
-  ours at exudyn's step and at the larger step where our error matches exudyn's. Without exudyn our side
-  still runs.
+  ours at exudyn's step and at the larger step where our error matches exudyn's. The reduced rotor
+  (``--only "reduced rotor"``, its own table): ``rotor_3d``'s whole 1 s spin-up against the same mesh, M, K and
+  Craig–Bampton basis on exudyn's ``ObjectFFRFreducedOrder`` (:mod:`skfem_flex.apps.peer_reduced`), CPU µs per
+  step on both sides at 1e-3 and 5e-4 s, exudyn's generalized-α and trapezoidal rule, errors of the disk
+  centre and of the spin against our run at 5e-5 s. Without exudyn our side still runs.
 
 Run ``python examples/benchmark.py [--repeat 3] [--window 1.0] [--record-every 10] [--catalogue-steps N]
 [--no-loop] [--no-catalogue] [--no-peer] [--flexible] [--limits] [--out DIR]``;
@@ -548,6 +551,84 @@ def spatial_peer_problems(out, suffix):
     return rows
 
 
+#: the reduced rotor's group: its label (``--only`` matches a part of it), simulated seconds (the scene's whole
+#: default run: the spin-up from rest passes the first critical speed near 0.85 s) and reference step (s)
+REDUCED_ROTOR = "reduced rotor (rotor_3d: Craig–Bampton, 20 elastic coordinates; disk centre)"
+REDUCED_ROTOR_T = 0.02 if QUICK else 1.0
+REDUCED_ROTOR_REF_DT = 5e-5
+#: its rows: (our Δt, exudyn's Δt, exudyn's scheme, ρ∞): equal steps, and ours at the step where our error
+#: matches that of exudyn's trapezoidal rule (quick mode: the first row only)
+REDUCED_ROTOR_ROWS = ((1e-3, 1e-3, "generalized-alpha", 0.9), (5e-4, 5e-4, "generalized-alpha", 0.9),
+                      (1e-3, 1e-3, "trapezoidal", 1.0), (6.25e-4, 1e-3, "trapezoidal", 1.0))[:1 if QUICK else None]
+
+
+def reduced_rotor_rows(out, repeat=3):
+    """The reduced rotor side by side (:func:`skfem_flex.scenes.rotor_3d` against the same mesh, M, K and
+    basis on exudyn's ``ObjectFFRFreducedOrder``, :mod:`skfem_flex.apps.peer_reduced`), every step recorded on
+    both sides, alternating, median of ``repeat``.
+
+    Rows (our Δt, our µs/step, our Newton it/step, exudyn's Δt, scheme, exudyn's µs/step, its Newton it/step,
+    ratio per step, ratio per run, our error (m), exudyn's error (m), our spin error, exudyn's (rad/s)). Time =
+    CPU time (:func:`time.process_time`): exudyn's around its solve; ours, that of the run less that of a
+    3-step run of the same scene (the set-up both share). Errors: the largest distance over the run of the
+    probe ``"disk"`` (and of ``"spin"``) from our energy-momentum run at Δt = 5e-5 s (20× below the largest
+    step)."""
+    from skfem_flex.apps import peer_reduced
+
+    suffix = "_quick" if QUICK else ""
+    t_end, cache = REDUCED_ROTOR_T, {}
+
+    def compute(probe):
+        if "ref" not in cache:
+            cache["ref"] = sf.simulate(sf.scenes.rotor_3d(), t_end=t_end, dt=REDUCED_ROTOR_REF_DT,
+                                       scheme="energy-momentum", record_every=1)
+        return cache["ref"].t, cache["ref"].probes[probe]
+    disk = _reference(out, "reduced_rotor_disk" + suffix, lambda: compute("disk"))
+    spin = _reference(out, "reduced_rotor_spin" + suffix, lambda: compute("spin"))
+
+    def cpu(make):
+        start = time.process_time()
+        result = make()
+        return time.process_time() - start, result
+    sf.simulate(sf.scenes.rotor_3d(), t_end=3e-3, dt=1e-3)            # compile or load our kernels
+    rows = []
+    for dt, peer_dt, scheme, rho in REDUCED_ROTOR_ROWS:
+        n, peer_n = int(round(t_end / dt)), int(round(t_end / peer_dt))
+        peer_run = peer_reduced.reduced_rotor(dt=peer_dt, t_end=t_end, scheme=scheme, rho_inf=rho)
+        ours, theirs = [], []
+        for _ in range(repeat):             # alternate, so that both see the same machine load
+            scene = sf.scenes.rotor_3d()
+            start_up, _ = cpu(lambda: sf.simulate(scene, t_end=3 * dt, dt=dt, scheme="energy-momentum", record_every=1))
+            scene = sf.scenes.rotor_3d()
+            whole, res = cpu(lambda: sf.simulate(scene, t_end=t_end, dt=dt, scheme="energy-momentum", record_every=1))
+            ours.append((whole - start_up) / (n - 3))
+            t, p, _ = peer_run()
+            theirs.append(peer_run.stats["cpu_seconds"] / peer_run.stats["steps"])
+        mine, peer_s = statistics.median(ours), statistics.median(theirs)
+        rows.append((dt, 1e6 * mine, float(np.mean(res.newton_iterations[1:])), peer_dt,
+                     f"{scheme} {rho:g}" if scheme == "generalized-alpha" else "trapezoidal, index 2", 1e6 * peer_s,
+                     peer_run.stats["newton"] / peer_run.stats["steps"], mine / peer_s, mine * n / (peer_s * peer_n),
+                     _max_distance(res.t, res.probes["disk"], disk), _max_distance(t, p, disk),
+                     _max_distance(res.t, res.probes["spin"], spin), _max_distance(t, peer_run.stats["spin"], spin)))
+    return rows
+
+
+def reduced_rotor_table(rows, repeat):
+    from skfem_flex.apps import peer
+    lines = [f"{REDUCED_ROTOR}, {REDUCED_ROTOR_T:g} s from rest: ours (energy-momentum, compiled) against exudyn "
+             f"{peer.version()}'s ObjectFFRFreducedOrder (C++ path) with the same mesh, M, K, basis, bearings, "
+             f"unbalance and torque; CPU time per step, alternating, median of {repeat}, every step recorded on "
+             f"both sides; error = largest distance over the run from our energy-momentum run at Δt = "
+             f"{REDUCED_ROTOR_REF_DT:g} s (disk centre off the axis, m; spin rate, rad/s).", "",
+             "| our Δt (s) | ours (µs/step) | our Newton it/step | exudyn Δt (s) | exudyn scheme | exudyn (µs/step) "
+             "| exudyn Newton it/step | ratio ours/exudyn per step | per run | our error (m) | exudyn error (m) "
+             "| our spin error (rad/s) | exudyn spin error (rad/s) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines += [f"| {dt:g} | {w:.0f} | {it:.2f} | {pdt:g} | {ps} | {pw:.0f} | {pit:.2f} | {r:.2f} | {rr:.2f} | {e:.2e} "
+              f"| {pe:.2e} | {se:.2e} | {pse:.2e} |" for dt, w, it, pdt, ps, pw, pit, r, rr, e, pe, se, pse in rows]
+    return "\n".join(lines) + "\n"
+
+
 def peer_rows(out, repeat=3, only=None):
     """Rows (problem, dt, our scheme, our compile and start-up s, ours s, peer scheme, peer s, ratio, our error,
     peer error).
@@ -643,7 +724,11 @@ if __name__ == "__main__":
     if not args.no_peer:
         from skfem_flex.apps.peer import peer_available
         if peer_available():
-            parts.append(peer_table(peer_rows(args.out, args.repeat, args.only), args.repeat))
+            rows = peer_rows(args.out, args.repeat, args.only)
+            if rows or args.only is None:
+                parts.append(peer_table(rows, args.repeat))
+            if args.only is None or args.only in REDUCED_ROTOR:
+                parts.append(reduced_rotor_table(reduced_rotor_rows(args.out, args.repeat), args.repeat))
         else:
             parts.append("exudyn is not installed (pip install \".[bench]\"): no side-by-side table.\n")
     text = "\n".join(parts)

@@ -207,9 +207,13 @@ def _pack(scene, python_only=False):
         idx = np.arange(off, off + nb)
         kd = None if python_only else _call(b, "compiled_kernel_data")
         if kd is not None:
+            form = getattr(b, "inertia_family", "floating frame")
+            add(family_for(form), (kd, b, off))
+            if form != "floating frame":               # spatial: gravity joins the body's own family
+                first_moment[id(b)] = (form,)
+                continue
             moment = _call(b, "mass_moment_map")
             angles.append(np.array([off + 2]))          # the frame's angle θ
-            add(family_for("floating frame"), (kd, b, off))
             if moment is not None:
                 first_moment[id(b)] = ("frame", moment[0], moment[1], moment[2])
             continue
@@ -228,7 +232,8 @@ def _pack(scene, python_only=False):
                     pass
         else:
             in_python("inertia", b, idx, "compiled=False" if python_only else
-                      "its mass matrix depends on q and it has no compiled_kernel_data()")
+                      getattr(b, "compiled_refusal", None)
+                      or "its mass matrix depends on q and it has no compiled_kernel_data()")
         if b.has_potential:
             strain = None if python_only else _call(b, "compiled_strain_data")
             if strain is not None:
@@ -248,6 +253,9 @@ def _pack(scene, python_only=False):
                     gam, c = moment
                     g3 = np.asarray(form[1], dtype=float)
                     add(family_for("linear potential"), ((-(g3 @ gam), -float(g3 @ c)), b, np.arange(off, off + nb)))
+                elif id(b) in first_moment and len(first_moment[id(b)]) == 1:
+                    add(family_for(first_moment[id(b)][0] + " gravity"),
+                        (("gravity", np.asarray(form[1], dtype=float)), b, packer.block(b)[0]))
                 elif id(b) in first_moment:
                     add(mod, ((first_moment[id(b)], np.asarray(form[1], dtype=float)), b, packer.block(b)))
                 else:

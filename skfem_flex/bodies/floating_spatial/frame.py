@@ -15,7 +15,7 @@ import numpy as np
 
 from ..base import Body, BodyPoint, check_finite_vector
 from ..spatial import DirectorFrame, SpatialPoint, orientation_matrix
-from . import kinetics
+from . import kernel, kinetics
 
 __all__ = ["FloatingFrame3D", "ElasticPoint"]
 
@@ -31,6 +31,21 @@ class FloatingFrame3D(DirectorFrame, Body):
     has_potential = True
     dimension = 3
     directors = (3, 6, 9)
+    #: the compiled family that packs ``compiled_kernel_data()`` (inertia, strain and gravity)
+    inertia_family = "spatial floating frame"
+
+    def compiled_kernel_data(self):
+        """The body's arrays for the compiled core (:class:`~.kernel.SpatialFrameKernelData`), or None when its
+        strain energy has no compiled form (:attr:`compiled_refusal`)."""
+        strain = self.strain_energy.compiled_strain()
+        return None if strain is None else kernel.kernel_data(self.inertia, *strain)
+
+    @property
+    def compiled_refusal(self):
+        """Why the body runs on the Python path, or None."""
+        if self.strain_energy.compiled_strain() is None:
+            return f"its strain energy ({type(self.strain_energy).__name__}) has no compiled form"
+        return None
 
     def set_initial_state(self, position, orientation, velocity, angular_velocity, elastic, elastic_velocity):
         """q0 and v0 from the frame's origin (m), orientation (Euler parameters or a rotation matrix), velocity

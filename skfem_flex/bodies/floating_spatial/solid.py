@@ -27,7 +27,10 @@ modes, precomputed; von Mises from σ. Geometric stiffening (the Green–Lagrang
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
+import scipy.linalg
 import scipy.sparse.linalg as spla
 
 from ...fem.elasticity3d import ElasticSolid3D, von_mises_3d
@@ -39,10 +42,18 @@ from .inertia import SpatialFrameInertia
 from .reduction import m_complement
 from .solid_strain import SolidGreenLagrange, stiffening_loads
 
-__all__ = ["FloatingSolid3D", "QuadraticEnergy"]
+__all__ = ["FloatingSolid3D", "QuadraticEnergy", "FrequencyCheck"]
 
 #: VTK's hexahedron corner order as indices into scikit-fem's (``skfem.io.meshio``'s mapping)
 _HEX_TO_VTK = (0, 3, 6, 2, 1, 5, 7, 4)
+
+
+class FrequencyCheck(NamedTuple):
+    """A reduced body's natural frequencies against its full mesh's (:meth:`FloatingSolid3D.frequency_errors`)."""
+
+    reduced: np.ndarray     # rad/s
+    full: np.ndarray        # rad/s
+    error: np.ndarray       # reduced / full − 1
 
 
 class QuadraticEnergy:
@@ -64,6 +75,10 @@ class QuadraticEnergy:
 
     def discrete_gradient(self, y0, y1):
         return self.K @ (0.5 * (y0 + y1)), 0.5 * self.K
+
+    def compiled_strain(self):
+        """(K,): the compiled core's form of this energy (:mod:`.kernel`)."""
+        return (self.K,)
 
 
 def _interface_sets(solid, frame, interfaces):
@@ -116,6 +131,12 @@ class FloatingSolid3D(FloatingFrame3D):
     centrifugal : bool, optional
         With the Green–Lagrange strain: the static responses to a unit spin about each frame axis join the
         basis (default True).
+    reduction : {"craig-bampton", "free-interface"}
+        Craig–Bampton (default: fixed-interface modes and the interfaces' static constraint modes, the
+        interface DOFs coordinates of their own) or free-interface modes with static correction (the lowest
+        ``n_modes`` modes with the interfaces free, and the residual attachment modes of the interface DOFs:
+        the static response to a unit load there less its part in the kept modes, so that a static interface
+        load is reproduced exactly). Either way the frame set is clamped (the frame's reference condition).
 
     Attributes
     ----------
@@ -131,7 +152,7 @@ class FloatingSolid3D(FloatingFrame3D):
 
     def __init__(self, solid, frame, n_modes, interfaces=None, position=(0.0, 0.0, 0.0), orientation=None,
                  velocity=(0.0, 0.0, 0.0), angular_velocity=(0.0, 0.0, 0.0), name=None, strain="linear",
-                 n_derivatives=None, centrifugal=None, averaged=None):
+                 n_derivatives=None, centrifugal=None, averaged=None, reduction="craig-bampton"):
         if not isinstance(solid, ElasticSolid3D):
             raise ValueError(f"FloatingSolid3D needs an ElasticSolid3D, got {solid!r}")
         self.solid, self.name = solid, solid.name if name is None else name
@@ -141,6 +162,7 @@ class FloatingSolid3D(FloatingFrame3D):
             raise ValueError(f"interfaces {sorted(both)} are given as rigid and as averaged: give each once")
         sets = _interface_sets(solid, frame, {**(interfaces or {}), **averaged})
         X = solid.node_positions
+        self._sets = sets
         self.origin = X[sets["frame"]].mean(axis=0)
         self.centres = {k: X[v].mean(axis=0) - self.origin for k, v in sets.items()}
         self.interface_names = tuple(k for k in sets if k != "frame" and k not in averaged)
@@ -148,8 +170,11 @@ class FloatingSolid3D(FloatingFrame3D):
         if strain not in ("linear", "green-lagrange"):
             raise ValueError(f"strain must be 'linear' or 'green-lagrange', got {strain!r}")
         self.strain = strain
-        self.basis, self.frequencies, tie = self._craig_bampton(
-            solid, {k: v for k, v in sets.items() if k not in averaged}, n_modes)
+        if reduction not in ("craig-bampton", "free-interface"):
+            raise ValueError(f"reduction must be 'craig-bampton' or 'free-interface', got {reduction!r}")
+        self.reduction = reduction
+        self.basis, self.frequencies, tie = self._reduce(
+            solid, {k: v for k, v in sets.items() if k not in averaged}, n_modes, reduction)
         self._averages = {k: solid.average_map(sets[k]) for k in averaged}
         if averaged:
             attach = np.hstack([self._attachment_modes(solid, tie, *self._averages[k]) for k in averaged])
@@ -166,6 +191,11 @@ class FloatingSolid3D(FloatingFrame3D):
             self.basis = np.hstack([self.basis, extra])
         self.n_elastic = self.basis.shape[1]
         self.n_dofs = 12 + self.n_elastic
+        # each rigid interface's (t, θ) per column: every column moves its set rigidly, so the fit is exact
+        self._interface_motion = {}
+        for k in self.interface_names:
+            dofs, R = solid.rigid_map(sets[k], X[sets[k]].mean(axis=0))
+            self._interface_motion[k] = np.linalg.lstsq(R, self.basis[dofs], rcond=None)[0]
         self.inertia = self._invariants(solid, self.basis, X - self.origin)
         self.strain_energy = (SolidGreenLagrange(solid, self.basis) if strain == "green-lagrange"
                               else QuadraticEnergy(self.basis.T @ (solid.stiffness @ self.basis)))
@@ -174,56 +204,73 @@ class FloatingSolid3D(FloatingFrame3D):
         self._names = (("x", "y", "z") + tuple(f"d{i}{c}" for i in (1, 2, 3) for c in "xyz")
                        + tuple(f"eta{k + 1}" for k in range(self.n_modes))
                        + tuple(f"{itf}_{c}" for itf in self.interface_names
-                               for c in ("tx", "ty", "tz", "rx", "ry", "rz"))
+                               for c in (("tx", "ty", "tz", "rx", "ry", "rz") if reduction == "craig-bampton"
+                                         else tuple(f"c{k + 1}" for k in range(6))))
                        + tuple(f"{itf}_a{k + 1}" for itf in self.averaged_names for k in range(6))
                        + tuple(f"xi{k + 1}" for k in range(n_extra)))
         self.set_initial_state(position, orientation, velocity, angular_velocity, None, None)
 
     # ---------------------------------------------------------------- reduction
     @staticmethod
-    def _craig_bampton(solid, sets, n_modes):
+    def _reduce(solid, sets, n_modes, reduction):
+        """(Φ on the mesh DOFs, the kept modes' frequencies, (T, n_solve, LU of the stiffness on the first
+        n_solve tied DOFs)) of the Craig–Bampton or the free-interface reduction (class docstring)."""
         rigid = [nodes for name, nodes in sets.items() if name != "frame"]
         T, n_free = solid.tie(sets["frame"], rigid)
         nb = 6 * len(rigid)
+        n_solve = n_free if reduction == "craig-bampton" else n_free + nb
         n_modes = int(n_modes) if not isinstance(n_modes, bool) and int(n_modes) == n_modes else -1
-        if not 1 <= n_modes < n_free - 1:
-            raise ValueError(f"n_modes must be an integer in [1, {n_free - 2}] for this mesh and these "
+        if not 1 <= n_modes < n_solve - 1:
+            raise ValueError(f"n_modes must be an integer in [1, {n_solve - 2}] for this mesh and these "
                              f"interfaces, got {n_modes!r}")
         Kw = (T.T @ solid.stiffness @ T).tocsc()
         Mw = (T.T @ solid.mass @ T).tocsc()
-        K, M = Kw[:n_free, :n_free], Mw[:n_free, :n_free]
+        K, M = Kw[:n_solve, :n_solve], Mw[:n_solve, :n_solve]
+        # one factorization: the shift-invert eigensolve, the constraint modes and every load later
+        lu = spla.splu(K.tocsc())
         # a fixed start vector: the same basis on every run (ARPACK's default start is random, and a nearly
         # repeated pair of modes would come out mixed differently each time)
-        lam, vec = spla.eigsh(K, k=n_modes, M=M, sigma=0.0, which="LM", v0=np.ones(n_free))
+        lam, vec = spla.eigsh(K, k=n_modes, M=M, sigma=0.0, which="LM", v0=np.ones(n_solve),
+                              OPinv=spla.LinearOperator(K.shape, matvec=lu.solve, dtype=float))
         order = np.argsort(lam)
         lam, vec = lam[order], vec[:, order]
-        blocks = [np.vstack([vec, np.zeros((nb, n_modes))])]
-        lu = spla.splu(K.tocsc())                       # one factorization: constraint modes and every load later
-        if nb:
-            blocks.append(np.vstack([-lu.solve(Kw[:n_free, n_free:].toarray()), np.eye(nb)]))
-        return T @ np.hstack(blocks), np.sqrt(np.maximum(lam, 0.0)), (T, n_free, lu)
+        if reduction == "craig-bampton":
+            blocks = [np.vstack([vec, np.zeros((nb, n_modes))])]
+            if nb:
+                blocks.append(np.vstack([-lu.solve(Kw[:n_free, n_free:].toarray()), np.eye(nb)]))
+            Phi = T @ np.hstack(blocks)
+        else:
+            # residual attachment modes: K⁻¹E − Φ Λ⁻¹ Φᵀ E (Φ M-normalized by eigsh), E the interface DOFs;
+            # they are K- but not M-orthogonal to the kept modes: made so (the same span)
+            E = np.zeros((n_solve, nb))
+            E[n_free:] = np.eye(nb)
+            residual = lu.solve(E) - vec @ (vec[n_free:].T / lam[:, None])
+            Phi = T @ vec
+            if nb:
+                Phi = np.hstack([Phi, m_complement(T @ residual, Phi, solid.mass)])
+        return Phi, np.sqrt(np.maximum(lam, 0.0)), (T, n_solve, lu)
 
     @staticmethod
     def _attachment_modes(solid, tie, dofs, P):
         """The six static responses (rigid interfaces held) to unit loads spread over an averaged set, Pᵀe_k."""
-        T, n_free, lu = tie
+        T, n_solve, lu = tie
         loads = np.zeros((solid.n_dofs, 6))
         loads[dofs] = P.T
-        return T[:, :n_free] @ lu.solve(np.asarray((T.T @ loads)[:n_free]))
+        return T[:, :n_solve] @ lu.solve(np.asarray((T.T @ loads)[:n_solve]))
 
     @staticmethod
     def _stiffening_vectors(solid, tie, modes, origin, spins, kept):
         """The static responses, interfaces held, to the stiffening loads (``solid_strain.stiffening_loads``),
         made M-orthogonal to the ``kept`` basis and to each other; the ones already spanned dropped."""
-        T, n_free, lu = tie
+        T, n_solve, lu = tie
         loads = stiffening_loads(solid, modes, origin, pairs=modes.shape[1] > 0, spins=spins)
         if loads.shape[1] == 0:
             return np.zeros((solid.n_dofs, 0))
         size = np.abs(loads).max(axis=0)
         # modes bending in different planes do not couple: their third derivative is round-off
         loads = loads[:, size > 1e-8 * size.max()]
-        w = -lu.solve(np.asarray((T.T @ loads)[:n_free]))
-        return m_complement(T[:, :n_free] @ w, kept, solid.mass)
+        w = -lu.solve(np.asarray((T.T @ loads)[:n_solve]))
+        return m_complement(T[:, :n_solve] @ w, kept, solid.mass)
 
     @staticmethod
     def _invariants(solid, Phi, X0):
@@ -241,6 +288,30 @@ class FloatingSolid3D(FloatingFrame3D):
                 P[i, k] = X0[:, i] @ MsPhi[k]
         return SpatialFrameInertia(mass=float(ones @ (Ms @ ones)), S0=ones @ MsX,
                                    Sbar=np.array([ones @ MsPhi[k] for k in range(3)]), I0=X0.T @ MsX, P=P, N=N)
+
+    def frequency_errors(self, n=None):
+        """How well the basis carries the body's vibration: its lowest ``n`` natural frequencies (the frame set
+        clamped, the rest as reduced) against the full mesh's with the frame set clamped and the rigid interfaces
+        free (rigid), averaged sets free.
+
+        Parameters
+        ----------
+        n : int, optional
+            How many (default: ``n_modes``).
+
+        Returns
+        -------
+        FrequencyCheck
+            ``reduced``, ``full`` (rad/s) and the relative ``error`` of each.
+        """
+        n = self.n_modes if n is None else int(n)
+        if not 1 <= n <= self.n_elastic:
+            raise ValueError(f"n must be in [1, {self.n_elastic}] (the elastic coordinates), got {n!r}")
+        K = self.basis.T @ (self.solid.stiffness @ self.basis)
+        M = self.basis.T @ (self.solid.mass @ self.basis)
+        reduced = np.sqrt(np.maximum(scipy.linalg.eigh(K, M, eigvals_only=True, subset_by_index=(0, n - 1)), 0.0))
+        full = self.solid.natural_frequencies(n, self._sets["frame"], [self._sets[k] for k in self.interface_names])
+        return FrequencyCheck(reduced, full, reduced / full - 1.0)
 
     # ---------------------------------------------------------------- state and points
     @property
@@ -265,10 +336,7 @@ class FloatingSolid3D(FloatingFrame3D):
             if locator not in self.interface_names:
                 raise ValueError(f"body {self.name!r} has no interface {locator!r}; it has "
                                  f"{['frame', *self.interface_names, *self.averaged_names]}")
-            S = np.zeros((3, self.n_elastic))
-            start = self.n_modes + 6 * self.interface_names.index(locator)
-            S[:, start:start + 3] = np.eye(3)
-            return ElasticPoint(self, self.centres[locator], S)
+            return ElasticPoint(self, self.centres[locator], self._interface_motion[locator][:3])
         X = check_finite_vector("point", locator, 3)
         node = int(np.argmin(np.sum((self.solid.node_positions - X) ** 2, axis=1)))
         S = np.stack([self.basis[self.solid.component_dofs[k, node]] for k in range(3)])

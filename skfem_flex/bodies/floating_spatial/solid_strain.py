@@ -132,6 +132,10 @@ class SolidGreenLagrange:
         dE = self._dE(U)
         return self._material(dE, dE, self.w) + self._curvature(self._stress(E))
 
+    def compiled_strain(self):
+        """None: the compiled core has no form of the solid's Green–Lagrange energy (it runs in Python)."""
+        return None
+
     def discrete_gradient(self, y0, y1):
         """(g, ∂g/∂y1): the stress at the mean strain times the mid-point dE, exact (module docstring)."""
         _, E0 = self._strain(y0)

@@ -77,6 +77,13 @@ class SpatialBeamStrain:
         out.A = [A @ basis for A in self.A]
         return out
 
+    def compiled_strain(self):
+        """The compiled core's form of this energy (:func:`.kernel.kernel_data`): (K,) or, with the
+        Green–Lagrange axis, (K₀, A (3, n_points, n), w)."""
+        if not self.nonlinear:
+            return (self.K,)
+        return self.K, np.stack(self.A), self.w
+
     def strains(self, y):
         """(u' (3, n_points), ε (n_points,)) at the Gauss points."""
         up = np.stack([A @ y for A in self.A])

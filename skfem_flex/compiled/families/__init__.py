@@ -42,6 +42,7 @@ FAMILY_MODULES = (
     "quadratic_rows",
     "linear_potentials",
     "spatial_loads",
+    "spatial_floating_frame",
 )
 
 

@@ -1,0 +1,161 @@
+r"""Spatial floating-frame bodies (:class:`~skfem_flex.bodies.floating_spatial.body.FloatingBeam3D`,
+:class:`~skfem_flex.bodies.floating_spatial.solid.FloatingSolid3D` with linear strain): a director frame and
+elastic coordinates with a mass matrix M(q) that is a polynomial of degree two in q, their strain energy and
+the gravity acting on them.
+
+The arithmetic is the bodies' compiled kernel (:mod:`skfem_flex.bodies.floating_spatial.kernel`, on each
+body's ``compiled_kernel_data()``); this family adds its results where the task wants them
+(:mod:`skfem_flex.compiled.tasks`):
+
+* TASK_EVAL: p, g_k and g_p of :func:`~skfem_flex.bodies.floating_spatial.kernel.body_terms` into the
+  residual's parts and, into the body's dense block of the Newton matrix,
+
+  .. math::
+
+      w_p(∂_{q_1}p\,dq_1 + M(q_1)\,d\dot{}) + w_{gk}(∂_{q_1}g_k\,dq_1 + ∂_{v_1}g_k\,dv_1)
+      + w_{gp} c_{dg}\,dq_1\, ∂_{q_b} g_p ,
+
+  with d = dv₁ (energy–momentum: p = M(q₁)v₁) or da₁ (Newmark: p = M(q₁)a₁); the potential's round-off
+  floor |w_gp c_dg dq₁ ∂g_p/∂q_b| (|q_a| + |q_b|) into ``floor`` and, for the Newmark family,
+  Σ_j |M_ij| terms_j into ``mterms``;
+* TASK_MOMENTUM: p = M(q₁)v₁ into ``p``, the linear momentum (the x rows of p) into ``out[1:4]`` and the
+  angular momentum about the origin Σ_k q_k × p_k over x and the three directors into ``out[4:7]``;
+* TASK_ENERGY: the strain energy and gravity's potential at q₁ into ``out[0]``.
+"""
+from __future__ import annotations
+
+from collections import namedtuple
+
+import numba
+import numpy as np
+
+from ...bodies.floating_spatial.kernel import EM, NEWMARK, STATE, SpatialFrameKernelData, body_terms
+from ..abi import context_of, f1, f2, f3, family_of, fvec, i1
+from ..registry import compiled_kernel
+from ..storage import add_qq, storage_of
+from ..tasks import SCHEME_EM, TASK_ENERGY, TASK_EVAL, TASK_MOMENTUM
+from . import FamilyPack
+
+__all__ = ["NAME", "FORMS", "pack", "kernel"]
+
+NAME = "spatial floating-frame bodies"
+FORMS = ("spatial floating frame", "spatial floating frame gravity")
+
+#: fields per body: those of SpatialFrameKernelData, after the family's one (the bodies' offsets)
+_NKD = len(SpatialFrameKernelData._fields)
+
+
+def pack(items, packer):
+    """The family's data: the offsets of the bodies' blocks, then each body's kernel data (fields
+    ``b<k>_<name>``), with the gravity fields that act on it summed into its ``g``.
+
+    Parameters
+    ----------
+    items : list
+        ``(SpatialFrameKernelData, body, offset)`` per body (form "spatial floating frame") and
+        ``(("gravity", g), body, offset)`` per gravity field on one of them.
+    packer : Packer
+
+    Returns
+    -------
+    FamilyPack
+        One dense coupling block per body.
+    """
+    bodies, gravity = [], {}
+    for item, body, off in items:
+        if isinstance(item, SpatialFrameKernelData):
+            bodies.append((item, body, off))
+        else:
+            gravity[id(body)] = gravity.get(id(body), 0.0) + np.asarray(item[1], dtype=float)
+    names, arrays, offs, couplings = ["offs"], [None], [], []
+    for b, (kd, body, off) in enumerate(bodies):
+        if id(body) in gravity:
+            kd = kd._replace(g=kd.g + gravity[id(body)])
+        names += [f"b{b}_{name}" for name in kd._fields]
+        arrays += list(kd)
+        offs.append(off)
+        couplings.append(np.arange(off, off + 12 + kd.Sbar.shape[1], dtype=np.int64))
+    arrays[0] = np.asarray(offs, dtype=np.int64)
+    data = namedtuple("SpatialFloatingFrameData", names)(*arrays)
+    return FamilyPack(data=data, count=len(bodies), couplings=couplings)
+
+
+@numba.njit(cache=True)
+def _body(fam, k):
+    """Body data from the pools, field by field (SpatialFrameKernelData's order)."""
+    return SpatialFrameKernelData(f1(fam, k), f1(fam, k + 1), f2(fam, k + 2), f2(fam, k + 3), f3(fam, k + 4),
+                                  f1(fam, k + 5), f2(fam, k + 6), i1(fam, k + 7), f3(fam, k + 8), f1(fam, k + 9),
+                                  f1(fam, k + 10))
+
+
+@numba.njit(cache=True)
+def _bodies(ctx, fam):
+    """Every body's part of the context's task (module docstring)."""
+    n, task = ctx.n, ctx.task
+    mode = STATE if task != TASK_EVAL else (EM if ctx.scheme == SCHEME_EM else NEWMARK)
+    offs = i1(fam, 0)
+    out = fvec(ctx.out, 7)
+    rp, rgk, rgp, floor = fvec(ctx.p, n), fvec(ctx.gk, n), fvec(ctx.gp, n), fvec(ctx.floor, n)
+    for b in range(offs.size):
+        kd = _body(fam, 1 + _NKD * b)
+        o, nb = offs[b], 12 + kd.Sbar.shape[1]
+        sl = slice(o, o + nb)
+        q1, v1 = fvec(ctx.q1, n)[sl].copy(), fvec(ctx.v1, n)[sl].copy()
+        if mode == STATE:                     # only q₁ and v₁ are set for these tasks
+            q0, v0, a1, qa, qb = q1, v1, v1, q1, q1
+        else:
+            q0, v0, a1 = fvec(ctx.q0, n)[sl].copy(), fvec(ctx.v0, n)[sl].copy(), fvec(ctx.a1, n)[sl].copy()
+            qa, qb = fvec(ctx.qa, n)[sl].copy(), fvec(ctx.qb, n)[sl].copy()
+        p, gk, gp, M1, dp_dq, dgk_dq, dgk_dv, dgp_dq, V = body_terms(kd, mode, q0, q1, v0, v1, a1, qa, qb)
+        if task == TASK_ENERGY:
+            out[0] += V
+            continue
+        if task == TASK_MOMENTUM:
+            for i in range(nb):
+                rp[o + i] += p[i]
+            for c in range(3):
+                out[1 + c] += p[c]
+            for k in range(4):
+                x0, x1, x2 = q1[3 * k], q1[3 * k + 1], q1[3 * k + 2]
+                out[4] += x1 * p[3 * k + 2] - x2 * p[3 * k + 1]
+                out[5] += x2 * p[3 * k] - x0 * p[3 * k + 2]
+                out[6] += x0 * p[3 * k + 1] - x1 * p[3 * k]
+            continue
+        dv1 = fvec(ctx.dv1, n)
+        st = storage_of(ctx)
+        w_p, w_gk, dq1 = ctx.w_p, ctx.w_gk, ctx.dq1
+        th = ctx.w_gp * ctx.c_dg * dq1
+        for i in range(nb):
+            rp[o + i] += p[i]
+            rgk[o + i] += gk[i]
+            rgp[o + i] += gp[i]
+            fl = 0.0
+            for j in range(nb):
+                dvj = dv1[o + j]
+                dm = dvj if mode == EM else ctx.da1
+                tp = th * dgp_dq[i, j]
+                val = w_p * (dp_dq[i, j] * dq1 + M1[i, j] * dm) + w_gk * (dgk_dq[i, j] * dq1 + dgk_dv[i, j] * dvj) + tp
+                if val != 0.0:
+                    add_qq(ctx, st, o + i, o + j, val)
+                fl += abs(tp) * (abs(qa[j]) + abs(qb[j]))
+            floor[o + i] += fl
+        if mode == NEWMARK:
+            mterms, terms = fvec(ctx.mterms, n), fvec(ctx.terms, n)
+            for i in range(nb):
+                s = 0.0
+                for j in range(nb):
+                    s += abs(M1[i, j]) * terms[o + j]
+                mterms[o + i] += s
+
+
+def _kernel(ctx_p, fam_p):
+    """The family's kernel (signature of :mod:`..abi`): TASK_EVAL, TASK_MOMENTUM and TASK_ENERGY."""
+    ctx = context_of(ctx_p)
+    task = ctx.task
+    if task == TASK_EVAL or task == TASK_MOMENTUM or task == TASK_ENERGY:
+        _bodies(ctx, family_of(fam_p))
+
+
+def kernel():
+    """The compiled kernel (from the cache, or compiled now)."""
+    return compiled_kernel(_kernel, "the spatial floating-frame family", nrt=True)

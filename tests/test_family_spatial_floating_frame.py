@@ -1,0 +1,204 @@
+"""The spatial floating-frame family of the compiled core (skfem_flex/compiled/families/spatial_floating_frame.py,
+its arithmetic in skfem_flex/bodies/floating_spatial/kernel.py): FloatingBeam3D (Green–Lagrange and linear
+strain) and FloatingSolid3D (linear strain).
+
+1. The compiled M(q), B(q, a), H(a, b), strain and gravity terms are the numpy specification's
+   (bodies/floating_spatial/kinetics.py, the strain objects, FloatingFrame3D.gravity_potential) at round-off.
+2. Kernel against the task specification (compiled/tasks.py): at random states and unknowns the Newton matrix is
+   the central difference of the residual under energy-momentum, trapezoidal and generalized-α, and the residual
+   is the bodies' numpy contract; the recorded momenta and energies are those of M(q) v, of V and of gravity.
+3. Scenes run compiled (no element left to Python) and their trajectories equal the Python path's under every
+   scheme; the solid's Green–Lagrange energy, which has no compiled form, runs in Python and says so.
+"""
+import functools
+
+import numpy as np
+import pytest
+import skfem
+
+import skfem_flex as sf
+from skfem_flex.bodies.floating_spatial import kernel, kinetics
+from skfem_flex.bodies.floating_spatial.body import FloatingBeam3D
+from skfem_flex.bodies.floating_spatial.solid import FloatingSolid3D
+from skfem_flex.fem.elasticity3d import ElasticSolid3D
+from skfem_flex.fem.spatial_beam import TimoshenkoBeam3D
+from skfem_flex.fem.spatial_section import SpatialSection
+
+from family_checks import fd_mismatch, loaded_stepper, rel_dev, run_both, run_new
+
+#: the Newton matrix against Richardson-extrapolated central differences, relative to each row's largest entry
+FD_TOL = 1e-9
+#: the compiled terms and residual against the numpy specification: round-off of sums of ~1e3 terms
+PARTS_TOL = 1e-12
+#: trajectories against the Python path (relative to the largest entry): the same equations, summed in
+#: another order
+RUN_TOL = 1e-10
+
+SECTION = SpatialSection(EA=1e4, GA1=8e3, GA2=6e3, GJ=400.0, EI1=500.0, EI2=300.0, rhoA=1.3, rhoI1=2.0, rhoI2=1.0)
+GRAVITY = (0.3, -1.0, -9.81)
+
+
+def beam(strain="green-lagrange", reference="clamped"):
+    line = TimoshenkoBeam3D(skfem.MeshLine(np.linspace(0.0, 2.0, 4)), SECTION, order=2)
+    return FloatingBeam3D(line, reference=reference, strain=strain, angular_velocity=(0.4, -0.3, 2.0))
+
+
+@functools.lru_cache(maxsize=None)
+def _solid(strain):
+    mesh = skfem.MeshHex.init_tensor(np.linspace(0, 1.0, 5), np.linspace(0, 0.1, 2), np.linspace(0, 0.1, 2))
+    solid = ElasticSolid3D(mesh.to_meshtet(), 2e11, 0.3, 7800.0, order=1)
+    return FloatingSolid3D(solid, lambda X: np.isclose(X[0], 0.0), 3, interfaces={"tip": lambda X: np.isclose(X[0], 1.0)},
+                           angular_velocity=(1.0, 0.5, 3.0), strain=strain)
+
+
+BODIES = {"beam": beam, "linear-strain beam": lambda: beam("linear", "chord"), "solid": lambda: _solid("linear")}
+
+
+def random_state(body, rng, scale=1e-3):
+    """A turned, moving, deformed state (the directors orthonormal, as the scene's rows keep them)."""
+    q = np.array(body.q0, dtype=float)
+    R = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    for k in range(1, 4):
+        q[3 * k:3 * k + 3] = R @ q[3 * k:3 * k + 3]
+    q[:3] = (0.3, -0.2, 0.7)
+    q[12:] = scale * rng.normal(size=q.size - 12)
+    v = rng.normal(size=q.size)
+    v[12:] *= 0.05
+    return q, v
+
+
+def gravity_scene(body):
+    return sf.Scene([body], forces=[sf.Gravity(GRAVITY)])
+
+
+@pytest.mark.parametrize("kind", list(BODIES))
+def test_compiled_terms_are_the_numpy_specification(kind):
+    """M, B, H, the strain energy's discrete gradient and gravity: the compiled twins equal the numpy methods."""
+    body = BODIES[kind]()
+    kd = body.compiled_kernel_data()._replace(g=np.array(GRAVITY))
+    rng = np.random.default_rng(0)
+    q0, v = random_state(body, rng)
+    q1, a = random_state(body, rng)
+    inv = body.inertia
+    pairs = [(kernel.mass_matrix(kd, q0), kinetics.mass_matrix(inv, q0)),
+             (kernel.momentum_jacobian(kd, q0, a), kinetics.momentum_jacobian(inv, q0, a)),
+             (kernel.kinetic_hessian(kd, v, a), kinetics.kinetic_hessian(inv, v, a))]
+    e1, g, jac = kernel.strain_terms(kd, q0[12:], q1[12:])
+    g_ref, jac_ref = body.strain_energy.discrete_gradient(q0[12:], q1[12:])
+    pairs += [(np.array([e1]), np.array([body.strain_energy.energy(q1[12:])])), (g, g_ref), (jac, jac_ref)]
+    pairs += [(np.concatenate([[a_], b_.ravel(), c_.ravel()]), np.concatenate([[a2], b2.ravel(), c2.ravel()]))
+              for (a_, b_, c_), (a2, b2, c2) in [(kernel.gravity_terms(kd, q1), body.gravity_potential(q1, GRAVITY))]]
+    for mine, ref in pairs:
+        assert np.abs(mine - ref).max() <= PARTS_TOL * max(np.abs(ref).max(), 1e-300)
+    # the strain energy really is nonlinear for the Green–Lagrange beam (the test above can see it)
+    if kind == "beam":
+        assert np.abs(jac - body.strain_energy.K / 2).max() > 1e-6 * np.abs(jac).max()
+
+
+def em_reference(body, q0, q1, v0, v1, h):
+    """r = p(q₁, v₁) − p(q₀, v₀) + Δt g_V − Δt g_G from the numpy methods (gravity included), and its scale."""
+    p1, p0 = body.mass_matrix(q1) @ v1, body.mass_matrix(q0) @ v0
+    gk = body.kinetic_discrete_gradient(q0, q1, v0, v1)[0]
+    gp = body.potential_discrete_gradient(q0, q1)[0] + body.gravity_discrete_gradient(q0, q1, GRAVITY)[0]
+    scale = max(np.abs(p1).max(), np.abs(p0).max(), h * np.abs(gk).max(), h * np.abs(gp).max())
+    return p1 - p0 + h * gp - h * gk, scale
+
+
+@pytest.mark.parametrize("kind", list(BODIES))
+def test_energy_momentum_step_is_the_bodies_contract(kind):
+    """Energy-momentum: the residual is the numpy contract's, the Newton matrix its derivative."""
+    body = BODIES[kind]()
+    scene = gravity_scene(body)
+    rng = np.random.default_rng(1)
+    q0, v0 = random_state(body, rng)
+    h = 0.01
+    st = loaded_stepper(scene, "energy-momentum", q0, v0)
+    assert not st.packed.python_elements
+    dq = h * v0 + 1e-4 * rng.normal(size=q0.size)
+    mu = 1e-2 * rng.normal(size=scene.n_constraints)          # the rigidity rows' multipliers
+    assert fd_mismatch(st, 0.0, h, np.concatenate([dq, mu]))[0] < FD_TOL
+    r = st.evaluate(0.0, h, np.concatenate([dq, np.zeros_like(mu)]))[0]
+    ref, scale = em_reference(body, q0, q0 + dq, v0, 2.0 * dq / h - v0, h)
+    assert np.abs(r[:body.n_dofs] - ref).max() <= 1e-10 * scale
+
+
+@pytest.mark.parametrize("scheme", ["trapezoidal", "generalized-alpha"])
+@pytest.mark.parametrize("kind", ["beam", "solid"])
+def test_newmark_tangent_is_the_residuals_derivative(kind, scheme):
+    """The Newmark family: M(q₁) q̈₁ + ∇V − Q_v and its derivative (the quadratic-velocity force's two
+    derivatives and DM(q)[v] included)."""
+    body = BODIES[kind]()
+    scene = gravity_scene(body)
+    rng = np.random.default_rng(2)
+    q0, v0 = random_state(body, rng)
+    st = loaded_stepper(scene, scheme, q0, v0, acc=rng.normal(size=q0.size))
+    x = np.concatenate([0.01 * v0 + 1e-4 * rng.normal(size=q0.size), 1e-2 * rng.normal(size=scene.n_constraints)])
+    assert fd_mismatch(st, 0.0, 0.01, x)[0] < FD_TOL
+
+
+@pytest.mark.parametrize("kind", ["beam", "solid"])
+def test_start_momenta_and_energy(kind):
+    """The consistent start solves the numpy M q̈ = Q_v − ∇V − ∇V_g on the rigidity rows; the recorded linear and
+    angular momenta are those of p = M(q) v (numpy), T = ½ vᵀp, V the strain energy and gravity's potential."""
+    body = BODIES[kind]()
+    scene = gravity_scene(body)
+    rec, _ = run_new(scene, "energy-momentum", 0.01, 3)
+    ref = sf.simulate(gravity_scene(BODIES[kind]()), 0.03, 0.01, compiled=False)
+    for i in range(3):
+        q, v = rec.q[i], rec.v[i]
+        p = body.mass_matrix(q) @ v
+        L = sum(np.cross(q[3 * k:3 * k + 3], p[3 * k:3 * k + 3]) for k in range(4))
+        np.testing.assert_allclose(ref.linear_momentum[i + 1], p[:3], rtol=0, atol=1e-11 * np.abs(p).max())
+        np.testing.assert_allclose(ref.angular_momentum[i + 1], L, rtol=0, atol=1e-11 * np.abs(L).max())
+    res = sf.simulate(gravity_scene(BODIES[kind]()), 0.03, 0.01)
+    assert not res.run_path["python_elements"]
+    np.testing.assert_allclose(res.linear_momentum, ref.linear_momentum, rtol=0,
+                               atol=1e-10 * np.abs(ref.linear_momentum).max())
+    np.testing.assert_allclose(res.angular_momentum, ref.angular_momentum, rtol=0,
+                               atol=1e-10 * np.abs(ref.angular_momentum).max())
+    for key in ("kinetic", "potential"):
+        mine, theirs = getattr(res, key), getattr(ref, key)
+        assert np.abs(mine - theirs).max() <= 1e-10 * np.abs(theirs).max()
+    # gravity's work shows in the potential: the body falls
+    assert np.ptp(ref.potential) > 0
+
+
+RUNS = {  # name: (scene factory, dt, steps, schemes)
+    "rotating beam 3D": (lambda: sf.scenes.rotating_beam_3d(n_elements=3), 0.01, 20,
+                         ("energy-momentum", "trapezoidal", "generalized-alpha")),
+    "rotor 3D": (lambda: sf.scenes.rotor_3d(n_modes=4), 1e-3, 20, ("energy-momentum", "generalized-alpha")),
+}
+
+
+@pytest.mark.parametrize("name, scheme", [(name, s) for name, run in RUNS.items() for s in run[3]])
+def test_trajectories_equal_the_python_path(name, scheme):
+    """A rotating Green–Lagrange beam on a driven hub and the meshed rotor on two ball joints: q, v and λ of the
+    compiled core are the Python path's."""
+    factory, dt, steps, _ = RUNS[name]
+    rec, ref = run_both(factory, scheme, dt, steps)
+    assert rel_dev(rec.q, ref.q[1:]) < RUN_TOL
+    assert rel_dev(rec.v, ref.v[1:]) < 1e3 * RUN_TOL
+    assert rel_dev(rec.lam, ref.lam[1:]) < 1e3 * RUN_TOL
+
+
+def test_energy_of_a_free_tumbling_beam_under_energy_momentum():
+    """A free Green–Lagrange beam tumbling under gravity, compiled: T + V + V_g stays to 1e-10 relative and the
+    momenta are gravity's impulse, over 100 large steps."""
+    body = beam()
+    res = sf.simulate(gravity_scene(body), 1.0, 0.01)
+    assert not res.run_path["python_elements"]
+    e = res.total_energy
+    assert np.abs(e - e[0]).max() <= 1e-10 * res.kinetic.max()
+    mass = body.inertia.mass
+    expected = res.linear_momentum[0] + mass * np.outer(res.t, GRAVITY)
+    assert np.abs(res.linear_momentum - expected).max() <= 1e-9 * np.abs(expected).max()
+
+
+def test_green_lagrange_solid_runs_in_python_and_says_why():
+    """The solid's Green–Lagrange energy has no compiled form: the body runs on the Python path, named with why."""
+    body = _solid("green-lagrange")
+    assert body.compiled_kernel_data() is None and "no compiled form" in body.compiled_refusal
+    res = sf.simulate(sf.Scene([body]), 0.02, 0.01)
+    assert any("SolidGreenLagrange" in why for why in res.run_path["python_elements"])
+    with pytest.raises(ValueError, match="no compiled form"):
+        sf.simulate(sf.Scene([_solid("green-lagrange")]), 0.02, 0.01, compiled=True)
