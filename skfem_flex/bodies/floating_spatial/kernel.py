@@ -85,7 +85,7 @@ def kernel_data(inertia, K, A=None, w=None, gravity=(0.0, 0.0, 0.0)):
         np.array([1 if green else 0], dtype=np.int64), A, w, np.asarray(gravity, dtype=float).reshape(3).copy())
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def matvec(A, x):
     """A x (plain loops: numba's BLAS-backed ``@`` costs seconds of compile for nothing at these sizes)."""
     out = np.zeros(A.shape[0])
@@ -97,7 +97,7 @@ def matvec(A, x):
     return out
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def _gram(A, B):
     """Aᵀ B of two 3 × 3 matrices."""
     out = np.zeros((3, 3))
@@ -107,7 +107,7 @@ def _gram(A, B):
     return out
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def _amax(x):
     out = 0.0
     for v in x:
@@ -115,7 +115,7 @@ def _amax(x):
     return out
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def _directors(q):
     D = np.empty((3, 3))
     for k in range(3):
@@ -146,7 +146,7 @@ def _contract(kd, q):
     return out
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def _add_weighted(kd, W, out, scale, transpose):
     """out[12 + a, 12 + b] += scale Σ_ik W_ik N_ikab (N_ikba with ``transpose``); loops, no slices: numba's
     slice assignment costs seconds of compile."""
@@ -160,7 +160,7 @@ def _add_weighted(kd, W, out, scale, transpose):
                     out[12 + a, 12 + b] += w * (N[r, b, a] if transpose else N[r, a, b])
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def _configuration(kd, q, Ny):
     """s (3,), J (3, 3), C (3, 3, n_f) at the elastic coordinates of q (``kinetics._configuration``); Ny the
     contraction of N with them (:func:`_contract`)."""
@@ -307,7 +307,7 @@ def kinetic_hessian(kd, a, b):
     return _hessian(kd, a, b, _contract(kd, a), _contract(kd, b))
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def _axial(kd, y):
     """(u' (3, n_points), ε (n_points,)) of the Green–Lagrange axis."""
     npts, nf = kd.A.shape[1], kd.A.shape[2]

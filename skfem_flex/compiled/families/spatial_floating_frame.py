@@ -80,7 +80,7 @@ def pack(items, packer):
     return FamilyPack(data=data, count=len(bodies), couplings=couplings)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _body(fam, k):
     """Body data from the pools, field by field (SpatialFrameKernelData's order)."""
     return SpatialFrameKernelData(f1(fam, k), f1(fam, k + 1), f2(fam, k + 2), f2(fam, k + 3), f3(fam, k + 4),
@@ -88,7 +88,7 @@ def _body(fam, k):
                                   f1(fam, k + 10))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _bodies(ctx, fam):
     """Every body's part of the context's task (module docstring)."""
     n, task = ctx.n, ctx.task
