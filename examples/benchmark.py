@@ -552,7 +552,7 @@ def spatial_peer_problems(out, suffix):
 
 
 #: the reduced rotor's group: its label (``--only`` matches a part of it), simulated seconds (the scene's whole
-#: default run: the spin-up from rest passes the first critical speed near 0.85 s) and reference step (s)
+#: default run: the spin-up from rest reaches the first critical speed, 237 rad/s, near its end) and reference step (s)
 REDUCED_ROTOR = "reduced rotor (rotor_3d: Craig–Bampton, 20 elastic coordinates; disk centre)"
 REDUCED_ROTOR_T = 0.02 if QUICK else 1.0
 REDUCED_ROTOR_REF_DT = 5e-5
