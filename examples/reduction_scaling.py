@@ -3,19 +3,19 @@
 A steel bar (10 × 1 × 1 in units of its width, P1 tetrahedra from a hexahedral grid) is assembled with
 scikit-fem (:class:`skfem_flex.ElasticSolid3D`) and reduced (:class:`skfem_flex.FloatingSolid3D`: the frame
 clamped at one end, a rigid interface at the other, 8 fixed-interface modes and the interface's 6 constraint
-modes: Craig–Bampton with one sparse LU, ``eigsh`` in shift-invert mode, the invariants by sparse products).
-Each size runs in a fresh process, which reports its wall time per stage and its peak resident memory
-(``ru_maxrss``) above the memory of the imports. The table goes to standard output and, with a folder
-argument, to ``reduction_scaling.md`` there::
+modes: Craig–Bampton with one sparse factorization, ``eigsh`` in shift-invert mode on it, the invariants by
+sparse products). Each size runs in a fresh process, which reports its wall time per stage, the
+factorization it used (:mod:`skfem_flex.fem.spd_solver`: SuperLU, or PARDISO from the optional
+``pypardiso`` above 20 000 rows) and its peak resident memory (``ru_maxrss``) above the memory of the
+imports. The table goes to standard output and, with a folder argument, to ``reduction_scaling.md`` there::
 
-    python examples/reduction_scaling.py                        # 10³, 3·10³, 10⁴, 3·10⁴ nodes
+    python examples/reduction_scaling.py                        # 10³ … 10⁵ nodes (10⁵ only with pypardiso)
     python examples/reduction_scaling.py docs/study             # the same, written as a table for the docs
-    python examples/reduction_scaling.py /tmp/out 100000        # other sizes (nodes)
+    python examples/reduction_scaling.py /tmp/out 3000 10000    # other sizes (nodes)
 
-The reduction's sparse LU fills in as a 3D mesh's does (its memory grows as about N^(4/3) and its time as
-about N² for a mesh refined in all three directions), so 10⁵ nodes need some 6 GB and many minutes on a
-2-core machine: that size is not in the default run. ``SKFEM_FLEX_EXAMPLE_QUICK=1`` runs 10³ and 3·10³ nodes
-only.
+SuperLU's factorization of a 3D stiffness grows as about N^1.6 in time (10⁵ nodes: many minutes and more
+than 7 GB), so the default run leaves 10⁵ nodes out without PARDISO. ``SKFEM_FLEX_EXAMPLE_QUICK=1`` runs
+10³ and 3·10³ nodes only.
 """
 import json
 import os
@@ -25,7 +25,7 @@ import time
 from pathlib import Path
 
 QUICK = os.environ.get("SKFEM_FLEX_EXAMPLE_QUICK") == "1"
-SIZES = (1_000, 3_000) if QUICK else (1_000, 3_000, 10_000, 30_000)
+SIZES = (1_000, 3_000) if QUICK else (1_000, 3_000, 10_000, 30_000, 100_000)
 
 
 def grid(nodes):
@@ -34,6 +34,12 @@ def grid(nodes):
     while (10 * (ny) + 1) * (ny + 1) ** 2 <= nodes:
         ny += 1
     return 10 * (ny - 1) + 1, ny
+
+
+def _method(n_dofs):
+    """The factorization :func:`skfem_flex.fem.spd_solver.spd_factor` takes for about this many rows."""
+    from skfem_flex.fem import spd_solver
+    return "PARDISO" if n_dofs > spd_solver.PARDISO_ABOVE and spd_solver.pardiso_available() else "SuperLU"
 
 
 def measure(nodes):
@@ -56,24 +62,30 @@ def measure(nodes):
                               interfaces={"tip": lambda X: np.isclose(X[0], 10 * width)})
     t2 = time.perf_counter()
     return dict(nodes=int(mesh.p.shape[1]), dofs=int(solid.n_dofs), assemble=t1 - t0, reduce=t2 - t1,
+                factor=_method(solid.n_dofs),
                 memory=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0 - base,
                 f1=float(body.frequencies[0]))
 
 
 def main(out=None, sizes=SIZES):
     rows = []
+    from skfem_flex.fem.spd_solver import pardiso_available
+    if sizes == SIZES and not pardiso_available():
+        sizes = tuple(n for n in sizes if n < 50_000)
+        print("pypardiso is not installed: 10⁵ nodes left out (SuperLU would need many minutes and > 7 GB)")
     for nodes in sizes:
         proc = subprocess.run([sys.executable, __file__, "--one", str(nodes)], capture_output=True, text=True)
         if proc.returncode != 0:
             raise RuntimeError(f"the run of {nodes} nodes failed:\n{proc.stderr[-3000:]}")
         rows.append(json.loads(proc.stdout.strip().splitlines()[-1]))
         r = rows[-1]
-        print(f"{r['nodes']:>8} nodes: assembly {r['assemble']:.2f} s, reduction {r['reduce']:.2f} s, "
+        print(f"{r['nodes']:>8} nodes: assembly {r['assemble']:.2f} s, reduction {r['reduce']:.2f} s ({r['factor']}), "
               f"peak memory {r['memory']:.0f} MB, first frequency {r['f1']:.1f} rad/s", flush=True)
-    lines = ["| nodes | DOFs | assembly (s) | reduction (s) | peak memory above imports (MB) | µs per DOF "
-             "(both) | first bending frequency (rad/s) |", "|---|---|---|---|---|---|---|"]
+    lines = ["| nodes | DOFs | assembly (s) | reduction (s) | factorization | peak memory above imports (MB) | "
+             "µs per DOF (both) | first bending frequency (rad/s) |", "|---|---|---|---|---|---|---|---|"]
     for r in rows:
-        lines.append(f"| {r['nodes']} | {r['dofs']} | {r['assemble']:.2f} | {r['reduce']:.2f} | {r['memory']:.0f} | "
+        lines.append(f"| {r['nodes']} | {r['dofs']} | {r['assemble']:.2f} | {r['reduce']:.2f} | {r['factor']} | "
+                     f"{r['memory']:.0f} | "
                      f"{1e6 * (r['assemble'] + r['reduce']) / r['dofs']:.0f} | {r['f1']:.2f} |")
     text = "\n".join(lines)
     print(text)

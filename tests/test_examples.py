@@ -301,7 +301,7 @@ def test_reduction_scaling(tmp_path):
     f = [float(r[-1]) for r in rows]
     beam = 4.730 ** 2 * math.sqrt(2.1e11 * 0.1 ** 4 / 12 / (7850.0 * 0.1 ** 2))
     assert f[1] < f[0] and 0.93 < f[1] / beam < 1.1
-    assert all(float(r[3]) > 0 and float(r[4]) > 0 for r in rows)
+    assert all(float(r[3]) > 0 and float(r[5]) > 0 and r[4].strip() in ("SuperLU", "PARDISO") for r in rows)
 
 
 def test_every_example_has_a_test():

@@ -41,7 +41,7 @@ import numpy as np
 
 from ..elements.motion import spin_up_law
 
-__all__ = ["peer_available", "version", "exudyn_modules", "simulation_settings", "spin_up", "flexible_pendulum",
+__all__ = ["peer_available", "version", "exudyn_modules", "simulation_settings", "solve_recorded", "spin_up", "flexible_pendulum",
            "pendulum"]
 
 
@@ -111,6 +111,25 @@ def simulation_settings(t_end, dt, scheme, rho_inf, absolute_tolerance=None, lin
     else:
         raise ValueError(f"scheme must be 'generalized-alpha' or 'trapezoidal', got {scheme!r}")
     return s
+
+
+def solve_recorded(mbs, sensors, settings, stats):
+    """Assemble and solve with exudyn's implicit second-order solver; returns (t, [recorded values of each
+    sensor], wall seconds). ``stats`` (a dict) receives ``steps``, ``newton``, ``jacobians`` and
+    ``cpu_seconds`` (:func:`time.process_time` around the solve, s)."""
+    exu, _ = exudyn_modules()
+    mbs.Assemble()
+    solver = exu.MainSolverImplicitSecondOrder()
+    cpu, wall = time.process_time(), time.perf_counter()
+    ok = solver.SolveSystem(mbs, settings)
+    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
+    it = solver.it
+    stats.update(steps=max(int(it.currentStepIndex) - 1, 0), newton=int(it.newtonStepsCount),  # index 0: t = 0
+                 jacobians=int(it.newtonJacobiCount), cpu_seconds=cpu)
+    if not ok:
+        raise RuntimeError(f"exudyn's solver stopped before the end time (at t = {it.currentTime} s)")
+    data = [np.asarray(mbs.GetSensorStoredData(s)) for s in sensors]
+    return data[0][:, 0], [d[:, 1:] for d in data], wall
 
 
 def _beam(mbs, length, n_elements, EA, EI, GA, rhoA, rhoI):

@@ -36,36 +36,16 @@ absolute tolerance 1e-10) unless a builder says otherwise.
 """
 from __future__ import annotations
 
-import time
 
 import numpy as np
 
 from ..numerics.quaternions import rotation_vector_matrix
-from .peer import exudyn_modules, peer_available, simulation_settings, version
+from .peer import exudyn_modules, peer_available, simulation_settings, solve_recorded, version
 
 __all__ = ["peer_available", "version", "heavy_top", "rigid_chain", "bricard", "spatial_slider_crank",
            "beam_cantilever", "BEAM_CANTILEVER"]
 
 _TOP_VARIANTS = ("simo-wong", "bruls")
-
-
-def _solve(mbs, sensors, settings, stats):
-    """Assemble and solve with exudyn's implicit second-order solver; returns (t, [recorded values of each
-    sensor], wall seconds). ``stats`` (a dict) receives ``steps``, ``newton``, ``jacobians`` and
-    ``cpu_seconds``."""
-    exu, _ = exudyn_modules()
-    mbs.Assemble()
-    solver = exu.MainSolverImplicitSecondOrder()
-    cpu, wall = time.process_time(), time.perf_counter()
-    ok = solver.SolveSystem(mbs, settings)
-    wall, cpu = time.perf_counter() - wall, time.process_time() - cpu
-    it = solver.it
-    stats.update(steps=max(int(it.currentStepIndex) - 1, 0), newton=int(it.newtonStepsCount),  # index 0: t = 0
-                 jacobians=int(it.newtonJacobiCount), cpu_seconds=cpu)
-    if not ok:
-        raise RuntimeError(f"exudyn's solver stopped before the end time (at t = {it.currentTime} s)")
-    data = [np.asarray(mbs.GetSensorStoredData(s)) for s in sensors]
-    return data[0][:, 0], [d[:, 1:] for d in data], wall
 
 
 def _sensor(mbs, output, body=None, local=None, node=None):
@@ -132,7 +112,7 @@ def heavy_top(variant="simo-wong", dt=0.009, t_end=10.0, scheme="generalized-alp
         sensors = [_sensor(mbs, "Position", body=top, local=c),
                    _sensor(mbs, "CoordinatesTotal", node=mbs.GetObject(top)["nodeNumber"])]
         settings = simulation_settings(t_end, dt, scheme, rho_inf, linear_solver="EXUdense", threads=1)
-        t, (com, q), seconds = _solve(mbs, sensors, settings, run.stats)
+        t, (com, q), seconds = solve_recorded(mbs, sensors, settings, run.stats)
         run.stats["euler_parameters"] = q[:, 3:7]
         return t, com, seconds
     run.stats = {}
@@ -184,7 +164,7 @@ def rigid_chain(n_bodies=10, dt=1e-3, t_end=1.0, scheme="generalized-alpha", rho
             previous, start, R = bar, start + R @ [length, 0.0, 0.0], R @ turn
         sensors = [_sensor(mbs, "Position", body=previous, local=[0.5 * length, 0.0, 0.0])]
         settings = simulation_settings(t_end, dt, scheme, rho_inf, linear_solver="EigenSparse", threads=1)
-        t, (tip,), seconds = _solve(mbs, sensors, settings, run.stats)
+        t, (tip,), seconds = solve_recorded(mbs, sensors, settings, run.stats)
         return t, tip, seconds
     run.stats = {}
     return run
@@ -238,7 +218,7 @@ def bricard(dt=1e-3, t_end=10.0, scheme="generalized-alpha", rho_inf=0.9):
         sensors = [_sensor(mbs, "Position", body=rods[1], local=[0.5, 0.0, 0.0])]
         settings = simulation_settings(t_end, dt, scheme, rho_inf, linear_solver="EigenDense",
                                        ignore_singular=True, threads=1)
-        t, (p3,), seconds = _solve(mbs, sensors, settings, run.stats)
+        t, (p3,), seconds = solve_recorded(mbs, sensors, settings, run.stats)
         return t, p3, seconds
     run.stats = {}
     return run
@@ -302,7 +282,7 @@ def spatial_slider_crank(dt=1e-3, t_end=5.0, scheme="generalized-alpha", rho_inf
         sensors = [_sensor(mbs, "Position", body=slider, local=[0.0, 0.0, 0.0]),
                    _sensor(mbs, "RotationMatrix", body=crank, local=[0.0, 0.0, 0.0])]
         settings = simulation_settings(t_end, dt, scheme, rho_inf, linear_solver="EXUdense", threads=1)
-        t, (position, rotation), seconds = _solve(mbs, sensors, settings, run.stats)
+        t, (position, rotation), seconds = solve_recorded(mbs, sensors, settings, run.stats)
         theta = np.unwrap(np.arctan2(-rotation[:, 5], rotation[:, 8]))     # row-major: d3 = entries 2, 5, 8
         return t, np.column_stack([position[:, 0], theta]), seconds
     run.stats = {}
@@ -359,7 +339,7 @@ def beam_cantilever(n_elements=16, dt=2e-3, t_end=1.0, scheme="trapezoidal", rho
                                  loadVector=[0.0, 0.0, -weight]))
         sensors = [_sensor(mbs, "Position", node=nodes[-1])]
         settings = simulation_settings(t_end, dt, scheme, rho_inf, threads=1)
-        t, (tip,), seconds = _solve(mbs, sensors, settings, run.stats)
+        t, (tip,), seconds = solve_recorded(mbs, sensors, settings, run.stats)
         return t, tip, seconds
     run.stats = {}
     return run

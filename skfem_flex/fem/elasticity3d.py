@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sps
-import scipy.sparse.linalg as spla
 import skfem
 from skfem import Basis, BilinearForm, ElementHex1, ElementTetP1, ElementTetP2, ElementVector, asm
 from skfem.helpers import dot
@@ -25,6 +24,7 @@ from skfem.models.elasticity import lame_parameters, linear_elasticity
 
 from .mesh_files import read_mesh_file
 from .node_sets import select_nodes
+from .spd_solver import lowest_modes
 from .section import positive_number
 
 __all__ = ["ElasticSolid3D", "von_mises_3d", "load_mesh_3d"]
@@ -218,11 +218,11 @@ class ElasticSolid3D:
 
     def natural_frequencies(self, n, clamped, rigid_sets=()):
         """The n lowest natural frequencies (rad/s) of the mesh with the ``clamped`` nodes held and each rigid
-        node set tied to six DOFs (:meth:`tie`): sparse, ``eigsh`` in shift-invert mode about zero."""
+        node set tied to six DOFs (:meth:`tie`): sparse, ``eigsh`` in shift-invert mode about zero
+        (:func:`~skfem_flex.fem.spd_solver.lowest_modes`)."""
         T, _ = self.tie(clamped, rigid_sets)
-        lam = spla.eigsh((T.T @ self.stiffness @ T).tocsc(), int(n), (T.T @ self.mass @ T).tocsc(), sigma=0.0,
-                         which="LM")[0]
-        return np.sqrt(np.maximum(np.sort(lam), 0.0))
+        lam = lowest_modes((T.T @ self.stiffness @ T).tocsc(), (T.T @ self.mass @ T).tocsc(), int(n))[0]
+        return np.sqrt(np.maximum(lam, 0.0))
 
     def cell_strain_operator(self):
         """(n_cells · 6, n_dofs) csr: the cell-mean strains (Voigt, engineering shear) of a displacement vector."""

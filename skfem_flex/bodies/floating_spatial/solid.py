@@ -12,7 +12,8 @@ the reduction basis on w is
 .. math::  Φ_w = \begin{bmatrix} Φ_i & Ψ \\ 0 & I \end{bmatrix},\qquad Ψ = −K_{ii}^{-1} K_{ib},
 
 Φ_i the lowest ``n_modes`` fixed-interface modes (every interface held), Ψ the static constraint modes of
-the interface DOFs (sparse LU and ``eigsh`` in shift-invert mode: the reduction stays sparse), and Φ = T Φ_w
+the interface DOFs (one sparse factorization, :mod:`~skfem_flex.fem.spd_solver`, and ``eigsh`` in shift-invert
+mode on it: the reduction stays sparse), and Φ = T Φ_w
 on the mesh's DOFs. The elastic coordinates are η = (modal amplitudes, interface DOFs): the interface
 DOFs are coordinates of their own, so an interface point's displacement is three of them.
 
@@ -31,9 +32,9 @@ from typing import NamedTuple
 
 import numpy as np
 import scipy.linalg
-import scipy.sparse.linalg as spla
 
 from ...fem.elasticity3d import ElasticSolid3D, von_mises_3d
+from ...fem.spd_solver import lowest_modes, spd_factor
 from ..base import BodyGeometry, check_finite_vector
 from ..spatial import SpatialPoint
 from . import kinetics
@@ -227,13 +228,8 @@ class FloatingSolid3D(FloatingFrame3D):
         Mw = (T.T @ solid.mass @ T).tocsc()
         K, M = Kw[:n_solve, :n_solve], Mw[:n_solve, :n_solve]
         # one factorization: the shift-invert eigensolve, the constraint modes and every load later
-        lu = spla.splu(K.tocsc())
-        # a fixed start vector: the same basis on every run (ARPACK's default start is random, and a nearly
-        # repeated pair of modes would come out mixed differently each time)
-        lam, vec = spla.eigsh(K, k=n_modes, M=M, sigma=0.0, which="LM", v0=np.ones(n_solve),
-                              OPinv=spla.LinearOperator(K.shape, matvec=lu.solve, dtype=float))
-        order = np.argsort(lam)
-        lam, vec = lam[order], vec[:, order]
+        lu = spd_factor(K)
+        lam, vec = lowest_modes(K, M, n_modes, lu)
         if reduction == "craig-bampton":
             blocks = [np.vstack([vec, np.zeros((nb, n_modes))])]
             if nb:
