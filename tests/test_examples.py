@@ -225,6 +225,18 @@ def test_bracket(monkeypatch, tmp_path):
     assert set(example["mesh"].boundaries) >= {"bolts", "load"}
 
 
+def test_render_vtk(monkeypatch, tmp_path):
+    """The picture of the bracket's stresses: rendered off screen from the VTK series the bracket example writes;
+    the field the renderer reads back from the .vtu spans the example's own von Mises range (1e-6)."""
+    pytest.importorskip("vtk")
+    example = run_example("bracket", monkeypatch, tmp_path)
+    render = run_example("render_vtk", monkeypatch, tmp_path / "bracket.pvd", "von_mises", tmp_path / "b.png")
+    lo, hi = render["field_range"](render["last_file"](tmp_path / "bracket.pvd"), "von_mises")
+    assert hi == pytest.approx(example["von_mises"].max(), rel=1e-6)
+    assert lo == pytest.approx(example["von_mises"].min(), rel=1e-6)
+    assert (tmp_path / "b.png").stat().st_size > 10_000
+
+
 def test_meshed_rod(monkeypatch, tmp_path):
     """The coarse rod's slider–crank: joints hold and the energy balance closes; finite stresses are written."""
     example = run_example("meshed_rod", monkeypatch, tmp_path)
