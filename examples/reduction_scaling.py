@@ -36,12 +36,6 @@ def grid(nodes):
     return 10 * (ny - 1) + 1, ny
 
 
-def _method(n_dofs):
-    """The factorization :func:`skfem_flex.fem.spd_solver.spd_factor` takes for about this many rows."""
-    from skfem_flex.fem import spd_solver
-    return "PARDISO" if n_dofs > spd_solver.PARDISO_ABOVE and spd_solver.pardiso_available() else "SuperLU"
-
-
 def measure(nodes):
     """One size, in this process: the stages' wall times (s) and the peak memory above the imports (MB)."""
     import resource
@@ -62,7 +56,7 @@ def measure(nodes):
                               interfaces={"tip": lambda X: np.isclose(X[0], 10 * width)})
     t2 = time.perf_counter()
     return dict(nodes=int(mesh.p.shape[1]), dofs=int(solid.n_dofs), assemble=t1 - t0, reduce=t2 - t1,
-                factor=_method(solid.n_dofs),
+                factor=body.factorization,
                 memory=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0 - base,
                 f1=float(body.frequencies[0]))
 

@@ -6,7 +6,7 @@ files, :mod:`skfem_flex.io.output`); the script reads its last file with VTK's o
 picture shows exactly what ParaView would open::
 
     python examples/bracket.py /tmp/bracket
-    python examples/render_vtk.py /tmp/bracket/bracket.pvd von_mises docs/images/bracket_von_mises.png --warp 100
+    python examples/render_vtk.py /tmp/bracket/bracket.pvd von_mises docs/images/bracket_von_mises.png --warp 50
 
 ``--warp`` scales the point field ``displacement`` (ParaView's "Warp By Vector"); the colours are ParaView's
 default map ("Cool to Warm", blue to red) over the field's range, in MPa for a stress (Pa / 10⁶). Needs the

@@ -230,7 +230,8 @@ def test_render_vtk(monkeypatch, tmp_path):
     the field the renderer reads back from the .vtu spans the example's own von Mises range (1e-6)."""
     pytest.importorskip("vtk")
     example = run_example("bracket", monkeypatch, tmp_path)
-    render = run_example("render_vtk", monkeypatch, tmp_path / "bracket.pvd", "von_mises", tmp_path / "b.png")
+    render = run_example("render_vtk", monkeypatch, tmp_path / "bracket.pvd", "von_mises", tmp_path / "b.png",
+                         "--warp", 50)                           # the command of the docs' picture
     lo, hi = render["field_range"](render["last_file"](tmp_path / "bracket.pvd"), "von_mises")
     assert hi == pytest.approx(example["von_mises"].max(), rel=1e-6)
     assert lo == pytest.approx(example["von_mises"].min(), rel=1e-6)

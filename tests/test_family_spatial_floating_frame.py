@@ -24,7 +24,8 @@ from skfem_flex.fem.elasticity3d import ElasticSolid3D
 from skfem_flex.fem.spatial_beam import TimoshenkoBeam3D
 from skfem_flex.fem.spatial_section import SpatialSection
 
-from family_checks import fd_mismatch, loaded_stepper, rel_dev, run_both, run_new
+from family_checks import SCHEMES, dense, fd_mismatch, loaded_stepper, rel_dev, run_both, run_new
+from skfem_flex.schemes.stepper import Stepper
 
 #: the Newton matrix against Richardson-extrapolated central differences, relative to each row's largest entry
 FD_TOL = 1e-9
@@ -44,10 +45,15 @@ def beam(strain="green-lagrange", reference="clamped"):
 
 
 @functools.lru_cache(maxsize=None)
-def _solid(strain):
+def _mesh_solid():
     mesh = skfem.MeshHex.init_tensor(np.linspace(0, 1.0, 5), np.linspace(0, 0.1, 2), np.linspace(0, 0.1, 2))
-    solid = ElasticSolid3D(mesh.to_meshtet(), 2e11, 0.3, 7800.0, order=1)
-    return FloatingSolid3D(solid, lambda X: np.isclose(X[0], 0.0), 3, interfaces={"tip": lambda X: np.isclose(X[0], 1.0)},
+    return ElasticSolid3D(mesh.to_meshtet(), 2e11, 0.3, 7800.0, order=1)
+
+
+def _solid(strain, position=(0.0, 0.0, 0.0)):
+    """A new reduced bar (a body is not shared between scenes: a scene may change its state)."""
+    return FloatingSolid3D(_mesh_solid(), lambda X: np.isclose(X[0], 0.0), 3,
+                           interfaces={"tip": lambda X: np.isclose(X[0], 1.0)}, position=position,
                            angular_velocity=(1.0, 0.5, 3.0), strain=strain)
 
 
@@ -125,8 +131,8 @@ def test_energy_momentum_step_is_the_bodies_contract(kind):
 @pytest.mark.parametrize("scheme", ["trapezoidal", "generalized-alpha"])
 @pytest.mark.parametrize("kind", ["beam", "solid"])
 def test_newmark_tangent_is_the_residuals_derivative(kind, scheme):
-    """The Newmark family: M(q₁) q̈₁ + ∇V − Q_v and its derivative (the quadratic-velocity force's two
-    derivatives and DM(q)[v] included)."""
+    """The Newmark family: the Newton matrix is the derivative of the residual (the quadratic-velocity force's two
+    derivatives and DM(q)[v] included); the residual itself is held to the Python path's below."""
     body = BODIES[kind]()
     scene = gravity_scene(body)
     rng = np.random.default_rng(2)
@@ -138,8 +144,8 @@ def test_newmark_tangent_is_the_residuals_derivative(kind, scheme):
 
 @pytest.mark.parametrize("kind", ["beam", "solid"])
 def test_start_momenta_and_energy(kind):
-    """The consistent start solves the numpy M q̈ = Q_v − ∇V − ∇V_g on the rigidity rows; the recorded linear and
-    angular momenta are those of p = M(q) v (numpy), T = ½ vᵀp, V the strain energy and gravity's potential."""
+    """The recorded linear and angular momenta are those of p = M(q) v (numpy), and the momenta and energies of a
+    compiled run equal the Python path's (T = ½ vᵀp, V the strain energy plus gravity's potential)."""
     body = BODIES[kind]()
     scene = gravity_scene(body)
     rec, _ = run_new(scene, "energy-momentum", 0.01, 3)
@@ -179,6 +185,62 @@ def test_trajectories_equal_the_python_path(name, scheme):
     assert rel_dev(rec.q, ref.q[1:]) < RUN_TOL
     assert rel_dev(rec.v, ref.v[1:]) < 1e3 * RUN_TOL
     assert rel_dev(rec.lam, ref.lam[1:]) < 1e3 * RUN_TOL
+
+
+def python_stepper(scene, scheme, q, v, acc):
+    """The Python path's Stepper (every element through its numpy methods) loaded like ``loaded_stepper``."""
+    sch = SCHEMES[scheme]()
+    st = Stepper(scene, sch, python_only=True)
+    lam = np.zeros(scene.n_constraints)
+    st.load(sch.make_state(0.0, np.array(q, dtype=float), np.array(v, dtype=float), acc=np.array(acc, dtype=float),
+                           pseudo=np.array(acc, dtype=float), lam=lam))
+    return st
+
+
+@pytest.mark.parametrize("scheme", ["energy-momentum", "trapezoidal", "generalized-alpha"])
+def test_residual_matrix_and_start_are_the_python_paths(scheme):
+    """At one random state and step, the compiled residual and Newton matrix equal the Python path's (every term
+    from the numpy methods: M q̈ + ∇V + ∇V_g − Q_v for the Newmark family), and the consistent start's
+    accelerations and multipliers are its (the numpy M q̈ = Q_v − ∇V − ∇V_g on the rigidity rows)."""
+    body = beam()
+    scene = gravity_scene(body)
+    rng = np.random.default_rng(4)
+    q0, v0 = random_state(body, rng)
+    acc = rng.normal(size=q0.size)
+    x = np.concatenate([0.01 * v0 + 1e-4 * rng.normal(size=q0.size), 1e-2 * rng.normal(size=scene.n_constraints)])
+    fast, slow = loaded_stepper(scene, scheme, q0, v0, acc=acc), python_stepper(scene, scheme, q0, v0, acc)
+    r_fast, j_fast, _ = fast.evaluate(0.0, 0.01, x)
+    r_slow, j_slow, _ = slow.evaluate(0.0, 0.01, x)
+    assert np.abs(r_fast - r_slow).max() <= 1e-11 * np.abs(r_slow).max()
+    assert np.abs(dense(j_fast) - dense(j_slow)).max() <= 1e-11 * np.abs(dense(j_slow)).max()
+    a_fast, l_fast = fast.start(0.0, q0, v0)[:2]
+    a_slow, l_slow = slow.start(0.0, q0, v0)[:2]
+    assert rel_dev(a_fast, a_slow) < 1e-10 and rel_dev(l_fast, l_slow) < 1e-10
+    assert np.abs(a_fast).max() > 1.0                   # gravity and the spin accelerate it
+
+
+def several_bodies():
+    """Three bodies in one family (a Green–Lagrange beam, a linear-strain beam, a solid), two gravity fields (one
+    on two of them), one coordinate of the first beam prescribed by a law in time."""
+    a, b, c = beam(), beam("linear", "chord"), _solid("linear", position=(0.0, 3.0, 0.0))
+    b.q0[:3] += (3.0, 0.0, 0.0)
+    law = sf.MotionLaw(lambda t: 0.2 * t, lambda t: 0.2, lambda t: 0.0)
+    return sf.Scene([a, b, c], forces=[sf.Gravity(GRAVITY), sf.Gravity((0.5, 0.2, 0.0), bodies=[a, c])],
+                    prescribed=[sf.Prescribed(a, 0, law)])
+
+
+@pytest.mark.parametrize("scheme", ["energy-momentum", "trapezoidal", "generalized-alpha"])
+def test_several_bodies_two_gravity_fields_and_a_prescribed_coordinate(scheme):
+    """The family packs several bodies and sums the gravity fields on each; with a prescribed coordinate the
+    trajectory, the energies and the momenta equal the Python path's."""
+    rec, ref = run_both(several_bodies, scheme, 0.01, 10)
+    assert rel_dev(rec.q, ref.q[1:]) < RUN_TOL
+    assert rel_dev(rec.v, ref.v[1:]) < 1e3 * RUN_TOL
+    res = sf.simulate(several_bodies(), 0.1, 0.01, integrator=scheme)
+    assert not res.run_path["python_elements"]
+    for key in ("kinetic", "potential", "linear_momentum", "angular_momentum"):
+        mine, theirs = np.asarray(getattr(res, key)), np.asarray(getattr(ref, key))
+        assert np.abs(mine - theirs).max() <= 1e-10 * np.abs(theirs).max(), key
 
 
 def test_energy_of_a_free_tumbling_beam_under_energy_momentum():

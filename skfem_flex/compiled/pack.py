@@ -208,6 +208,9 @@ def _pack(scene, python_only=False):
         kd = None if python_only else _call(b, "compiled_kernel_data")
         if kd is not None:
             form = getattr(b, "inertia_family", "floating frame")
+            if family_for(form) is None or (form != "floating frame" and family_for(form + " gravity") is None):
+                raise ValueError(f"body {b.name!r} names the inertia family {form!r}, which no compiled family "
+                                 f"packs (with its gravity, {form + ' gravity'!r})")
             add(family_for(form), (kd, b, off))
             if form != "floating frame":               # spatial: gravity joins the body's own family
                 first_moment[id(b)] = (form,)

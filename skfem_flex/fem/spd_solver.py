@@ -37,7 +37,9 @@ class _Pardiso:
 
     def __init__(self, K):
         import pypardiso
-        self._solver = pypardiso.PyPardisoSolver(mtype=2)         # real symmetric positive definite
+        # real symmetric positive definite; pypardiso checks on every solve that the matrix is the one it
+        # factorized: by a hash (size_limit_storage=0), not by a copy of the matrix
+        self._solver = pypardiso.PyPardisoSolver(mtype=2, size_limit_storage=0)
         self._upper = sps.triu(K, format="csr")
         self._solver.factorize(self._upper)
 

@@ -34,16 +34,21 @@ class FloatingFrame3D(DirectorFrame, Body):
     #: the compiled family that packs ``compiled_kernel_data()`` (inertia, strain and gravity)
     inertia_family = "spatial floating frame"
 
+    def _compiled_strain(self):
+        """The strain energy's compiled form, or None (a strain object without ``compiled_strain``: a user's)."""
+        form = getattr(self.strain_energy, "compiled_strain", None)
+        return None if form is None else form()
+
     def compiled_kernel_data(self):
         """The body's arrays for the compiled core (:class:`~.kernel.SpatialFrameKernelData`), or None when its
         strain energy has no compiled form (:attr:`compiled_refusal`)."""
-        strain = self.strain_energy.compiled_strain()
+        strain = self._compiled_strain()
         return None if strain is None else kernel.kernel_data(self.inertia, *strain)
 
     @property
     def compiled_refusal(self):
         """Why the body runs on the Python path, or None."""
-        if self.strain_energy.compiled_strain() is None:
+        if self._compiled_strain() is None:
             return f"its strain energy ({type(self.strain_energy).__name__}) has no compiled form"
         return None
 

@@ -42,7 +42,8 @@ class SpatialFrameKernelData(NamedTuple):
     P : ndarray (3, 3, n_f)
         ∫ρ X₀,i S_k (bilinear invariants).
     N : ndarray (9 n_f²,)
-        ∫ρ S_iᵀ S_k, (3, 3, n_f, n_f) raveled.
+        ∫ρ S_iᵀ S_k, (3, 3, n_f, n_f) raveled; the kernel needs it exactly symmetric, N_ikab = N_kiba
+        (:func:`kernel_data` makes it so).
     K : ndarray (n_f, n_f)
         The strain energy's constant quadratic part, N/m (or per unit of y).
     green : ndarray (1,) of int
@@ -69,32 +70,45 @@ class SpatialFrameKernelData(NamedTuple):
 
 
 def kernel_data(inertia, K, A=None, w=None, gravity=(0.0, 0.0, 0.0)):
-    """A :class:`SpatialFrameKernelData` from a :class:`~.inertia.SpatialFrameInertia`, the stiffness K and
-    (Green–Lagrange) the axial strain rows A (3, n_points, n_f) and weights w."""
-    nf = inertia.Sbar.shape[1]
-    # N_ikab = N_kiba (∫ρ S_iᵀS_k); the kernel's contractions use it, so it is made exact here
+    """The kernel's arrays of one body (:class:`SpatialFrameKernelData`).
+
+    Parameters
+    ----------
+    inertia : SpatialFrameInertia
+        The invariants on the body's n_f elastic coordinates (:mod:`.inertia`).
+    K : array_like (n_f, n_f)
+        The strain energy's constant quadratic part (N/m or per unit of the coordinates).
+    A, w : array_like (3, n_points, n_f) and (n_points,), optional
+        Both or neither: the Green–Lagrange axis's rows u'_k = A_k y and its weights EA dx (N m).
+    gravity : array_like (3,)
+        The gravity field on the body, m/s².
+
+    Raises
+    ------
+    ValueError
+        Arrays of the wrong shapes, or only one of A and w.
+    """
+    Sbar = np.asarray(inertia.Sbar, dtype=float)
+    nf = Sbar.shape[1] if Sbar.ndim == 2 and Sbar.shape[0] == 3 else -1
+    K = np.asarray(K, dtype=float)
+    if nf < 0 or K.shape != (nf, nf) or np.size(inertia.N) != 9 * nf * nf or np.size(inertia.P) != 9 * nf:
+        raise ValueError(f"the invariants and K must be on one set of elastic coordinates: S̄ {Sbar.shape}, "
+                         f"K {K.shape}, N of size {np.size(inertia.N)}, P of size {np.size(inertia.P)}")
+    if (A is None) != (w is None):
+        raise ValueError("the Green–Lagrange axis needs both its rows A and its weights w, or neither")
+    # N_ikab = N_kiba (∫ρ S_iᵀS_k); the kernel's contractions rely on it, so it is made exact here
     N = np.asarray(inertia.N, dtype=float).reshape(3, 3, nf, nf)
     green = A is not None
     A = np.zeros((3, 0, nf)) if A is None else np.ascontiguousarray(A, dtype=float)
     w = np.zeros(0) if w is None else np.ascontiguousarray(w, dtype=float)
+    if A.ndim != 3 or A.shape[0] != 3 or A.shape[2] != nf or w.shape != (A.shape[1],):
+        raise ValueError(f"A must be (3, n_points, {nf}) and w (n_points,), got {A.shape} and {w.shape}")
     return SpatialFrameKernelData(
         np.array([float(inertia.mass)]), np.ascontiguousarray(inertia.S0, dtype=float),
-        np.ascontiguousarray(inertia.Sbar, dtype=float).reshape(3, nf), np.ascontiguousarray(inertia.I0, dtype=float),
+        np.ascontiguousarray(Sbar), np.ascontiguousarray(inertia.I0, dtype=float),
         np.ascontiguousarray(inertia.P, dtype=float).reshape(3, 3, nf),
-        np.ascontiguousarray(0.5 * (N + N.transpose(1, 0, 3, 2))).ravel(), np.ascontiguousarray(K, dtype=float).reshape(nf, nf),
+        np.ascontiguousarray(0.5 * (N + N.transpose(1, 0, 3, 2))).ravel(), np.ascontiguousarray(K),
         np.array([1 if green else 0], dtype=np.int64), A, w, np.asarray(gravity, dtype=float).reshape(3).copy())
-
-
-@numba.njit(cache=True)
-def matvec(A, x):
-    """A x (plain loops: numba's BLAS-backed ``@`` costs seconds of compile for nothing at these sizes)."""
-    out = np.zeros(A.shape[0])
-    for i in range(A.shape[0]):
-        acc = 0.0
-        for j in range(A.shape[1]):
-            acc += A[i, j] * x[j]
-        out[i] = acc
-    return out
 
 
 @numba.njit(cache=True)

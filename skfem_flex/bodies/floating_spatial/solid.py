@@ -50,11 +50,19 @@ _HEX_TO_VTK = (0, 3, 6, 2, 1, 5, 7, 4)
 
 
 class FrequencyCheck(NamedTuple):
-    """A reduced body's natural frequencies against its full mesh's (:meth:`FloatingSolid3D.frequency_errors`)."""
+    """A reduced body's natural frequencies against its full mesh's (:meth:`FloatingSolid3D.frequency_errors`).
 
-    reduced: np.ndarray     # rad/s
-    full: np.ndarray        # rad/s
-    error: np.ndarray       # reduced / full − 1
+    Attributes
+    ----------
+    reduced, full : ndarray (n,)
+        The reduced body's and the full mesh's lowest natural frequencies, rad/s.
+    error : ndarray (n,)
+        reduced / full − 1.
+    """
+
+    reduced: np.ndarray
+    full: np.ndarray
+    error: np.ndarray
 
 
 class QuadraticEnergy:
@@ -100,11 +108,12 @@ def _interface_sets(solid, frame, interfaces):
 
 
 class FloatingSolid3D(FloatingFrame3D):
-    """A Craig–Bampton reduced 3D solid in the spatial floating frame (module docstring).
+    """A reduced 3D solid in the spatial floating frame (module docstring).
 
     Coordinates q = (x, d₁, d₂, d₃, η): the frame (origin at the centre of the ``frame`` node set, axes the
-    mesh's) and η = (``n_modes`` fixed-interface amplitudes, then t_x, t_y, t_z, θ_x, θ_y, θ_z of each
-    interface, in the frame's axes).
+    mesh's) and η = (``n_modes`` modal amplitudes, then, Craig–Bampton: t_x, t_y, t_z, θ_x, θ_y, θ_z of each
+    interface in the frame's axes; free-interface: the amplitudes ``static1``, … of the residual attachment
+    modes, six per interface), then the averaged interfaces' attachment modes and the stiffening vectors.
 
     Parameters
     ----------
@@ -142,7 +151,11 @@ class FloatingSolid3D(FloatingFrame3D):
     Attributes
     ----------
     frequencies : ndarray (n_modes,)
-        The fixed-interface modes' natural frequencies, rad/s (the first mode left out sets the cut-off).
+        The kept modes' natural frequencies (fixed-interface or free-interface), rad/s (the first mode left out
+        sets the cut-off).
+    factorization : str
+        Which factorization of the clamped stiffness the reduction used ("SuperLU" or "PARDISO",
+        :mod:`~skfem_flex.fem.spd_solver`).
 
     Raises
     ------
@@ -176,6 +189,7 @@ class FloatingSolid3D(FloatingFrame3D):
         self.reduction = reduction
         self.basis, self.frequencies, tie = self._reduce(
             solid, {k: v for k, v in sets.items() if k not in averaged}, n_modes, reduction)
+        self.factorization = tie[2].name
         self._averages = {k: solid.average_map(sets[k]) for k in averaged}
         if averaged:
             attach = np.hstack([self._attachment_modes(solid, tie, *self._averages[k]) for k in averaged])
@@ -204,11 +218,14 @@ class FloatingSolid3D(FloatingFrame3D):
         self._stress_modes = np.einsum("ab,cbm->cam", solid.material, strain)
         self._names = (("x", "y", "z") + tuple(f"d{i}{c}" for i in (1, 2, 3) for c in "xyz")
                        + tuple(f"eta{k + 1}" for k in range(self.n_modes))
-                       + tuple(f"{itf}_{c}" for itf in self.interface_names
-                               for c in (("tx", "ty", "tz", "rx", "ry", "rz") if reduction == "craig-bampton"
-                                         else tuple(f"c{k + 1}" for k in range(6))))
+                       + (tuple(f"{itf}_{c}" for itf in self.interface_names
+                                for c in ("tx", "ty", "tz", "rx", "ry", "rz")) if reduction == "craig-bampton"
+                          else tuple(f"static{k + 1}" for k in range(6 * len(self.interface_names))))
                        + tuple(f"{itf}_a{k + 1}" for itf in self.averaged_names for k in range(6))
                        + tuple(f"xi{k + 1}" for k in range(n_extra)))
+        if len(self._names) != self.n_dofs:
+            raise AssertionError(f"{len(self._names)} coordinate names for {self.n_dofs} coordinates: the basis "
+                                 f"dropped a dependent vector it should have kept")
         self.set_initial_state(position, orientation, velocity, angular_velocity, None, None)
 
     # ---------------------------------------------------------------- reduction
@@ -237,7 +254,8 @@ class FloatingSolid3D(FloatingFrame3D):
             Phi = T @ np.hstack(blocks)
         else:
             # residual attachment modes: K⁻¹E − Φ Λ⁻¹ Φᵀ E (Φ M-normalized by eigsh), E the interface DOFs;
-            # they are K- but not M-orthogonal to the kept modes: made so (the same span)
+            # M-orthogonal to the kept modes up to the eigensolver's tolerance (ΦᵀMK⁻¹ = Λ⁻¹Φᵀ): the
+            # complement removes that and conditions the block
             E = np.zeros((n_solve, nb))
             E[n_free:] = np.eye(nb)
             residual = lu.solve(E) - vec @ (vec[n_free:].T / lam[:, None])
@@ -248,7 +266,8 @@ class FloatingSolid3D(FloatingFrame3D):
 
     @staticmethod
     def _attachment_modes(solid, tie, dofs, P):
-        """The six static responses (rigid interfaces held) to unit loads spread over an averaged set, Pᵀe_k."""
+        """The six static responses to unit loads spread over an averaged set, Pᵀe_k (the rigid interfaces held
+        for Craig–Bampton, free for the free-interface reduction: the factorization's DOFs)."""
         T, n_solve, lu = tie
         loads = np.zeros((solid.n_dofs, 6))
         loads[dofs] = P.T
@@ -256,7 +275,8 @@ class FloatingSolid3D(FloatingFrame3D):
 
     @staticmethod
     def _stiffening_vectors(solid, tie, modes, origin, spins, kept):
-        """The static responses, interfaces held, to the stiffening loads (``solid_strain.stiffening_loads``),
+        """The static responses (on the factorization's DOFs, as :meth:`_attachment_modes`) to the stiffening loads
+        (``solid_strain.stiffening_loads``),
         made M-orthogonal to the ``kept`` basis and to each other; the ones already spanned dropped."""
         T, n_solve, lu = tie
         loads = stiffening_loads(solid, modes, origin, pairs=modes.shape[1] > 0, spins=spins)
@@ -300,8 +320,8 @@ class FloatingSolid3D(FloatingFrame3D):
         FrequencyCheck
             ``reduced``, ``full`` (rad/s) and the relative ``error`` of each.
         """
-        n = self.n_modes if n is None else int(n)
-        if not 1 <= n <= self.n_elastic:
+        n = self.n_modes if n is None else n
+        if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 1 <= n <= self.n_elastic:
             raise ValueError(f"n must be in [1, {self.n_elastic}] (the elastic coordinates), got {n!r}")
         K = self.basis.T @ (self.solid.stiffness @ self.basis)
         M = self.basis.T @ (self.solid.mass @ self.basis)
