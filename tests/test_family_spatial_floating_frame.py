@@ -264,3 +264,32 @@ def test_green_lagrange_solid_runs_in_python_and_says_why():
     assert any("SolidGreenLagrange" in why for why in res.run_path["python_elements"])
     with pytest.raises(ValueError, match="no compiled form"):
         sf.simulate(sf.Scene([_solid("green-lagrange")]), 0.02, 0.01, compiled=True)
+
+
+def test_a_users_strain_object_runs_in_python():
+    """A strain energy without a compiled form (any object with energy, gradient, hessian and
+    discrete_gradient): the body runs through its numpy methods, named with why, and moves as the compiled one."""
+    class Wrapped:
+        def __init__(self, inner):
+            self.inner = inner
+
+        def energy(self, y):
+            return self.inner.energy(y)
+
+        def gradient(self, y):
+            return self.inner.gradient(y)
+
+        def hessian(self, y):
+            return self.inner.hessian(y)
+
+        def discrete_gradient(self, y0, y1):
+            return self.inner.discrete_gradient(y0, y1)
+
+    users = beam()
+    users.strain_energy = Wrapped(users.strain_energy)
+    assert users.compiled_kernel_data() is None and "Wrapped" in users.compiled_refusal
+    res = sf.simulate(gravity_scene(users), 0.05, 0.01)
+    assert any("Wrapped" in why for why in res.run_path["python_elements"])
+    ref = sf.simulate(gravity_scene(beam()), 0.05, 0.01)
+    assert not ref.run_path["python_elements"]
+    assert rel_dev(res.q, ref.q) < RUN_TOL
