@@ -72,3 +72,15 @@ def run_both(factory, scheme, dt, steps):
 def rel_dev(a, ref):
     """max|a − ref| / max|ref|."""
     return np.abs(a - ref).max() / max(np.abs(ref).max(), 1e-300)
+
+
+def em_reference(body, q0, q1, v0, v1, h, gravity=None):
+    """r = p(q₁, v₁) − p(q₀, v₀) + Δt g_V − Δt g_G from a body's numpy methods (with ``gravity``, g (m/s²): its
+    discrete gradient joins g_V), and the scale of the terms."""
+    p1, p0 = dense(body.mass_matrix(q1)) @ v1, dense(body.mass_matrix(q0)) @ v0
+    gk = body.kinetic_discrete_gradient(q0, q1, v0, v1)[0]
+    gp = body.potential_discrete_gradient(q0, q1)[0]
+    if gravity is not None:
+        gp = gp + body.gravity_discrete_gradient(q0, q1, gravity)[0]
+    scale = max(np.abs(p1).max(), np.abs(p0).max(), h * np.abs(gk).max(), h * np.abs(gp).max())
+    return p1 - p0 + h * gp - h * gk, scale

@@ -17,7 +17,7 @@ import pytest
 import skfem_flex as sf
 from skfem_flex.scenes.rotating import hub_beam
 
-from family_checks import dense, fd_mismatch, loaded_stepper, rel_dev, run_both, run_new
+from family_checks import dense, em_reference, fd_mismatch, loaded_stepper, rel_dev, run_both, run_new
 
 #: the Newton matrix against central differences, relative to each row's largest entry: they reach 4e-12–3e-11
 #: here (family_checks.fd_mismatch)
@@ -57,15 +57,6 @@ def scene_of(body, prescribed=None):
 
 
 BODIES = {"beam": beam, "linear-strain beam": lambda: beam("linear"), "modal": modal}
-
-
-def em_reference(body, q0, q1, v0, v1, h):
-    """r = p(q₁, v₁) − p(q₀, v₀) + Δt g_V − Δt g_G from the body's numpy methods, and its scale."""
-    p1, p0 = dense(body.mass_matrix(q1)) @ v1, dense(body.mass_matrix(q0)) @ v0
-    gk = body.kinetic_discrete_gradient(q0, q1, v0, v1)[0]
-    gp = body.potential_discrete_gradient(q0, q1)[0]
-    scale = max(np.abs(p1).max(), np.abs(p0).max(), h * np.abs(gk).max(), h * np.abs(gp).max())
-    return p1 - p0 + h * gp - h * gk, scale
 
 
 @pytest.mark.parametrize("kind", list(BODIES))

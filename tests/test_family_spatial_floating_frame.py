@@ -24,7 +24,7 @@ from skfem_flex.fem.elasticity3d import ElasticSolid3D
 from skfem_flex.fem.spatial_beam import TimoshenkoBeam3D
 from skfem_flex.fem.spatial_section import SpatialSection
 
-from family_checks import SCHEMES, dense, fd_mismatch, loaded_stepper, rel_dev, run_both, run_new
+from family_checks import SCHEMES, dense, em_reference, fd_mismatch, loaded_stepper, rel_dev, run_both, run_new
 from skfem_flex.schemes.stepper import Stepper
 
 #: the Newton matrix against Richardson-extrapolated central differences, relative to each row's largest entry
@@ -101,15 +101,6 @@ def test_compiled_terms_are_the_numpy_specification(kind):
         assert np.abs(jac - body.strain_energy.K / 2).max() > 1e-6 * np.abs(jac).max()
 
 
-def em_reference(body, q0, q1, v0, v1, h):
-    """r = p(q₁, v₁) − p(q₀, v₀) + Δt g_V − Δt g_G from the numpy methods (gravity included), and its scale."""
-    p1, p0 = body.mass_matrix(q1) @ v1, body.mass_matrix(q0) @ v0
-    gk = body.kinetic_discrete_gradient(q0, q1, v0, v1)[0]
-    gp = body.potential_discrete_gradient(q0, q1)[0] + body.gravity_discrete_gradient(q0, q1, GRAVITY)[0]
-    scale = max(np.abs(p1).max(), np.abs(p0).max(), h * np.abs(gk).max(), h * np.abs(gp).max())
-    return p1 - p0 + h * gp - h * gk, scale
-
-
 @pytest.mark.parametrize("kind", list(BODIES))
 def test_energy_momentum_step_is_the_bodies_contract(kind):
     """Energy-momentum: the residual is the numpy contract's, the Newton matrix its derivative."""
@@ -124,7 +115,7 @@ def test_energy_momentum_step_is_the_bodies_contract(kind):
     mu = 1e-2 * rng.normal(size=scene.n_constraints)          # the rigidity rows' multipliers
     assert fd_mismatch(st, 0.0, h, np.concatenate([dq, mu]))[0] < FD_TOL
     r = st.evaluate(0.0, h, np.concatenate([dq, np.zeros_like(mu)]))[0]
-    ref, scale = em_reference(body, q0, q0 + dq, v0, 2.0 * dq / h - v0, h)
+    ref, scale = em_reference(body, q0, q0 + dq, v0, 2.0 * dq / h - v0, h, GRAVITY)
     assert np.abs(r[:body.n_dofs] - ref).max() <= 1e-10 * scale
 
 
