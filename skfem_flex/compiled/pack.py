@@ -200,6 +200,7 @@ def _pack(scene, python_only=False):
             reasons.append((element, why))
 
     first_moment = {}
+    own_gravity = {}                                      # bodies whose family evaluates gravity on them: its form
     mass_blocks = []
     angles = [np.asarray(scene.cayley_index, dtype=np.int64)]
     for b in scene.bodies:
@@ -212,8 +213,8 @@ def _pack(scene, python_only=False):
                 raise ValueError(f"body {b.name!r} names the inertia family {form!r}, which no compiled family "
                                  f"packs (with its gravity, {form + ' gravity'!r})")
             add(family_for(form), (kd, b, off))
-            if form != "floating frame":               # spatial: gravity joins the body's own family
-                first_moment[id(b)] = (form,)
+            if form != "floating frame":               # gravity quadratic in q: the body's own family takes it
+                own_gravity[id(b)] = form + " gravity"
                 continue
             moment = _call(b, "mass_moment_map")
             angles.append(np.array([off + 2]))          # the frame's angle θ
@@ -256,9 +257,9 @@ def _pack(scene, python_only=False):
                     gam, c = moment
                     g3 = np.asarray(form[1], dtype=float)
                     add(family_for("linear potential"), ((-(g3 @ gam), -float(g3 @ c)), b, np.arange(off, off + nb)))
-                elif id(b) in first_moment and len(first_moment[id(b)]) == 1:
-                    add(family_for(first_moment[id(b)][0] + " gravity"),
-                        (("gravity", np.asarray(form[1], dtype=float)), b, packer.block(b)[0]))
+                elif id(b) in own_gravity:
+                    add(family_for(own_gravity[id(b)]), (("gravity", np.asarray(form[1], dtype=float)), b,
+                                                         packer.block(b)[0]))
                 elif id(b) in first_moment:
                     add(mod, ((first_moment[id(b)], np.asarray(form[1], dtype=float)), b, packer.block(b)))
                 else:

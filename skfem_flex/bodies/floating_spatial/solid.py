@@ -212,8 +212,10 @@ class FloatingSolid3D(FloatingFrame3D):
             dofs, R = solid.rigid_map(sets[k], X[sets[k]].mean(axis=0))
             self._interface_motion[k] = np.linalg.lstsq(R, self.basis[dofs], rcond=None)[0]
         self.inertia = self._invariants(solid, self.basis, X - self.origin)
+        #: ΦᵀKΦ: the linear energy's stiffness, the quadratic part of the Green–Lagrange one, the frequency check's
+        self.reduced_stiffness = self.basis.T @ (solid.stiffness @ self.basis)
         self.strain_energy = (SolidGreenLagrange(solid, self.basis) if strain == "green-lagrange"
-                              else QuadraticEnergy(self.basis.T @ (solid.stiffness @ self.basis)))
+                              else QuadraticEnergy(self.reduced_stiffness))
         strain = (solid.cell_strain_operator() @ self.basis).reshape(-1, 6, self.n_elastic)
         self._stress_modes = np.einsum("ab,cbm->cam", solid.material, strain)
         self._names = (("x", "y", "z") + tuple(f"d{i}{c}" for i in (1, 2, 3) for c in "xyz")
@@ -323,9 +325,9 @@ class FloatingSolid3D(FloatingFrame3D):
         n = self.n_modes if n is None else n
         if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 1 <= n <= self.n_elastic:
             raise ValueError(f"n must be in [1, {self.n_elastic}] (the elastic coordinates), got {n!r}")
-        K = self.basis.T @ (self.solid.stiffness @ self.basis)
-        M = self.basis.T @ (self.solid.mass @ self.basis)
-        reduced = np.sqrt(np.maximum(scipy.linalg.eigh(K, M, eigvals_only=True, subset_by_index=(0, n - 1)), 0.0))
+        M = np.einsum("kkab->ab", self.inertia.N)          # ΦᵀMΦ = Σ_k Φ_kᵀ M_s Φ_k, from the invariants
+        reduced = np.sqrt(np.maximum(scipy.linalg.eigh(self.reduced_stiffness, M, eigvals_only=True,
+                                                       subset_by_index=(0, n - 1)), 0.0))
         full = self.solid.natural_frequencies(n, self._sets["frame"], [self._sets[k] for k in self.interface_names])
         return FrequencyCheck(reduced, full, reduced / full - 1.0)
 
