@@ -144,6 +144,41 @@ def test_green_lagrange_energy_of_the_reduced_solid():
     assert abs(SolidGreenLagrange(solid, turn).energy(np.ones(1))) <= 1e-12 * linear
 
 
+def test_green_lagrange_tensors_are_the_quadrature_sums():
+    """The quartic polynomial the solid's energy is evaluated as (K, K3, K4 summed once) equals the definition at
+    the mesh's quadrature points (E = ½(U + Uᵀ + UᵀU), S = λ tr E I + 2μ E, V = ½ Σ w E : S; the discrete gradient
+    Σ w S̄ : sym(F̄ᵀ G_m) with S̄ the stress at the mean strain and F̄ at the mean state) to round-off, at an
+    amplitude where the cubic and quartic parts are three quarters of the energy."""
+    body = FloatingSolid3D(bar(4), root, 3, interfaces={"tip": tip}, strain="green-lagrange")
+    V = body.strain_energy
+    G, w, lam, mu = V.G, V.w, V.lam, V.mu
+
+    def strain(y):
+        U = np.einsum("qijm,m->qij", G, y)
+        return U, 0.5 * (U + U.transpose(0, 2, 1) + U.transpose(0, 2, 1) @ U)
+
+    def stress(E):
+        return lam * np.trace(E, axis1=1, axis2=2)[:, None, None] * np.eye(3) + 2.0 * mu * E
+
+    def energy(y):
+        E = strain(y)[1]
+        return 0.5 * np.einsum("q,qij,qij->", w, E, stress(E))
+
+    def discrete_gradient(y0, y1):
+        Um = strain(0.5 * (y0 + y1))[0]
+        S = stress(0.5 * (strain(y0)[1] + strain(y1)[1]))
+        FtG = np.einsum("qki,qkjm->qijm", np.eye(3) + Um, G)
+        return np.einsum("q,qij,qijm->m", w, S, 0.5 * (FtG + FtG.transpose(0, 2, 1, 3)))
+
+    rng = np.random.default_rng(3)
+    scale = 0.2 / np.abs(body.basis).max()
+    y0, y1 = (scale * rng.standard_normal(body.n_elastic) for _ in range(2))
+    assert 1.0 - 0.5 * y1 @ V.K @ y1 / energy(y1) > 0.5                 # the nonlinear part dominates
+    assert abs(V.energy(y1) - energy(y1)) <= 1e-12 * energy(y1)
+    assert relerr(V.discrete_gradient(y0, y1)[0], discrete_gradient(y0, y1)) <= 1e-12
+    assert relerr(V.gradient(y1), discrete_gradient(y1, y1)) <= 1e-12
+
+
 @pytest.mark.parametrize("lam, flap, lag", ROTATING_TABLE[::2] + [ROTATING_TABLE[-1]])
 def test_spinning_meshed_bar_against_the_rotating_cantilever_table(lam, flap, lag):
     """A steel bar 1 × 0.05 × 0.05 m of P2 tetrahedra, clamped to its frame, spinning about z: with the
@@ -355,5 +390,7 @@ def test_bad_input():
         FloatingSolid3D(solid, root, 2, strain="green-lagrange", n_derivatives=5)
     with pytest.raises(ValueError, match="reduction must be"):
         FloatingSolid3D(solid, root, 2, reduction="guyan")
+    with pytest.raises(ValueError, match="at most 60 elastic coordinates, got 61"):
+        FloatingSolid3D(solid, root, 58, strain="green-lagrange", n_derivatives=0)      # 58 modes + 3 spin shapes
     with pytest.raises(ValueError, match="n must be in"):
         body.frequency_errors(100)

@@ -175,8 +175,8 @@ def _momentum_layout(body):
 
 
 def _spatial_first_moment(body):
-    """(Γ, c) of a spatial body whose positions are linear in q, or None (planar, or not linear: the spatial
-    floating-frame beam, whose gravity runs in Python)."""
+    """(Γ, c) of a spatial body whose positions are linear in q, or None (planar, or not linear: a spatial
+    floating-frame body, whose gravity its own family evaluates)."""
     if getattr(body, "dimension", 2) != 3:
         return None
     try:

@@ -43,7 +43,7 @@ class FloatingFrame3D(DirectorFrame, Body):
         """The body's arrays for the compiled core (:class:`~.kernel.SpatialFrameKernelData`), or None when its
         strain energy has no compiled form (:attr:`compiled_refusal`)."""
         strain = self._compiled_strain()
-        return None if strain is None else kernel.kernel_data(self.inertia, *strain)
+        return None if strain is None else kernel.kernel_data(self.inertia, **strain)
 
     @property
     def compiled_refusal(self):

@@ -7,7 +7,10 @@ loops, for the compiled core (:mod:`skfem_flex.compiled.families.spatial_floatin
 once per Newton evaluation. The coordinates are q = (x, d₁, d₂, d₃, y); D[c, k] = q[3 + 3k + c].
 
 The strain energy is V = ½ yᵀK y + ½ Σ_q w_q ε_q² with the Green–Lagrange axis ε = u₃' + ½|u'|²,
-u'_k = A_k y (a beam with ``green``), or V = ½ yᵀK y (linear strain: a beam's or a meshed solid's). Its
+u'_k = A_k y (a beam with ``green``), or V = ½ yᵀK y + ½ K3_ijk y_i y_j y_k + ⅛ K4_ijkl y_i y_j y_k y_l (a
+meshed solid's Green–Lagrange energy, with ``quartic``: the tensors of ``SolidGreenLagrange.quartic``, folded
+by :func:`~skfem_flex.bodies.modal.kernel.pack_quartic` and evaluated by that module's kernels, which the
+planar reduced body uses too), or V = ½ yᵀK y (linear strain: a beam's or a meshed solid's). Its
 discrete gradient is the stress at the mean strain (exact), gravity's the mid-point gradient (exact:
 V_g = −g·(m x + D(S₀ + S̄ y)) is quadratic).
 """
@@ -17,6 +20,8 @@ from typing import NamedTuple
 
 import numba
 import numpy as np
+
+from ..modal.kernel import quartic_discrete_gradient, quartic_energy
 
 __all__ = ["SpatialFrameKernelData", "kernel_data", "mass_matrix", "momentum_jacobian", "kinetic_hessian",
            "strain_terms", "gravity_terms", "body_terms", "STATE", "EM", "NEWMARK"]
@@ -54,6 +59,11 @@ class SpatialFrameKernelData(NamedTuple):
         EA times the quadrature weight, N m.
     g : ndarray (3,)
         The gravity field acting on the body, m/s² (zero: none).
+    quartic : ndarray (1,) of int
+        1: add the cubic and quartic terms of the arrays below; 0: they are empty.
+    k3p, k3q, k3a, k3b, k4a, k4s, k4w : ndarray (2-D)
+        The cubic and quartic tensors as :func:`~skfem_flex.bodies.modal.kernel.pack_quartic` folds them,
+        N/m (per unit of y cubed and to the fourth).
     """
 
     mass: np.ndarray
@@ -67,9 +77,17 @@ class SpatialFrameKernelData(NamedTuple):
     A: np.ndarray
     w: np.ndarray
     g: np.ndarray
+    quartic: np.ndarray
+    k3p: np.ndarray
+    k3q: np.ndarray
+    k3a: np.ndarray
+    k3b: np.ndarray
+    k4a: np.ndarray
+    k4s: np.ndarray
+    k4w: np.ndarray
 
 
-def kernel_data(inertia, K, A=None, w=None, gravity=(0.0, 0.0, 0.0)):
+def kernel_data(inertia, K, A=None, w=None, quartic=None, gravity=(0.0, 0.0, 0.0)):
     """The kernel's arrays of one body (:class:`SpatialFrameKernelData`).
 
     Parameters
@@ -80,13 +98,16 @@ def kernel_data(inertia, K, A=None, w=None, gravity=(0.0, 0.0, 0.0)):
         The strain energy's constant quadratic part (N/m or per unit of the coordinates).
     A, w : array_like (3, n_points, n_f) and (n_points,), optional
         Both or neither: the Green–Lagrange axis's rows u'_k = A_k y and its weights EA dx (N m).
+    quartic : tuple of seven arrays, optional
+        The cubic and quartic terms of a quartic energy on y, as
+        :func:`~skfem_flex.bodies.modal.kernel.pack_quartic` returns them (not with A and w).
     gravity : array_like (3,)
         The gravity field on the body, m/s².
 
     Raises
     ------
     ValueError
-        Arrays of the wrong shapes, or only one of A and w.
+        Arrays of the wrong shapes, only one of A and w, or the quartic terms with them.
     """
     Sbar = np.asarray(inertia.Sbar, dtype=float)
     nf = Sbar.shape[1] if Sbar.ndim == 2 and Sbar.shape[0] == 3 else -1
@@ -103,12 +124,24 @@ def kernel_data(inertia, K, A=None, w=None, gravity=(0.0, 0.0, 0.0)):
     w = np.zeros(0) if w is None else np.ascontiguousarray(w, dtype=float)
     if A.ndim != 3 or A.shape[0] != 3 or A.shape[2] != nf or w.shape != (A.shape[1],):
         raise ValueError(f"A must be (3, n_points, {nf}) and w (n_points,), got {A.shape} and {w.shape}")
+    if quartic is None:
+        quartic_arrays = (np.zeros((0, 0)),) * 7
+    else:
+        if green:
+            raise ValueError("a body has either the Green–Lagrange axis (A, w) or the quartic terms, not both")
+        ns, nw = nf * (nf + 1) // 2, nf * (nf - 1) // 2
+        shapes = [(nf, ns), (nf, ns), (nf * nf, nf), (nf * nf, nf), (ns, ns), (ns, ns), (nw, nw)]
+        quartic_arrays = tuple(np.ascontiguousarray(a, dtype=float) for a in quartic)
+        if [a.shape for a in quartic_arrays] != shapes:
+            raise ValueError(f"the quartic terms on {nf} elastic coordinates must have the shapes {shapes}, "
+                             f"got {[a.shape for a in quartic_arrays]}")
     return SpatialFrameKernelData(
         np.array([float(inertia.mass)]), np.ascontiguousarray(inertia.S0, dtype=float),
         np.ascontiguousarray(Sbar), np.ascontiguousarray(inertia.I0, dtype=float),
         np.ascontiguousarray(inertia.P, dtype=float).reshape(3, 3, nf),
         np.ascontiguousarray(0.5 * (N + N.transpose(1, 0, 3, 2))).ravel(), np.ascontiguousarray(K),
-        np.array([1 if green else 0], dtype=np.int64), A, w, np.asarray(gravity, dtype=float).reshape(3).copy())
+        np.array([1 if green else 0], dtype=np.int64), A, w, np.asarray(gravity, dtype=float).reshape(3).copy(),
+        np.array([0 if quartic is None else 1], dtype=np.int64), *quartic_arrays)
 
 
 @numba.njit(cache=True)
@@ -341,7 +374,8 @@ def _axial(kd, y):
 @numba.njit(cache=True)
 def strain_terms(kd, y0, y1):
     """(V(y1), g, ∂g/∂y1): the strain energy at y1 and its exact discrete gradient from y0 to y1 (at y0 = y1:
-    the gradient and half the Hessian), ``SpatialBeamStrain.discrete_gradient`` / ``QuadraticEnergy``."""
+    the gradient and half the Hessian), ``SpatialBeamStrain.discrete_gradient`` / ``QuadraticEnergy`` /
+    ``SolidGreenLagrange.discrete_gradient``."""
     nf = kd.K.shape[0]
     g = np.zeros(nf)
     jac = np.empty((nf, nf))
@@ -352,6 +386,14 @@ def strain_terms(kd, y0, y1):
             g[a] += 0.5 * kab * (y0[b] + y1[b])
             jac[a, b] = 0.5 * kab
             energy += 0.5 * y1[a] * kab * y1[b]
+    if kd.quartic[0] != 0:
+        energy += quartic_energy(kd.k3p, kd.k4a, y1, 0)
+        g4, dg4 = quartic_discrete_gradient(kd.k3p, kd.k3q, kd.k3a, kd.k3b, kd.k4a, kd.k4s, kd.k4w, y0, y1, 0)
+        for a in range(nf):
+            g[a] += g4[a]
+            for b in range(nf):
+                jac[a, b] += dg4[a, b]
+        return energy, g, jac
     if kd.green[0] == 0:
         return energy, g, jac
     npts = kd.A.shape[1]

@@ -36,6 +36,7 @@ import scipy.linalg
 from ...fem.elasticity3d import ElasticSolid3D, von_mises_3d
 from ...fem.spd_solver import lowest_modes, spd_factor
 from ..base import BodyGeometry, check_finite_vector
+from ..modal.stiffening import QUARTIC_LIMIT
 from ..spatial import SpatialPoint
 from . import kinetics
 from .frame import ElasticPoint, FloatingFrame3D
@@ -86,8 +87,8 @@ class QuadraticEnergy:
         return self.K @ (0.5 * (y0 + y1)), 0.5 * self.K
 
     def compiled_strain(self):
-        """(K,): the compiled core's form of this energy (:mod:`.kernel`)."""
-        return (self.K,)
+        """The compiled core's form of this energy, keyword arguments of :func:`.kernel.kernel_data`: K."""
+        return {"K": self.K}
 
 
 def _interface_sets(solid, frame, interfaces):
@@ -205,6 +206,10 @@ class FloatingSolid3D(FloatingFrame3D):
             n_extra = extra.shape[1]
             self.basis = np.hstack([self.basis, extra])
         self.n_elastic = self.basis.shape[1]
+        if strain == "green-lagrange" and self.n_elastic > QUARTIC_LIMIT:
+            raise ValueError(f"strain='green-lagrange' keeps m⁴ modal tensors: at most {QUARTIC_LIMIT} elastic "
+                             f"coordinates, got {self.n_elastic} (n_modes={n_modes}, n_derivatives={nd}, the "
+                             f"interfaces' and the spin shapes' vectors); take fewer modes or derivatives")
         self.n_dofs = 12 + self.n_elastic
         # each rigid interface's (t, θ) per column: every column moves its set rigidly, so the fit is exact
         self._interface_motion = {}

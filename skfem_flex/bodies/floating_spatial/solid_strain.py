@@ -15,6 +15,12 @@ E is quadratic in η, so E(η₁) − E(η₀) = dE(η_m)·(η₁ − η₀) exa
 mean strain", Σ w S̄ : dE(η_m) with S̄ = C : (E₀ + E₁)/2, is exact. Its quadratic part is the linear
 stiffness ΦᵀKΦ (the same quadrature as scikit-fem's assembly).
 
+With E = Lη + ½N(η, η) the energy is the quartic polynomial ½ηᵀKη + ½K3_ijk η_iη_jη_k + ⅛K4_ijkl η_iη_jη_kη_l
+whose tensors are these sums over the quadrature points, taken once (:meth:`SolidGreenLagrange.quartic`); every
+evaluation (the formulas above, written in the tensors: :class:`~skfem_flex.bodies.modal.stiffening.QuarticEnergy`,
+the same as the planar reduced body's) then costs m⁴ operations and none over the mesh, and the compiled core
+evaluates the same tensors (:mod:`.kernel`).
+
 Bending modes alone cannot stretch the body, so a basis for stiffening needs more vectors (assembled on the
 full mesh by scikit-fem forms, :func:`stiffening_loads`): the **modal derivatives**, the static response to the
 third derivative of V at rest, ∂³V[φ_i, φ_j, δ] = (C:Q_ij):ε(δ) + (C:ε_i):sym(G_jᵀ∇δ) + (C:ε_j):sym(G_iᵀ∇δ)
@@ -26,6 +32,9 @@ from __future__ import annotations
 import numpy as np
 from skfem import LinearForm, asm
 from skfem.helpers import ddot, dot, mul, transpose
+
+from ..modal.kernel import pack_quartic
+from ..modal.stiffening import QuarticEnergy
 
 __all__ = ["SolidGreenLagrange", "stiffening_loads"]
 
@@ -78,11 +87,23 @@ def stiffening_loads(solid, modes, origin, pairs=True, spins=True):
 class SolidGreenLagrange:
     """V(η) of a reduced solid (module docstring): energy, gradient, Hessian and the exact discrete gradient.
 
+    The energy is evaluated as the quartic polynomial of :meth:`quartic` (its tensors summed over the mesh's
+    quadrature points once, on the first call): per evaluation m⁴ operations, none over the mesh.
+
     Parameters
     ----------
     solid : ElasticSolid3D
     basis : ndarray (n_dofs, m)
         Φ, u = Φ η.
+
+    Attributes
+    ----------
+    G : ndarray (Q, 3, 3, m)
+        The displacement gradient of each basis vector at every quadrature point, G[q, i, j, m] = ∂Φ_im/∂X_j.
+    w : ndarray (Q,)
+        The quadrature weights (m³).
+    lam, mu : float
+        The Lamé parameters (Pa).
     """
 
     nonlinear = True
@@ -95,54 +116,83 @@ class SolidGreenLagrange:
         m = basis.shape[1]
         self.G = np.ascontiguousarray(grads.transpose(2, 3, 0, 1, 4).reshape(-1, 3, 3, m))   # (Q, 3, 3, m)
         self.w = b.dx.ravel()
+        self._quartic = None
 
-    def _strain(self, y):
-        U = np.einsum("qijm,m->qij", self.G, y)
-        return U, 0.5 * (U + U.transpose(0, 2, 1) + U.transpose(0, 2, 1) @ U)
-
-    def _stress(self, E):
-        return self.lam * np.trace(E, axis1=1, axis2=2)[:, None, None] * np.eye(3) + 2.0 * self.mu * E
-
-    def _dE(self, U):
-        """dE_m = sym(Fᵀ G_m), (Q, 3, 3, m)."""
-        FtG = np.einsum("qki,qkjm->qijm", np.eye(3) + U, self.G)
-        return 0.5 * (FtG + FtG.transpose(0, 2, 1, 3))
-
-    def _curvature(self, S):
-        """Σ_q w S : G_mᵀ G_n (the second derivative of E contracted with S)."""
-        SG = np.einsum("qij,qkjn->qkin", S * self.w[:, None, None], self.G)
-        return np.einsum("qkim,qkin->mn", self.G, SG)
-
-    def _material(self, dEa, dEb, weights):
-        CdE = (self.lam * np.einsum("qiim->qm", dEb)[:, None, None, :] * np.eye(3)[None, :, :, None]
-               + 2.0 * self.mu * dEb)
-        return np.einsum("q,qijm,qijn->mn", weights, dEa, CdE)
+    @property
+    def K(self):
+        """The quadratic part, ΦᵀKΦ on the same quadrature (N/m)."""
+        return self.quartic().K
 
     def energy(self, y):
-        _, E = self._strain(y)
-        return 0.5 * float(np.einsum("q,qij,qij->", self.w, E, self._stress(E)))
+        return self.quartic().energy(y)
 
     def gradient(self, y):
-        U, E = self._strain(y)
-        P = (np.eye(3) + U) @ self._stress(E)
-        return np.einsum("q,qij,qijm->m", self.w, P, self.G)
+        return self.quartic().gradient(y)
 
     def hessian(self, y):
-        U, E = self._strain(y)
-        dE = self._dE(U)
-        return self._material(dE, dE, self.w) + self._curvature(self._stress(E))
-
-    def compiled_strain(self):
-        """None: the compiled core has no form of the solid's Green–Lagrange energy (it runs in Python)."""
-        return None
+        return self.quartic().hessian(y)
 
     def discrete_gradient(self, y0, y1):
         """(g, ∂g/∂y1): the stress at the mean strain times the mid-point dE, exact (module docstring)."""
-        _, E0 = self._strain(y0)
-        U1, E1 = self._strain(y1)
-        Um, _ = self._strain(0.5 * (y0 + y1))
-        S = self._stress(0.5 * (E0 + E1))
-        dEm = self._dE(Um)
-        g = np.einsum("q,qij,qijm->m", self.w, S, dEm)
-        jac = 0.5 * self._material(dEm, self._dE(U1), self.w) + 0.5 * self._curvature(S)
-        return g, jac
+        return self.quartic().discrete_gradient(y0, y1)
+
+    def quartic(self, chunk=2048):
+        r"""The same energy as a quartic polynomial of η (module docstring): a
+        :class:`~skfem_flex.bodies.modal.stiffening.QuarticEnergy` (K, K3, K4), built once and kept.
+
+        With the strain E = Lη + ½N(η, η), L_m = sym(G_m), N_mn = sym(G_mᵀG_n) and A : C : B =
+        λ tr A tr B + 2μ A : B at every quadrature point,
+
+        .. math::
+
+            K_{ij} = \sum_q w\, L_i : C : L_j,\quad K^{(3)}_{ijk} = \sum_q w\, L_i : C : N_{jk},\quad
+            K^{(4)}_{ijkl} = \sum_q w\, N_{ij} : C : N_{kl},
+
+        the same quadrature as :meth:`energy`, so the two agree to round-off. The sums run over the
+        quadrature points in chunks of ``chunk`` (memory ``chunk`` × 6 × m(m+1)/2 numbers) and over the
+        pairs j ≤ k only (N is symmetric in them): about 12 Q m⁴/4 multiply–adds for Q points.
+        """
+        if self._quartic is not None:
+            return self._quartic
+        Q, _, _, m = self.G.shape
+        j, k = np.triu_indices(m)
+        # a symmetric 3 × 3 tensor as 6 numbers whose dot product is the full contraction A : B
+        rows, cols = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])
+        scale = np.array([1.0, 1.0, 1.0, np.sqrt(2.0), np.sqrt(2.0), np.sqrt(2.0)])
+        K = np.zeros((m, m))
+        K3p = np.zeros((m, j.size))
+        K4p = np.zeros((j.size, j.size))
+        for start in range(0, Q, chunk):
+            G = self.G[start:start + chunk]
+            w = self.w[start:start + chunk]
+            L = 0.5 * (G + G.transpose(0, 2, 1, 3))                             # (n, 3, 3, m)
+            T = np.einsum("qcaP,qcbP->qabP", G[..., j], G[..., k])               # G_jᵀG_k on the pairs
+            N = 0.5 * (T + T.transpose(0, 2, 1, 3))
+            L6 = L[:, rows, cols] * scale[:, None]                               # (n, 6, m)
+            N6 = N[:, rows, cols] * scale[:, None]                               # (n, 6, n_pairs)
+            trL = np.einsum("qaam->qm", L)
+            trN = np.einsum("qaaP->qP", N)
+            wL6 = (w[:, None, None] * L6).reshape(-1, m)
+            wtrL = w[:, None] * trL
+            K += self.lam * (wtrL.T @ trL) + 2.0 * self.mu * (wL6.T @ L6.reshape(-1, m))
+            K3p += self.lam * (wtrL.T @ trN) + 2.0 * self.mu * (wL6.T @ N6.reshape(-1, j.size))
+            wN6 = (w[:, None, None] * N6).reshape(-1, j.size)
+            K4p += self.lam * ((w[:, None] * trN).T @ trN) + 2.0 * self.mu * (wN6.T @ N6.reshape(-1, j.size))
+        K3 = np.empty((m, m, m))
+        K3[:, j, k] = K3p
+        K3[:, k, j] = K3p
+        K4 = np.empty((m, m, m, m))
+        for a in range(j.size):
+            K4[j[a], k[a], j, k] = K4p[a]
+            K4[j[a], k[a], k, j] = K4p[a]
+            K4[k[a], j[a], j, k] = K4p[a]
+            K4[k[a], j[a], k, j] = K4p[a]
+        self._quartic = QuarticEnergy(0.5 * (K + K.T), K3, K4)
+        return self._quartic
+
+    def compiled_strain(self):
+        """The compiled core's form of this energy (:func:`.kernel.kernel_data`): the quadratic part K and the
+        cubic and quartic tensors of :meth:`quartic`, folded by their symmetries
+        (:func:`~skfem_flex.bodies.modal.kernel.pack_quartic`)."""
+        energy = self.quartic()
+        return {"K": energy.K, "quartic": pack_quartic(energy.K3, energy.K4)}

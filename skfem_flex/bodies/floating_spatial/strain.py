@@ -78,11 +78,11 @@ class SpatialBeamStrain:
         return out
 
     def compiled_strain(self):
-        """The compiled core's form of this energy (:func:`.kernel.kernel_data`): (K,) or, with the
-        Green–Lagrange axis, (K₀, A (3, n_points, n), w)."""
+        """The compiled core's form of this energy, keyword arguments of :func:`.kernel.kernel_data`: K or,
+        with the Green–Lagrange axis, K₀, A (3, n_points, n) and w."""
         if not self.nonlinear:
-            return (self.K,)
-        return self.K, np.stack(self.A), self.w
+            return {"K": self.K}
+        return {"K": self.K, "A": np.stack(self.A), "w": self.w}
 
     def strains(self, y):
         """(u' (3, n_points), ε (n_points,)) at the Gauss points."""

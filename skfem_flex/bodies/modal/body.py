@@ -29,12 +29,9 @@ from ..floating import kernel as fk
 from ..ffr import FloatingFrame, FramePoint
 from .kernel import pack_quartic
 from ..rigid import E_MATRIX as E2, rotation as _rot
-from .stiffening import QuarticEnergy
+from .stiffening import QUARTIC_LIMIT, QuarticEnergy
 
 __all__ = ["ElasticModel", "Interface", "ModalBody"]
-
-#: reduced bodies with more elastic coordinates than this get no Green–Lagrange tensors (n⁴ entries)
-QUARTIC_LIMIT = 60
 
 
 @dataclass

@@ -29,7 +29,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["GreenLagrange", "QuarticEnergy"]
+__all__ = ["GreenLagrange", "QuarticEnergy", "QUARTIC_LIMIT"]
+
+#: reduced bodies with more elastic coordinates than this get no Green–Lagrange tensors (m⁴ entries)
+QUARTIC_LIMIT = 60
 
 
 @dataclass

@@ -1,5 +1,5 @@
 r"""Spatial floating-frame bodies (:class:`~skfem_flex.bodies.floating_spatial.body.FloatingBeam3D`,
-:class:`~skfem_flex.bodies.floating_spatial.solid.FloatingSolid3D` with linear strain): a director frame and
+:class:`~skfem_flex.bodies.floating_spatial.solid.FloatingSolid3D`, linear or Green–Lagrange): a director frame and
 elastic coordinates with a mass matrix M(q) that is a polynomial of degree two in q, their strain energy and
 the gravity acting on them.
 
@@ -85,7 +85,8 @@ def _body(fam, k):
     """Body data from the pools, field by field (SpatialFrameKernelData's order)."""
     return SpatialFrameKernelData(f1(fam, k), f1(fam, k + 1), f2(fam, k + 2), f2(fam, k + 3), f3(fam, k + 4),
                                   f1(fam, k + 5), f2(fam, k + 6), i1(fam, k + 7), f3(fam, k + 8), f1(fam, k + 9),
-                                  f1(fam, k + 10))
+                                  f1(fam, k + 10), i1(fam, k + 11), f2(fam, k + 12), f2(fam, k + 13),
+                                  f2(fam, k + 14), f2(fam, k + 15), f2(fam, k + 16), f2(fam, k + 17), f2(fam, k + 18))
 
 
 @numba.njit(cache=True, inline="always")
