@@ -1,12 +1,12 @@
 """A ParaView picture of a VTK series: the last frame, warped by its displacement, coloured by a cell field,
-with a colour bar. A ParaView Python script: run it with ParaView's ``pvbatch`` (off screen), not with the
-package's Python::
+with a colour bar. A ParaView Python script, run by ParaView's ``pvbatch`` (off screen); started with another
+Python (the package's), it runs itself again under ``pvbatch`` from the PATH, inside ``xvfb-run`` where
+there is no screen (a ParaView built for one, as Debian's ``paraview`` package, needs it even off screen)::
 
     python examples/bracket.py /tmp/bracket
-    pvbatch examples/render_paraview.py /tmp/bracket/bracket.pvd von_mises docs/images/bracket_paraview.png --warp 50
+    python examples/render_paraview.py /tmp/bracket/bracket.pvd von_mises docs/images/bracket_paraview.png --warp 50
 
-(``xvfb-run pvbatch ...`` where ParaView was built for a screen and none is there: Debian's ``paraview``
-package.) It is the pipeline one clicks together in ParaView's window: open the ``.pvd`` collection, go to its
+It is the pipeline one clicks together in ParaView's window: open the ``.pvd`` collection, go to its
 last time, "Cell Data to Point Data" is not applied (each tetrahedron keeps its own value), "Warp By Vector"
 on the point field ``displacement`` scaled by ``--warp``, shown as "Surface With Edges", coloured by the cell
 field in ParaView's default map ("Cool to Warm"), in MPa for a stress (a Calculator divides by 10⁶), with its colour bar, and save a
@@ -14,6 +14,10 @@ screenshot. ``examples/render_vtk.py`` draws the same picture with the ``vtk`` w
 without ParaView.
 """
 import argparse
+import os
+import shutil
+import subprocess
+import sys
 
 
 def render(series, field, png, warp=1.0, size=(900, 700), scale=1e-6, unit="MPa"):
@@ -54,7 +58,23 @@ def render(series, field, png, warp=1.0, size=(900, 700), scale=1e-6, unit="MPa"
     return lo, hi
 
 
+def run_under_pvbatch(argv):
+    """This script with ``argv`` under ParaView's ``pvbatch`` (in ``xvfb-run`` without a screen); its exit status."""
+    pvbatch = shutil.which("pvbatch")
+    if pvbatch is None:
+        raise SystemExit("render_paraview: ParaView's pvbatch is not on the PATH: install ParaView (Debian: apt "
+                         "install paraview), or draw the picture with examples/render_vtk.py")
+    command = [pvbatch, os.path.abspath(__file__), *argv]
+    if not os.environ.get("DISPLAY") and shutil.which("xvfb-run"):
+        command = ["xvfb-run", "-a", *command]
+    return subprocess.run(command).returncode
+
+
 if __name__ == "__main__":
+    try:
+        import paraview.simple  # noqa: F401  (ParaView's own Python: pvbatch or pvpython)
+    except ImportError:
+        raise SystemExit(run_under_pvbatch(sys.argv[1:]))
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("series", help="a .pvd collection or a .vtu file")
     ap.add_argument("field", help="a cell field of it, for example von_mises")

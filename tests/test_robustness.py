@@ -92,6 +92,16 @@ def test_bad_cli_input_is_one_line_naming_it(tmp_path, capsys, argv, needle):
     assert len(err.strip().splitlines()) == 1 and needle in err and "Traceback" not in err, err
 
 
+def test_a_solve_the_settings_make_impossible_is_one_line(tmp_path, capsys):
+    """A steady spin at 1e308 rad/s (found by the test above): the solve before the run fails, and the command
+    says where and why in one line with exit status 1, not an internal error."""
+    rc, err = run_cli(capsys, ["run", "rotating_beam_3d", "--set", "omega=1e308", "--out", str(tmp_path / "o"),
+                               "--no-vtk", "--no-plots", "--quiet"])
+    lines = [line for line in err.strip().splitlines() if not line.startswith("skfem-flex: compil")]
+    assert rc == 1 and len(lines) == 1, err
+    assert lines[0].startswith("skfem-flex: error: steady spin") and "not finite" in lines[0], err
+
+
 def test_list_into_a_closed_pipe_is_quiet():
     env = package_env()
     proc = subprocess.run(f"{sys.executable} -m skfem_flex list | head -1", shell=True, env=env,

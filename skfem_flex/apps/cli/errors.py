@@ -2,7 +2,8 @@
 
 :func:`exit_status` runs a command and turns what it raises into that line and status: bad input
 (:class:`UsageError`) 2; an output that cannot be written (:class:`OutputWriteError`) 1; Ctrl-C 130 and
-SIGTERM (:class:`Terminated`) 143; numbers beyond double precision 1; anything else an "internal error"
+SIGTERM (:class:`Terminated`) 143; numbers beyond double precision and a failed solve outside the time loop
+(:class:`~skfem_flex.errors.ConvergenceError`) 1; anything else an "internal error"
 line, 1 (``SKFEM_FLEX_DEBUG=1`` shows the traceback). Python warnings print as one line too
 (:func:`one_line_warning`).
 """
@@ -10,6 +11,8 @@ from __future__ import annotations
 
 import os
 import sys
+
+from ...errors import ConvergenceError
 
 __all__ = ["UsageError", "OutputWriteError", "Terminated", "raise_terminated", "exit_status", "one_line",
            "one_line_warning", "EXIT_STOPPED", "EXIT_DIVERGED", "EXIT_SIGNAL"]
@@ -81,6 +84,11 @@ def exit_status(command):
     except (ArithmeticError, MemoryError, RecursionError) as exc:
         # numbers beyond double precision deep inside a computation: one line, not a traceback
         print(f"skfem-flex: error: {type(exc).__name__}: {one_line(exc)}", file=sys.stderr)
+        return EXIT_STOPPED
+    except ConvergenceError as exc:
+        # a solve outside the time loop (a steady spin, a static equilibrium) that the settings made impossible:
+        # the message says where and why
+        print(f"skfem-flex: error: {one_line(exc)}", file=sys.stderr)
         return EXIT_STOPPED
     except Exception as exc:
         if os.environ.get("SKFEM_FLEX_DEBUG"):
