@@ -40,7 +40,7 @@ class FloatingFrame3D(DirectorFrame, Body):
         return None if form is None else form()
 
     def compiled_kernel_data(self):
-        """The body's arrays for the compiled core (:class:`~.kernel.SpatialFrameKernelData`), or None when its
+        """The body's arrays for the compiled core (:class:`~.kernel.SpatialBodyData`), or None when its
         strain energy has no compiled form (:attr:`compiled_refusal`)."""
         strain = self._compiled_strain()
         return None if strain is None else kernel.kernel_data(self.inertia, **strain)

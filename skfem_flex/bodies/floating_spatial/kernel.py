@@ -23,7 +23,7 @@ import numpy as np
 
 from ..modal.kernel import quartic_discrete_gradient, quartic_energy
 
-__all__ = ["SpatialFrameKernelData", "kernel_data", "mass_matrix", "momentum_jacobian", "kinetic_hessian",
+__all__ = ["SpatialFrameKernelData", "QuarticTerms", "SpatialBodyData", "kernel_data", "mass_matrix", "momentum_jacobian", "kinetic_hessian",
            "strain_terms", "gravity_terms", "body_terms", "STATE", "EM", "NEWMARK"]
 
 #: what :func:`body_terms` evaluates: the state's momentum and potential energy, the energy–momentum step's
@@ -59,11 +59,6 @@ class SpatialFrameKernelData(NamedTuple):
         EA times the quadrature weight, N m.
     g : ndarray (3,)
         The gravity field acting on the body, m/s² (zero: none).
-    quartic : ndarray (1,) of int
-        1: add the cubic and quartic terms of the arrays below; 0: they are empty.
-    k3p, k3q, k3a, k3b, k4a, k4s, k4w : ndarray (2-D)
-        The cubic and quartic tensors as :func:`~skfem_flex.bodies.modal.kernel.pack_quartic` folds them,
-        N/m (per unit of y cubed and to the fourth).
     """
 
     mass: np.ndarray
@@ -77,6 +72,21 @@ class SpatialFrameKernelData(NamedTuple):
     A: np.ndarray
     w: np.ndarray
     g: np.ndarray
+
+
+class QuarticTerms(NamedTuple):
+    """The cubic and quartic terms of a body's strain energy (a Green–Lagrange solid), apart from
+    :class:`SpatialFrameKernelData`, which the kinetic functions take: only :func:`strain_terms` reads them.
+
+    Attributes
+    ----------
+    quartic : ndarray (1,) of int
+        1: add the cubic and quartic terms of the arrays below; 0: they are empty.
+    k3p, k3q, k3a, k3b, k4a, k4s, k4w : ndarray (2-D)
+        The cubic and quartic tensors as :func:`~skfem_flex.bodies.modal.kernel.pack_quartic` folds them,
+        N/m (per unit of y cubed and to the fourth).
+    """
+
     quartic: np.ndarray
     k3p: np.ndarray
     k3q: np.ndarray
@@ -87,8 +97,15 @@ class SpatialFrameKernelData(NamedTuple):
     k4w: np.ndarray
 
 
+class SpatialBodyData(NamedTuple):
+    """All the compiled core needs of one body: its frame data and its strain energy's quartic terms."""
+
+    frame: SpatialFrameKernelData
+    quartic: QuarticTerms
+
+
 def kernel_data(inertia, K, A=None, w=None, quartic=None, gravity=(0.0, 0.0, 0.0)):
-    """The kernel's arrays of one body (:class:`SpatialFrameKernelData`).
+    """The kernel's arrays of one body (:class:`SpatialBodyData`).
 
     Parameters
     ----------
@@ -135,13 +152,14 @@ def kernel_data(inertia, K, A=None, w=None, quartic=None, gravity=(0.0, 0.0, 0.0
         if [a.shape for a in quartic_arrays] != shapes:
             raise ValueError(f"the quartic terms on {nf} elastic coordinates must have the shapes {shapes}, "
                              f"got {[a.shape for a in quartic_arrays]}")
-    return SpatialFrameKernelData(
+    frame = SpatialFrameKernelData(
         np.array([float(inertia.mass)]), np.ascontiguousarray(inertia.S0, dtype=float),
         np.ascontiguousarray(Sbar), np.ascontiguousarray(inertia.I0, dtype=float),
         np.ascontiguousarray(inertia.P, dtype=float).reshape(3, 3, nf),
         np.ascontiguousarray(0.5 * (N + N.transpose(1, 0, 3, 2))).ravel(), np.ascontiguousarray(K),
-        np.array([1 if green else 0], dtype=np.int64), A, w, np.asarray(gravity, dtype=float).reshape(3).copy(),
-        np.array([0 if quartic is None else 1], dtype=np.int64), *quartic_arrays)
+        np.array([1 if green else 0], dtype=np.int64), A, w, np.asarray(gravity, dtype=float).reshape(3).copy())
+    return SpatialBodyData(frame, QuarticTerms(np.array([0 if quartic is None else 1], dtype=np.int64),
+                                               *quartic_arrays))
 
 
 @numba.njit(cache=True)
@@ -372,8 +390,8 @@ def _axial(kd, y):
 
 
 @numba.njit(cache=True)
-def strain_terms(kd, y0, y1):
-    """(V(y1), g, ∂g/∂y1): the strain energy at y1 and its exact discrete gradient from y0 to y1 (at y0 = y1:
+def strain_terms(kd, qt, y0, y1):
+    """``qt``: the :class:`QuarticTerms`. (V(y1), g, ∂g/∂y1): the strain energy at y1 and its exact discrete gradient from y0 to y1 (at y0 = y1:
     the gradient and half the Hessian), ``SpatialBeamStrain.discrete_gradient`` / ``QuadraticEnergy`` /
     ``SolidGreenLagrange.discrete_gradient``."""
     nf = kd.K.shape[0]
@@ -386,9 +404,9 @@ def strain_terms(kd, y0, y1):
             g[a] += 0.5 * kab * (y0[b] + y1[b])
             jac[a, b] = 0.5 * kab
             energy += 0.5 * y1[a] * kab * y1[b]
-    if kd.quartic[0] != 0:
-        energy += quartic_energy(kd.k3p, kd.k4a, y1, 0)
-        g4, dg4 = quartic_discrete_gradient(kd.k3p, kd.k3q, kd.k3a, kd.k3b, kd.k4a, kd.k4s, kd.k4w, y0, y1, 0)
+    if qt.quartic[0] != 0:
+        energy += quartic_energy(qt.k3p, qt.k4a, y1, 0)
+        g4, dg4 = quartic_discrete_gradient(qt.k3p, qt.k3q, qt.k3a, qt.k3b, qt.k4a, qt.k4s, qt.k4w, y0, y1, 0)
         for a in range(nf):
             g[a] += g4[a]
             for b in range(nf):
@@ -452,11 +470,12 @@ def gravity_terms(kd, q):
 
 
 @numba.njit(cache=True)
-def body_terms(kd, mode, q0, q1, v0, v1, a1, qa, qb):
+def body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb):
     r"""Every part of one body's residual and its derivatives, as the compiled core's tasks ask them
     (:mod:`skfem_flex.compiled.tasks`); the one compiled entry of the body's arithmetic.
 
-    ``mode`` :data:`EM` (energy–momentum): p = M(q₁)v₁ with ∂p/∂q₁ = B(q₁, v₁), ∂p/∂v₁ = M(q₁);
+    ``kd`` and ``qt``: the body's :class:`SpatialFrameKernelData` and :class:`QuarticTerms`. ``mode`` :data:`EM`
+    (energy–momentum): p = M(q₁)v₁ with ∂p/∂q₁ = B(q₁, v₁), ∂p/∂v₁ = M(q₁);
     g_k = ½B(q_m, v₀)ᵀv₁ (the exact discrete gradient of ½v₀ᵀM(q)v₁) with ∂/∂q₁ = ¼H(v₀, v₁),
     ∂/∂v₁ = ½B(q_m, v₀)ᵀ. :data:`NEWMARK`: p = M(q₁)a₁ with ∂p/∂q₁ = B(q₁, a₁), ∂p/∂a₁ = M(q₁);
     g_k = Q_v(q₁, v₁) = ½Bᵀv − Bv with ∂/∂q₁ = ½H(v, v) − (B(v, v) − B(0, v)), ∂/∂v₁ = Bᵀ − B − DM(q₁)[v₁]
@@ -552,7 +571,7 @@ def body_terms(kd, mode, q0, q1, v0, v1, a1, qa, qb):
     for i in range(n):
         for j in range(n):
             dgp_dq[i, j] = 0.5 * Hg[i, j]
-    vs, gs, js = strain_terms(kd, qa[12:], qb[12:])
+    vs, gs, js = strain_terms(kd, qt, qa[12:], qb[12:])
     for a in range(nf):
         gp[12 + a] += gs[a]
         for b in range(nf):

@@ -29,7 +29,8 @@ from collections import namedtuple
 import numba
 import numpy as np
 
-from ...bodies.floating_spatial.kernel import EM, NEWMARK, STATE, SpatialFrameKernelData, body_terms
+from ...bodies.floating_spatial.kernel import (EM, NEWMARK, STATE, QuarticTerms, SpatialBodyData,
+                                               SpatialFrameKernelData, body_terms)
 from ..abi import context_of, f1, f2, f3, family_of, fvec, i1
 from ..registry import compiled_kernel
 from ..storage import add_qq, storage_of
@@ -41,8 +42,10 @@ __all__ = ["NAME", "FORMS", "pack", "kernel"]
 NAME = "spatial floating-frame bodies"
 FORMS = ("spatial floating frame", "spatial floating frame gravity")
 
-#: fields per body: those of SpatialFrameKernelData, after the family's one (the bodies' offsets)
-_NKD = len(SpatialFrameKernelData._fields)
+#: fields per body: those of SpatialFrameKernelData, then those of QuarticTerms, after the family's one (the
+#: bodies' offsets)
+_NFRAME = len(SpatialFrameKernelData._fields)
+_NKD = _NFRAME + len(QuarticTerms._fields)
 
 
 def pack(items, packer):
@@ -52,7 +55,7 @@ def pack(items, packer):
     Parameters
     ----------
     items : list
-        ``(SpatialFrameKernelData, body, offset)`` per body (form "spatial floating frame") and
+        ``(SpatialBodyData, body, offset)`` per body (form "spatial floating frame") and
         ``(("gravity", g), body, offset)`` per gravity field on one of them.
     packer : Packer
 
@@ -63,16 +66,17 @@ def pack(items, packer):
     """
     bodies, gravity = [], {}
     for item, body, off in items:
-        if isinstance(item, SpatialFrameKernelData):
+        if isinstance(item, SpatialBodyData):
             bodies.append((item, body, off))
         else:
             gravity[id(body)] = gravity.get(id(body), 0.0) + np.asarray(item[1], dtype=float)
     names, arrays, offs, couplings = ["offs"], [None], [], []
-    for b, (kd, body, off) in enumerate(bodies):
+    for b, (data, body, off) in enumerate(bodies):
+        kd = data.frame
         if id(body) in gravity:
             kd = kd._replace(g=kd.g + gravity[id(body)])
-        names += [f"b{b}_{name}" for name in kd._fields]
-        arrays += list(kd)
+        names += [f"b{b}_{name}" for name in kd._fields + data.quartic._fields]
+        arrays += list(kd) + list(data.quartic)
         offs.append(off)
         couplings.append(np.arange(off, off + 12 + kd.Sbar.shape[1], dtype=np.int64))
     arrays[0] = np.asarray(offs, dtype=np.int64)
@@ -85,8 +89,14 @@ def _body(fam, k):
     """Body data from the pools, field by field (SpatialFrameKernelData's order)."""
     return SpatialFrameKernelData(f1(fam, k), f1(fam, k + 1), f2(fam, k + 2), f2(fam, k + 3), f3(fam, k + 4),
                                   f1(fam, k + 5), f2(fam, k + 6), i1(fam, k + 7), f3(fam, k + 8), f1(fam, k + 9),
-                                  f1(fam, k + 10), i1(fam, k + 11), f2(fam, k + 12), f2(fam, k + 13),
-                                  f2(fam, k + 14), f2(fam, k + 15), f2(fam, k + 16), f2(fam, k + 17), f2(fam, k + 18))
+                                  f1(fam, k + 10))
+
+
+@numba.njit(cache=True, inline="always")
+def _quartic(fam, k):
+    """The body's QuarticTerms from the pools (their order)."""
+    return QuarticTerms(i1(fam, k), f2(fam, k + 1), f2(fam, k + 2), f2(fam, k + 3), f2(fam, k + 4), f2(fam, k + 5),
+                        f2(fam, k + 6), f2(fam, k + 7))
 
 
 @numba.njit(cache=True, inline="always")
@@ -98,7 +108,7 @@ def _bodies(ctx, fam):
     out = fvec(ctx.out, 7)
     rp, rgk, rgp, floor = fvec(ctx.p, n), fvec(ctx.gk, n), fvec(ctx.gp, n), fvec(ctx.floor, n)
     for b in range(offs.size):
-        kd = _body(fam, 1 + _NKD * b)
+        kd, qt = _body(fam, 1 + _NKD * b), _quartic(fam, 1 + _NKD * b + _NFRAME)
         o, nb = offs[b], 12 + kd.Sbar.shape[1]
         sl = slice(o, o + nb)
         q1, v1 = fvec(ctx.q1, n)[sl].copy(), fvec(ctx.v1, n)[sl].copy()
@@ -107,7 +117,7 @@ def _bodies(ctx, fam):
         else:
             q0, v0, a1 = fvec(ctx.q0, n)[sl].copy(), fvec(ctx.v0, n)[sl].copy(), fvec(ctx.a1, n)[sl].copy()
             qa, qb = fvec(ctx.qa, n)[sl].copy(), fvec(ctx.qb, n)[sl].copy()
-        p, gk, gp, M1, dp_dq, dgk_dq, dgk_dv, dgp_dq, V = body_terms(kd, mode, q0, q1, v0, v1, a1, qa, qb)
+        p, gk, gp, M1, dp_dq, dgk_dq, dgk_dv, dgp_dq, V = body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb)
         if task == TASK_ENERGY:
             out[0] += V
             continue
