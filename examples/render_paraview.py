@@ -1,7 +1,7 @@
 """A ParaView picture of a VTK series: the last frame, warped by its displacement, coloured by a cell field,
 with a colour bar. A ParaView Python script, run by ParaView's ``pvbatch`` (off screen); started with another
-Python (the package's), it runs itself again under ``pvbatch`` from the PATH, inside ``xvfb-run`` where
-there is no screen (a ParaView built for one, as Debian's ``paraview`` package, needs it even off screen)::
+Python (the package's), it runs itself again under ``pvbatch`` from the PATH, on a virtual screen (``Xvfb``)
+where there is none (a ParaView built for one, as Debian's ``paraview`` package, needs it even off screen)::
 
     python examples/bracket.py /tmp/bracket
     python examples/render_paraview.py /tmp/bracket/bracket.pvd von_mises docs/images/bracket_paraview.png --warp 50
@@ -59,15 +59,26 @@ def render(series, field, png, warp=1.0, size=(900, 700), scale=1e-6, unit="MPa"
 
 
 def run_under_pvbatch(argv):
-    """This script with ``argv`` under ParaView's ``pvbatch`` (in ``xvfb-run`` without a screen); its exit status."""
+    """This script with ``argv`` under ParaView's ``pvbatch``; without a screen, on a virtual one (``Xvfb``,
+    which picks a free display number itself and says it: no race between runs). Returns the exit status."""
     pvbatch = shutil.which("pvbatch")
     if pvbatch is None:
         raise SystemExit("render_paraview: ParaView's pvbatch is not on the PATH: install ParaView (Debian: apt "
                          "install paraview), or draw the picture with examples/render_vtk.py")
-    command = [pvbatch, os.path.abspath(__file__), *argv]
-    if not os.environ.get("DISPLAY") and shutil.which("xvfb-run"):
-        command = ["xvfb-run", "-a", *command]
-    return subprocess.run(command).returncode
+    command = [pvbatch, "--force-offscreen-rendering", os.path.abspath(__file__), *argv]
+    if os.environ.get("DISPLAY") or not shutil.which("Xvfb"):
+        return subprocess.run(command).returncode
+    # a 24-bit screen: OpenGL finds no visual on Xvfb's default 8 bits
+    server = subprocess.Popen(["Xvfb", "-displayfd", "1", "-screen", "0", "1280x1024x24", "-nolisten", "tcp"],
+                              stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    try:
+        display = server.stdout.readline().strip()
+        if not display:
+            raise SystemExit("render_paraview: Xvfb did not start (no screen for pvbatch)")
+        return subprocess.run(command, env=dict(os.environ, DISPLAY=f":{display}")).returncode
+    finally:
+        server.terminate()
+        server.wait()
 
 
 if __name__ == "__main__":
