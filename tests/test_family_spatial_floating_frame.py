@@ -258,8 +258,8 @@ def spinning_green_lagrange_solid():
 @pytest.mark.parametrize("scheme", ["energy-momentum", "trapezoidal", "generalized-alpha"])
 def test_green_lagrange_solid_runs_compiled_as_the_python_path(scheme):
     """The solid's Green–Lagrange energy (its cubic and quartic modal tensors) runs on the compiled core, in a
-    joint, under every scheme: trajectory, energies and momenta equal the Python path's (whose strain energy is
-    the sum over the mesh's quadrature points, not the tensors)."""
+    joint, under every scheme: trajectory, energies and momenta equal the Python path's (numpy on the same
+    tensors; test_spatial_solid.py holds the tensors to the sums at the quadrature points)."""
     res = sf.simulate(spinning_green_lagrange_solid(), 0.02, 0.002, integrator=scheme, compiled=True)
     ref = sf.simulate(spinning_green_lagrange_solid(), 0.02, 0.002, integrator=scheme, compiled=False)
     assert not res.run_path["python_elements"] and ref.run_path["python_elements"]
@@ -269,6 +269,31 @@ def test_green_lagrange_solid_runs_compiled_as_the_python_path(scheme):
     for key in ("kinetic", "potential"):
         mine, theirs = getattr(res, key), getattr(ref, key)
         assert np.abs(mine - theirs).max() <= 1e-10 * np.abs(theirs).max(), key
+
+
+def loaded_bodies():
+    """A spinning bar and a beam, each pushed at a material point (quadratic in q) by a force fixed in space,
+    one constant and one a function of time."""
+    bar, rod = _solid("green-lagrange"), beam()
+    rod.q0[:3] += (0.0, 3.0, 0.0)
+    loads = [sf.SpatialPointForce(bar.point("tip"), lambda t: np.array([2e4 * np.sin(40.0 * t), 1e4, -3e4])),
+             sf.SpatialPointForce(rod.point(1.5), (0.0, 50.0, 20.0))]
+    return sf.Scene([bar, rod], forces=loads)
+
+
+@pytest.mark.parametrize("scheme", ["energy-momentum", "trapezoidal", "generalized-alpha"])
+def test_point_forces_at_material_points_run_compiled_as_the_python_path(scheme):
+    """A force fixed in space at a floating-frame body's material point (r quadratic in q: Q = Jᵀ(q) F(t),
+    ∂Q/∂q = Σ F_c H_c) runs on the compiled point-load family: trajectory and energies as the Python path's."""
+    res = sf.simulate(loaded_bodies(), 0.02, 0.002, integrator=scheme, compiled=True)
+    ref = sf.simulate(loaded_bodies(), 0.02, 0.002, integrator=scheme, compiled=False)
+    assert not res.run_path["python_elements"] and ref.run_path["python_elements"]
+    assert rel_dev(res.q, ref.q) < RUN_TOL
+    assert rel_dev(res.v, ref.v) < 1e3 * RUN_TOL
+    assert np.abs(ref.external_work).max() > 1e-3 * np.abs(ref.kinetic).max()          # the loads do work
+    for key in ("kinetic", "external_work"):
+        mine, theirs = np.asarray(getattr(res, key)), np.asarray(getattr(ref, key))
+        assert np.abs(mine - theirs).max() <= 1e-9 * np.abs(theirs).max(), key
 
 
 def test_a_users_strain_object_runs_in_python():

@@ -3,7 +3,7 @@
 :func:`exit_status` runs a command and turns what it raises into that line and status: bad input
 (:class:`UsageError`) 2; an output that cannot be written (:class:`OutputWriteError`) 1; Ctrl-C 130 and
 SIGTERM (:class:`Terminated`) 143; numbers beyond double precision and a failed solve outside the time loop
-(:class:`~skfem_flex.errors.ConvergenceError`) 1; anything else an "internal error"
+(:class:`~skfem_flex.errors.ConvergenceError`, :class:`~skfem_flex.errors.DivergenceError`) 1; anything else an "internal error"
 line, 1 (``SKFEM_FLEX_DEBUG=1`` shows the traceback). Python warnings print as one line too
 (:func:`one_line_warning`).
 """
@@ -12,7 +12,7 @@ from __future__ import annotations
 import os
 import sys
 
-from ...errors import ConvergenceError
+from ...errors import ConvergenceError, DivergenceError
 
 __all__ = ["UsageError", "OutputWriteError", "Terminated", "raise_terminated", "exit_status", "one_line",
            "one_line_warning", "EXIT_STOPPED", "EXIT_DIVERGED", "EXIT_SIGNAL"]
@@ -85,9 +85,9 @@ def exit_status(command):
         # numbers beyond double precision deep inside a computation: one line, not a traceback
         print(f"skfem-flex: error: {type(exc).__name__}: {one_line(exc)}", file=sys.stderr)
         return EXIT_STOPPED
-    except ConvergenceError as exc:
-        # a solve outside the time loop (a steady spin, a static equilibrium) that the settings made impossible:
-        # the message says where and why
+    except (ConvergenceError, DivergenceError) as exc:
+        # a solve outside the time loop (a steady spin, a static equilibrium, a scene's set-up) that the settings
+        # made impossible: the message says where and why
         print(f"skfem-flex: error: {one_line(exc)}", file=sys.stderr)
         return EXIT_STOPPED
     except Exception as exc:

@@ -23,7 +23,8 @@ import numpy as np
 
 from ..modal.kernel import quartic_discrete_gradient, quartic_energy
 
-__all__ = ["SpatialFrameKernelData", "QuarticTerms", "SpatialBodyData", "kernel_data", "mass_matrix", "momentum_jacobian", "kinetic_hessian",
+__all__ = ["SpatialFrameKernelData", "QuarticTerms", "SpatialBodyData",
+           "kernel_data", "mass_matrix", "momentum_jacobian", "kinetic_hessian",
            "strain_terms", "gravity_terms", "body_terms", "STATE", "EM", "NEWMARK"]
 
 #: what :func:`body_terms` evaluates: the state's momentum and potential energy, the energy–momentum step's
@@ -84,7 +85,7 @@ class QuarticTerms(NamedTuple):
         1: add the cubic and quartic terms of the arrays below; 0: they are empty.
     k3p, k3q, k3a, k3b, k4a, k4s, k4w : ndarray (2-D)
         The cubic and quartic tensors as :func:`~skfem_flex.bodies.modal.kernel.pack_quartic` folds them,
-        N/m (per unit of y cubed and to the fourth).
+        N/m² and N/m³ (y in m).
     """
 
     quartic: np.ndarray
@@ -391,9 +392,9 @@ def _axial(kd, y):
 
 @numba.njit(cache=True)
 def strain_terms(kd, qt, y0, y1):
-    """``qt``: the :class:`QuarticTerms`. (V(y1), g, ∂g/∂y1): the strain energy at y1 and its exact discrete gradient from y0 to y1 (at y0 = y1:
+    """(V(y1), g, ∂g/∂y1): the strain energy at y1 and its exact discrete gradient from y0 to y1 (at y0 = y1:
     the gradient and half the Hessian), ``SpatialBeamStrain.discrete_gradient`` / ``QuadraticEnergy`` /
-    ``SolidGreenLagrange.discrete_gradient``."""
+    ``SolidGreenLagrange.discrete_gradient``; ``qt`` the body's :class:`QuarticTerms`."""
     nf = kd.K.shape[0]
     g = np.zeros(nf)
     jac = np.empty((nf, nf))

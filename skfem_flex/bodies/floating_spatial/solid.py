@@ -23,8 +23,9 @@ m = 1ᵀM_s1, S₀ = 1ᵀM_sX₀, S̄_k = 1ᵀM_sΦ_k, I₀ = X₀ᵀM_sX₀, P_
 the mesh's interpolation, computed once from sparse products.
 
 **Strain and stress.** The strain energy is ½ηᵀΦᵀKΦη (linear elasticity in the body frame: a finite rigid
-motion strains nothing). Stresses come back per cell from η: σ = C ε̄ with the cell-mean strains ε̄ of the
-modes, precomputed; von Mises from σ. Geometric stiffening (the Green–Lagrange terms) is not in this body.
+motion strains nothing), or with ``strain="green-lagrange"`` the Green–Lagrange energy of ``solid_strain.py``
+(geometric stiffening, with modal derivatives and spin shapes in the basis). Stresses come back per cell from
+η: σ = C ε̄ with the cell-mean strains ε̄ of the modes, precomputed (the linear stress); von Mises from σ.
 """
 from __future__ import annotations
 

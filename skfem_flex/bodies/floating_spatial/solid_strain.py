@@ -136,9 +136,8 @@ class SolidGreenLagrange:
         """(g, ∂g/∂y1): the stress at the mean strain times the mid-point dE, exact (module docstring)."""
         return self.quartic().discrete_gradient(y0, y1)
 
-    def quartic(self, chunk=2048):
-        r"""The same energy as a quartic polynomial of η (module docstring): a
-        :class:`~skfem_flex.bodies.modal.stiffening.QuarticEnergy` (K, K3, K4), built once and kept.
+    def quartic(self, chunk=1024):
+        r"""The same energy as a quartic polynomial of η (module docstring), built once and kept.
 
         With the strain E = Lη + ½N(η, η), L_m = sym(G_m), N_mn = sym(G_mᵀG_n) and A : C : B =
         λ tr A tr B + 2μ A : B at every quadrature point,
@@ -148,9 +147,21 @@ class SolidGreenLagrange:
             K_{ij} = \sum_q w\, L_i : C : L_j,\quad K^{(3)}_{ijk} = \sum_q w\, L_i : C : N_{jk},\quad
             K^{(4)}_{ijkl} = \sum_q w\, N_{ij} : C : N_{kl},
 
-        the same quadrature as :meth:`energy`, so the two agree to round-off. The sums run over the
-        quadrature points in chunks of ``chunk`` (memory ``chunk`` × 6 × m(m+1)/2 numbers) and over the
-        pairs j ≤ k only (N is symmetric in them): about 12 Q m⁴/4 multiply–adds for Q points.
+        the same quadrature as the definition (a test holds them to it). The sums run over the quadrature
+        points in chunks of ``chunk`` (about 30 × ``chunk`` × m(m+1)/2 numbers at a time) and over the pairs
+        j ≤ k only (N is symmetric in them): about 7 Q m⁴/4 multiply–adds for Q points.
+
+        Parameters
+        ----------
+        chunk : int
+            Quadrature points per block of the sums.
+
+        Returns
+        -------
+        QuarticEnergy
+            K (N/m), K3 (N/m²) and K4 (N/m³) on the basis's coordinates (per unit of η where Φ is not in m),
+            K4 exactly symmetric in (i, j), in (k, l) and under (ij) ↔ (kl) as
+            :class:`~skfem_flex.bodies.modal.stiffening.QuarticEnergy` requires.
         """
         if self._quartic is not None:
             return self._quartic
@@ -168,6 +179,7 @@ class SolidGreenLagrange:
             L = 0.5 * (G + G.transpose(0, 2, 1, 3))                             # (n, 3, 3, m)
             T = np.einsum("qcaP,qcbP->qabP", G[..., j], G[..., k])               # G_jᵀG_k on the pairs
             N = 0.5 * (T + T.transpose(0, 2, 1, 3))
+            del T
             L6 = L[:, rows, cols] * scale[:, None]                               # (n, 6, m)
             N6 = N[:, rows, cols] * scale[:, None]                               # (n, 6, n_pairs)
             trL = np.einsum("qaam->qm", L)
@@ -178,6 +190,7 @@ class SolidGreenLagrange:
             K3p += self.lam * (wtrL.T @ trN) + 2.0 * self.mu * (wL6.T @ N6.reshape(-1, j.size))
             wN6 = (w[:, None, None] * N6).reshape(-1, j.size)
             K4p += self.lam * ((w[:, None] * trN).T @ trN) + 2.0 * self.mu * (wN6.T @ N6.reshape(-1, j.size))
+        K4p = 0.5 * (K4p + K4p.T)           # the two factors of its products differ: exact at round-off only
         K3 = np.empty((m, m, m))
         K3[:, j, k] = K3p
         K3[:, k, j] = K3p

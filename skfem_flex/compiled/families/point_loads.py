@@ -6,6 +6,9 @@ r"""Loads given as functions of time: point forces, follower forces and generali
   (linear in q); ∂Q/∂q = ∂(J_rᵀ f)/∂q|_f + J_rᵀ E f ⊗ g with f = A(ϑ) F.
 * "generalized force" (:class:`~skfem_flex.elements.forces.PointMoment`): Q = Gᵀ F(t), G constant
   (k, the element's coordinates), one time-table column per row of G; no derivative.
+* "quadratic point force" (a :class:`~skfem_flex.elements.forces.SpatialPointForce` fixed in space at a point
+  whose position is quadratic in q, r_c = ½ qᵀH_c q + A_c·q + a_c: a floating-frame body's material point):
+  Q = Σ_c F_c(t) (H_c q + A_c) = J_r(q)ᵀ F, ∂Q/∂q = Σ_c F_c(t) H_c (constant entries times the load).
 
 The functions of time are columns of the chunk's time table, evaluated where the scheme evaluates its
 loads (``packer.column(fun, component, "force")``, read from ``ctx.trow``). TASK_EVAL_LOADS adds Q(q_e, t)
@@ -26,7 +29,7 @@ from ..tasks import TASK_EVAL_LOADS, TASK_LOADS
 from . import FamilyPack
 
 NAME = "point loads"
-FORMS = ("point force", "follower force", "generalized force")
+FORMS = ("point force", "follower force", "generalized force", "quadratic point force")
 
 
 class Data(NamedTuple):
@@ -34,20 +37,26 @@ class Data(NamedTuple):
     #                         first, end of g
     angle0: np.ndarray      # (k,) c of ϑ = g·q + c (0 for a point force), rad
     gen: np.ndarray         # (l, 3) rows of generalized forces: column, first, end of their entries
-    idx: np.ndarray         # global coordinates of the nonzero entries of g (followers) and G's rows
+    idx: np.ndarray         # global coordinates of the nonzero entries of g (followers), G's rows and A_c
     coef: np.ndarray        # the entries
+    quad: np.ndarray        # (m, 5) rows c of quadratic point forces: column, first, end of H_c's entries (hij,
+    #                         hcoef), first, end of A_c's (idx, coef)
+    hij: np.ndarray         # (p, 2) global (row, column) of the nonzero entries of the H_c
+    hcoef: np.ndarray       # the entries, m⁻¹ (per unit of q squared)
 
 
 @numba.njit(cache=True, _nrt=False)
 def _view(fam):
-    return Data(i2(fam, 0), f1(fam, 1), i2(fam, 2), i1(fam, 3), f1(fam, 4))
+    return Data(i2(fam, 0), f1(fam, 1), i2(fam, 2), i1(fam, 3), f1(fam, 4), i2(fam, 5), i2(fam, 6), f1(fam, 7))
 
 
 def pack(items, packer):
-    """Point forces ("point force", point, F), follower forces ("follower force", point, g, c, F) and generalized
-    forces ("generalized force", G, F): F(t) as time-table columns at the scheme's load points; followers couple
-    their point's map support and g, point forces on frame maps their map's support."""
+    """Point forces ("point force", point, F), follower forces ("follower force", point, g, c, F), generalized
+    forces ("generalized force", G, F) and quadratic point forces ("quadratic point force", H, A, F): F(t) as
+    time-table columns at the scheme's load points; followers couple their point's map support and g, point
+    forces on frame maps their map's support, quadratic point forces the entries of their H."""
     force, angle0, gen, idx, coef, couplings = [], [], [], [], [], []
+    quad, hij, hcoef = [], [], []
     for form, element, where in items:
         where = np.asarray(where, dtype=np.int64)
         name = form[0]
@@ -72,6 +81,17 @@ def pack(items, packer):
                 if packer.maps.rows[k][0] == FRAME:       # ∂(J_rᵀ f)/∂q couples the frame's angle and q_f
                     couplings.append(support)
             force.append((k, col, 1 if name == "follower force" else 0, first, len(idx)))
+        elif name == "quadratic point force":
+            _, H, A, fun = form
+            for comp in range(3):
+                hi, hj = np.nonzero(H[comp])
+                a = np.flatnonzero(A[comp])
+                quad.append((packer.column(fun, comp, "force"), len(hcoef), len(hcoef) + hi.size, len(idx),
+                             len(idx) + a.size))
+                hij.extend(zip(where[hi], where[hj]))
+                hcoef.extend(H[comp][hi, hj])
+                idx.extend(where[a])
+                coef.extend(A[comp][a])
         else:
             _, gmat, fun = form
             for comp, grad in enumerate(np.atleast_2d(np.asarray(gmat, dtype=float))):
@@ -81,8 +101,10 @@ def pack(items, packer):
                 coef.extend(grad[nz])
     data = Data(np.asarray(force, dtype=np.int64).reshape(-1, 5), np.asarray(angle0, dtype=float),
                 np.asarray(gen, dtype=np.int64).reshape(-1, 3), np.asarray(idx, dtype=np.int64),
-                np.asarray(coef, dtype=float))
-    return FamilyPack(data=data, count=len(items), couplings=couplings)
+                np.asarray(coef, dtype=float), np.asarray(quad, dtype=np.int64).reshape(-1, 5),
+                np.asarray(hij, dtype=np.int64).reshape(-1, 2), np.asarray(hcoef, dtype=float))
+    entries = (data.hij[:, 0].copy(), data.hij[:, 1].copy()) if len(hcoef) else None
+    return FamilyPack(data=data, count=len(items), couplings=couplings, entries=entries)
 
 
 @numba.njit(cache=True, _nrt=False)
@@ -130,6 +152,16 @@ def _loads(ctx, fam, tangent):
         # Q = g F_c(t)
         val = trow[d.gen[e, 0]]
         for t in range(d.gen[e, 1], d.gen[e, 2]):
+            ext[d.idx[t]] += d.coef[t] * val
+    for e in range(d.quad.shape[0]):
+        # Q = F_c(t) (H_c q + A_c), ∂Q/∂q = F_c(t) H_c
+        val = trow[d.quad[e, 0]]
+        for t in range(d.quad[e, 1], d.quad[e, 2]):
+            i, j = d.hij[t, 0], d.hij[t, 1]
+            ext[i] += d.hcoef[t] * val * q[j]
+            if tangent:
+                add_qq(ctx, st, i, j, w * d.hcoef[t] * val)
+        for t in range(d.quad[e, 3], d.quad[e, 4]):
             ext[d.idx[t]] += d.coef[t] * val
 
 

@@ -318,11 +318,18 @@ class SpatialPointForce(ForceElement):
         self.name = name
 
     def compiled_form(self):
-        """A force fixed in space: ("generalized force", G, F) of the point-load family; a following one:
-        ("spatial following force", G, triad, F) of the spatial-load family; a point that is not affine in q:
-        None (the Python path)."""
-        if type(self).generalized_force is not SpatialPointForce.generalized_force or self.G is None:
+        """A force fixed in space: ("generalized force", G, F) of the point-load family, or at a point whose
+        position is quadratic in q (a floating-frame body's material point) ("quadratic point force", H, A, F)
+        of the same family; a following one: ("spatial following force", G, triad, F) of the spatial-load
+        family; any other point: None (the Python path)."""
+        if type(self).generalized_force is not SpatialPointForce.generalized_force:
             return None
+        if self.G is None:
+            quadratic = getattr(self.point, "quadratic", None)
+            if self.following or quadratic is None:
+                return None
+            H, A, _ = quadratic()
+            return "quadratic point force", H, A, self.force
         if not self.following:
             return "generalized force", self.G, self.force
         return "spatial following force", self.G, tuple(self.point.triad), self.force
