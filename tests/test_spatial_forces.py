@@ -82,6 +82,52 @@ def test_free_pair_on_springs_conserves_energy_and_momenta():
     assert np.abs(L - L[0]).max() <= 1e-10 * np.abs(L[0]).max()
 
 
+def _sprung():
+    """Two rigid bodies on two springs (one to a ground point, one with a rest length) and an exact beam whose tip
+    node hangs on a third, under gravity: every spring's points are affine in q."""
+    a, b = _bodies()
+    a.v0[:3] = (0.3, -0.2, 0.1)
+    b.v0[3:] = np.concatenate([np.cross([1.0, -2.0, 3.0], b.q0[3 + 3 * k:6 + 3 * k]) for k in range(3)])
+    sec = sf.SpatialSection(EA=1e4, GA1=5e3, GA2=5e3, GJ=20.0, EI1=20.0, EI2=20.0, rhoA=1.0, rhoI1=1e-3,
+                            rhoI2=1e-3)
+    beam = sf.SpatialExactBeam.straight(sec, (1.0, 0.0, 0.0), (2.0, 0.0, 0.0), n_elements=2, normal=(0.0, 1.0, 0.0))
+    springs = [sf.SpatialSpring(a.point([0.1, 0.0, 0.05]), b.point([-0.1, 0.02, 0.0]), 200.0, rest_length=0.3),
+               sf.SpatialSpring(a.point([0.0, 0.1, 0.0]), [0.3, 0.4, 0.5], 20.0, rest_length=0.0),
+               sf.SpatialSpring(beam.point(1.0), [2.0, 0.0, 0.5], 300.0)]
+    return sf.Scene([a, b, beam], [sf.Weld3D(beam.point(0.0))], springs + [sf.Gravity((0.0, 0.0, -9.81))])
+
+
+@pytest.mark.parametrize("scheme", ["energy-momentum", "trapezoidal", "generalized-alpha"])
+def test_springs_run_compiled_as_the_python_path(scheme):
+    """The spatial-spring family (springs between points affine in q) against every spring's numpy methods:
+    trajectories and energies to 1e-10 under the three schemes; under energy-momentum the energy is kept."""
+    fast = sf.simulate(_sprung(), 0.2, 0.01, scheme=scheme, compiled=True)
+    slow = sf.simulate(_sprung(), 0.2, 0.01, scheme=scheme, compiled=False)
+    assert not fast.run_path["python_elements"]
+    assert any("SpatialSpring" in why for why in slow.run_path["python_elements"])
+    assert np.abs(fast.q - slow.q).max() <= 1e-10 * np.abs(slow.q).max()
+    assert np.abs(fast.v - slow.v).max() <= 1e-8 * np.abs(slow.v).max()
+    assert np.abs(fast.potential - slow.potential).max() <= 1e-10 * np.abs(slow.potential).max()
+    assert np.ptp(slow.potential) > 1e-2                       # the springs work
+    if scheme == "energy-momentum":
+        E = fast.total_energy
+        assert np.abs(E - E[0]).max() <= 1e-10 * np.abs(E).max()
+
+
+@pytest.mark.parametrize("scheme", ["energy-momentum", "generalized-alpha"])
+def test_spring_family_tangent_is_the_residuals_derivative(scheme):
+    """The spatial-spring family's Newton matrix is the derivative of its residual (central differences)."""
+    from family_checks import fd_mismatch, loaded_stepper
+    scene = _sprung()
+    q0 = np.concatenate([b.q0 for b in scene.bodies])
+    v0 = np.concatenate([b.v0 for b in scene.bodies])
+    rng = np.random.default_rng(5)
+    st = loaded_stepper(scene, scheme, q0, v0, acc=rng.normal(size=q0.size))
+    assert not st.packed.python_elements
+    x = np.concatenate([0.01 * v0 + 1e-3 * rng.normal(size=q0.size), 1e-2 * rng.normal(size=scene.n_constraints)])
+    assert fd_mismatch(st, 0.0, 0.01, x)[0] < 1e-8
+
+
 def test_damper_work_closes_the_energy_balance():
     r = sf.simulate(_free_pair(damping=5.0), 2.0, 0.02, scheme="energy-momentum")
     E, W = r.total_energy, r.external_work

@@ -43,6 +43,7 @@ FAMILY_MODULES = (
     "linear_potentials",
     "spatial_loads",
     "spatial_floating_frame",
+    "spatial_springs",
 )
 
 

@@ -17,11 +17,11 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sps
 
-from ...bodies.base import BodyPoint, check_finite_vector
+from ...bodies.base import BodyPoint, check_finite_vector, keeps_methods
 from ...numerics.quaternions import skew
 from ..constraints.quadratic import Affine, hinge_directions
 from ..point_terms import PointLayout
-from .base import ForceElement, check_nonnegative
+from .base import CONSERVATIVE, ForceElement, check_nonnegative
 from .point_loads import time_function
 
 __all__ = ["SpatialSpring", "SpatialDamper", "SpatialTorsionalSpring", "SpatialTorsionalDamper", "SpatialPointForce",
@@ -86,6 +86,14 @@ class SpatialSpring(_Line):
         length = self.length(self.layout.initial())
         self.rest_length = length if rest_length is None else check_nonnegative("rest_length", rest_length)
         self.name = name
+
+    def compiled_form(self):
+        """("spatial spring", A, a, k, l₀) of the spatial-spring family (d = A q + a on the element's coordinates),
+        when both points are affine in q; None otherwise (a floating-frame body's material point: the Python
+        path)."""
+        if self.d.H is not None or not keeps_methods(self, SpatialSpring, CONSERVATIVE + ("length", "_ds")):
+            return None
+        return "spatial spring", self.d.A, self.d.a, self.k, self.rest_length
 
     def _ds(self, q):
         """∇s (n,) with s = d·d: 2 Aᵀ d."""
