@@ -13,7 +13,6 @@ field in ParaView's default map ("Cool to Warm"), in MPa for a stress (a Calcula
 screenshot. ``examples/render_vtk.py`` draws the same picture with the ``vtk`` wheel alone, for a machine
 without ParaView.
 """
-import argparse
 import os
 import shutil
 import subprocess
@@ -86,11 +85,8 @@ if __name__ == "__main__":
         import paraview.simple  # noqa: F401  (ParaView's own Python: pvbatch or pvpython)
     except ImportError:
         raise SystemExit(run_under_pvbatch(sys.argv[1:]))
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("series", help="a .pvd collection or a .vtu file")
-    ap.add_argument("field", help="a cell field of it, for example von_mises")
-    ap.add_argument("png", help="the picture to write")
-    ap.add_argument("--warp", type=float, default=1.0, help="scale of the displacement (default 1)")
-    args = ap.parse_args()
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))     # its sibling, under pvbatch too
+    from render_vtk import arguments
+    args = arguments(__doc__.splitlines()[0])
     lo, hi = render(args.series, args.field, args.png, warp=args.warp)
     print(f"{args.field}: {lo:.6g} to {hi:.6g}; wrote {args.png}")

@@ -113,13 +113,18 @@ def render(series, field, png, warp=1.0, size=(900, 700), scale=1e-6, unit="MPa"
     return lo, hi
 
 
-if __name__ == "__main__":
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def arguments(description, argv=None):
+    """The command line of a picture script (this one and ``render_paraview.py``): series, field, png, --warp."""
+    ap = argparse.ArgumentParser(description=description)
     ap.add_argument("series", help="a .pvd collection (its last frame) or a .vtu file")
     ap.add_argument("field", help="the cell field to colour by (von_mises)")
     ap.add_argument("png", help="the picture to write")
     ap.add_argument("--warp", type=float, default=1.0, help="scale of the displacement (1: true shape)")
-    args = ap.parse_args()
+    return ap.parse_args(argv)
+
+
+if __name__ == "__main__":
+    args = arguments(__doc__.splitlines()[0])
     lo, hi = render(args.series, args.field, args.png, args.warp)
     print(f"wrote {args.png}: {args.field} from {lo / 1e6:.3g} to {hi / 1e6:.3g} MPa on the last frame of "
           f"{args.series}")

@@ -149,9 +149,15 @@ def test_green_lagrange_tensors_are_the_quadrature_sums():
     the mesh's quadrature points (E = ½(U + Uᵀ + UᵀU), S = λ tr E I + 2μ E, V = ½ Σ w E : S; the discrete gradient
     Σ w S̄ : sym(F̄ᵀ G_m) with S̄ the stress at the mean strain and F̄ at the mean state) to round-off, at an
     amplitude where the cubic and quartic parts are three quarters of the energy."""
-    body = FloatingSolid3D(bar(4), root, 3, interfaces={"tip": tip}, strain="green-lagrange")
+    from skfem.models.elasticity import lame_parameters
+    solid = bar(4)
+    body = FloatingSolid3D(solid, root, 3, interfaces={"tip": tip}, strain="green-lagrange")
     V = body.strain_energy
-    G, w, lam, mu = V.G, V.w, V.lam, V.mu
+    # the definition's ingredients from scikit-fem: each basis vector's gradient at every quadrature point
+    m = body.n_elastic
+    grads = np.stack([solid.basis.interpolate(body.basis[:, k]).grad for k in range(m)], axis=-1)
+    G = grads.transpose(2, 3, 0, 1, 4).reshape(-1, 3, 3, m)
+    w, (lam, mu) = solid.basis.dx.ravel(), lame_parameters(E, NU)
 
     def strain(y):
         U = np.einsum("qijm,m->qij", G, y)

@@ -2,12 +2,11 @@
 modes of a pencil (K, M) on it.
 
 A 3D mesh's stiffness fills in when it is factorized: SuperLU (scipy's ``splu``, always there) orders it for
-a general matrix, and on a tetrahedral bar of 9 100 nodes its factorization takes about 4 s and 0.7 GB, on 25 700
-nodes 40 s and 2.3 GB, growing as N^1.6 in time. Intel MKL's PARDISO (through the optional package
-``pypardiso``, ``pip install "skfem-flex[large]"``) orders it by nested dissection and factorizes the
-symmetric matrix once (Cholesky-like): the same 25 700 nodes in 2 s and about 89 000 nodes in 9 s
-(``examples/reduction_scaling.py``). :func:`spd_factor` takes PARDISO when it is installed and the matrix is
-larger than :data:`PARDISO_ABOVE` rows, else SuperLU.
+a general matrix, and its time grows about as N^1.6 on a tetrahedral bar. Intel MKL's PARDISO (through the
+optional package ``pypardiso``, ``pip install "skfem-flex[large]"``) orders it by nested dissection and
+factorizes the symmetric matrix once (Cholesky-like), near linearly in N up to 10⁵ nodes (the table of
+``examples/reduction_scaling.py`` in ``docs/spatial_solids.md``). :func:`spd_factor` takes PARDISO when it is
+installed and the matrix is larger than :data:`PARDISO_ABOVE` rows, else SuperLU.
 """
 from __future__ import annotations
 

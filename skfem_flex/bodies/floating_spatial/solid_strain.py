@@ -16,7 +16,7 @@ mean strain", Σ w S̄ : dE(η_m) with S̄ = C : (E₀ + E₁)/2, is exact. Its 
 stiffness ΦᵀKΦ (the same quadrature as scikit-fem's assembly).
 
 With E = Lη + ½N(η, η) the energy is the quartic polynomial ½ηᵀKη + ½K3_ijk η_iη_jη_k + ⅛K4_ijkl η_iη_jη_kη_l
-whose tensors are these sums over the quadrature points, taken once (:meth:`SolidGreenLagrange.quartic`); every
+whose tensors are these sums over the quadrature points, taken once (:func:`quartic_tensors`); every
 evaluation (the formulas above, written in the tensors: :class:`~skfem_flex.bodies.modal.stiffening.QuarticEnergy`,
 the same as the planar reduced body's) then costs m⁴ operations and none over the mesh, and the compiled core
 evaluates the same tensors (:mod:`.kernel`).
@@ -36,7 +36,7 @@ from skfem.helpers import ddot, dot, mul, transpose
 from ..modal.kernel import pack_quartic
 from ..modal.stiffening import QuarticEnergy
 
-__all__ = ["SolidGreenLagrange", "stiffening_loads"]
+__all__ = ["SolidGreenLagrange", "quartic_tensors", "stiffening_loads"]
 
 
 def _sym(A):
@@ -84,128 +84,125 @@ def stiffening_loads(solid, modes, origin, pairs=True, spins=True):
     return np.column_stack(out) if out else np.zeros((b.N, 0))
 
 
+def quartic_tensors(G, w, lam, mu, chunk=1024):
+    r"""The Green–Lagrange energy on a reduced basis as a quartic polynomial of η (module docstring).
+
+    With the strain E = Lη + ½N(η, η), L_m = sym(G_m), N_mn = sym(G_mᵀG_n) and A : C : B =
+    λ tr A tr B + 2μ A : B at every quadrature point,
+
+    .. math::
+
+        K_{ij} = \sum_q w\, L_i : C : L_j,\quad K^{(3)}_{ijk} = \sum_q w\, L_i : C : N_{jk},\quad
+        K^{(4)}_{ijkl} = \sum_q w\, N_{ij} : C : N_{kl},
+
+    the same quadrature as the definition (a test holds them to it). The sums run over the quadrature
+    points in chunks of ``chunk`` (about 30 × ``chunk`` × m(m+1)/2 numbers at a time) and over the pairs
+    j ≤ k only (N is symmetric in them): about 7 Q m⁴/4 multiply–adds for Q points.
+
+    Parameters
+    ----------
+    G : ndarray (Q, 3, 3, m)
+        The displacement gradient of each basis vector at every quadrature point, G[q, i, j, m] = ∂Φ_im/∂X_j.
+    w : ndarray (Q,)
+        The quadrature weights, m³.
+    lam, mu : float
+        The Lamé parameters, Pa.
+    chunk : int
+        Quadrature points per block of the sums.
+
+    Returns
+    -------
+    QuarticEnergy
+        K (N/m), K3 (N/m²) and K4 (N/m³) on the basis's coordinates (per unit of η where Φ is not in m),
+        K4 exactly symmetric in (i, j), in (k, l) and under (ij) ↔ (kl) as
+        :class:`~skfem_flex.bodies.modal.stiffening.QuarticEnergy` requires.
+    """
+    Q, _, _, m = G.shape
+    j, k = np.triu_indices(m)
+    # a symmetric 3 × 3 tensor as 6 numbers whose dot product is the full contraction A : B
+    rows, cols = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])
+    scale = np.array([1.0, 1.0, 1.0, np.sqrt(2.0), np.sqrt(2.0), np.sqrt(2.0)])
+    K = np.zeros((m, m))
+    K3p = np.zeros((m, j.size))
+    K4p = np.zeros((j.size, j.size))
+    for start in range(0, Q, chunk):
+        Gc = G[start:start + chunk]
+        wc = w[start:start + chunk]
+        L = 0.5 * (Gc + Gc.transpose(0, 2, 1, 3))                             # (n, 3, 3, m)
+        T = np.einsum("qcaP,qcbP->qabP", Gc[..., j], Gc[..., k])               # G_jᵀG_k on the pairs
+        N = 0.5 * (T + T.transpose(0, 2, 1, 3))
+        del T
+        L6 = L[:, rows, cols] * scale[:, None]                               # (n, 6, m)
+        N6 = N[:, rows, cols] * scale[:, None]                               # (n, 6, n_pairs)
+        trL = np.einsum("qaam->qm", L)
+        trN = np.einsum("qaaP->qP", N)
+        wL6 = (wc[:, None, None] * L6).reshape(-1, m)
+        wtrL = wc[:, None] * trL
+        K += lam * (wtrL.T @ trL) + 2.0 * mu * (wL6.T @ L6.reshape(-1, m))
+        K3p += lam * (wtrL.T @ trN) + 2.0 * mu * (wL6.T @ N6.reshape(-1, j.size))
+        wN6 = (wc[:, None, None] * N6).reshape(-1, j.size)
+        K4p += lam * ((wc[:, None] * trN).T @ trN) + 2.0 * mu * (wN6.T @ N6.reshape(-1, j.size))
+    K4p = 0.5 * (K4p + K4p.T)           # the two factors of its products differ: exact at round-off only
+    K3 = np.empty((m, m, m))
+    K3[:, j, k] = K3p
+    K3[:, k, j] = K3p
+    K4 = np.empty((m, m, m, m))
+    for a in range(j.size):
+        K4[j[a], k[a], j, k] = K4p[a]
+        K4[j[a], k[a], k, j] = K4p[a]
+        K4[k[a], j[a], j, k] = K4p[a]
+        K4[k[a], j[a], k, j] = K4p[a]
+    return QuarticEnergy(0.5 * (K + K.T), K3, K4)
+
+
 class SolidGreenLagrange:
     """V(η) of a reduced solid (module docstring): energy, gradient, Hessian and the exact discrete gradient.
 
-    The energy is evaluated as the quartic polynomial of :meth:`quartic` (its tensors summed over the mesh's
-    quadrature points once, on the first call): per evaluation m⁴ operations, none over the mesh.
+    The energy is the quartic polynomial of :func:`quartic_tensors`, summed over the mesh's quadrature points
+    once, here: every evaluation then costs m⁴ operations and none over the mesh, and the mode gradients at the
+    quadrature points (Q × 9 × m numbers) are not kept.
 
     Parameters
     ----------
     solid : ElasticSolid3D
     basis : ndarray (n_dofs, m)
         Φ, u = Φ η.
-
-    Attributes
-    ----------
-    G : ndarray (Q, 3, 3, m)
-        The displacement gradient of each basis vector at every quadrature point, G[q, i, j, m] = ∂Φ_im/∂X_j.
-    w : ndarray (Q,)
-        The quadrature weights (m³).
-    lam, mu : float
-        The Lamé parameters (Pa).
     """
 
     nonlinear = True
 
     def __init__(self, solid, basis):
         from skfem.models.elasticity import lame_parameters
-        self.lam, self.mu = lame_parameters(solid.E, solid.nu)
-        b = solid.basis
-        grads = np.stack([b.interpolate(basis[:, k]).grad for k in range(basis.shape[1])], axis=-1)
+        lam, mu = lame_parameters(solid.E, solid.nu)
         m = basis.shape[1]
-        self.G = np.ascontiguousarray(grads.transpose(2, 3, 0, 1, 4).reshape(-1, 3, 3, m))   # (Q, 3, 3, m)
-        self.w = b.dx.ravel()
-        self._quartic = None
+        grads = np.stack([solid.basis.interpolate(basis[:, k]).grad for k in range(m)], axis=-1)
+        G = np.ascontiguousarray(grads.transpose(2, 3, 0, 1, 4).reshape(-1, 3, 3, m))   # (Q, 3, 3, m)
+        #: the energy as a :class:`~skfem_flex.bodies.modal.stiffening.QuarticEnergy` (K, K3, K4)
+        self.polynomial = quartic_tensors(G, solid.basis.dx.ravel(), lam, mu)
+        self._packed = None
 
     @property
     def K(self):
         """The quadratic part, ΦᵀKΦ on the same quadrature (N/m)."""
-        return self.quartic().K
+        return self.polynomial.K
 
     def energy(self, y):
-        return self.quartic().energy(y)
+        return self.polynomial.energy(y)
 
     def gradient(self, y):
-        return self.quartic().gradient(y)
+        return self.polynomial.gradient(y)
 
     def hessian(self, y):
-        return self.quartic().hessian(y)
+        return self.polynomial.hessian(y)
 
     def discrete_gradient(self, y0, y1):
         """(g, ∂g/∂y1): the stress at the mean strain times the mid-point dE, exact (module docstring)."""
-        return self.quartic().discrete_gradient(y0, y1)
-
-    def quartic(self, chunk=1024):
-        r"""The same energy as a quartic polynomial of η (module docstring), built once and kept.
-
-        With the strain E = Lη + ½N(η, η), L_m = sym(G_m), N_mn = sym(G_mᵀG_n) and A : C : B =
-        λ tr A tr B + 2μ A : B at every quadrature point,
-
-        .. math::
-
-            K_{ij} = \sum_q w\, L_i : C : L_j,\quad K^{(3)}_{ijk} = \sum_q w\, L_i : C : N_{jk},\quad
-            K^{(4)}_{ijkl} = \sum_q w\, N_{ij} : C : N_{kl},
-
-        the same quadrature as the definition (a test holds them to it). The sums run over the quadrature
-        points in chunks of ``chunk`` (about 30 × ``chunk`` × m(m+1)/2 numbers at a time) and over the pairs
-        j ≤ k only (N is symmetric in them): about 7 Q m⁴/4 multiply–adds for Q points.
-
-        Parameters
-        ----------
-        chunk : int
-            Quadrature points per block of the sums.
-
-        Returns
-        -------
-        QuarticEnergy
-            K (N/m), K3 (N/m²) and K4 (N/m³) on the basis's coordinates (per unit of η where Φ is not in m),
-            K4 exactly symmetric in (i, j), in (k, l) and under (ij) ↔ (kl) as
-            :class:`~skfem_flex.bodies.modal.stiffening.QuarticEnergy` requires.
-        """
-        if self._quartic is not None:
-            return self._quartic
-        Q, _, _, m = self.G.shape
-        j, k = np.triu_indices(m)
-        # a symmetric 3 × 3 tensor as 6 numbers whose dot product is the full contraction A : B
-        rows, cols = np.array([0, 1, 2, 0, 0, 1]), np.array([0, 1, 2, 1, 2, 2])
-        scale = np.array([1.0, 1.0, 1.0, np.sqrt(2.0), np.sqrt(2.0), np.sqrt(2.0)])
-        K = np.zeros((m, m))
-        K3p = np.zeros((m, j.size))
-        K4p = np.zeros((j.size, j.size))
-        for start in range(0, Q, chunk):
-            G = self.G[start:start + chunk]
-            w = self.w[start:start + chunk]
-            L = 0.5 * (G + G.transpose(0, 2, 1, 3))                             # (n, 3, 3, m)
-            T = np.einsum("qcaP,qcbP->qabP", G[..., j], G[..., k])               # G_jᵀG_k on the pairs
-            N = 0.5 * (T + T.transpose(0, 2, 1, 3))
-            del T
-            L6 = L[:, rows, cols] * scale[:, None]                               # (n, 6, m)
-            N6 = N[:, rows, cols] * scale[:, None]                               # (n, 6, n_pairs)
-            trL = np.einsum("qaam->qm", L)
-            trN = np.einsum("qaaP->qP", N)
-            wL6 = (w[:, None, None] * L6).reshape(-1, m)
-            wtrL = w[:, None] * trL
-            K += self.lam * (wtrL.T @ trL) + 2.0 * self.mu * (wL6.T @ L6.reshape(-1, m))
-            K3p += self.lam * (wtrL.T @ trN) + 2.0 * self.mu * (wL6.T @ N6.reshape(-1, j.size))
-            wN6 = (w[:, None, None] * N6).reshape(-1, j.size)
-            K4p += self.lam * ((w[:, None] * trN).T @ trN) + 2.0 * self.mu * (wN6.T @ N6.reshape(-1, j.size))
-        K4p = 0.5 * (K4p + K4p.T)           # the two factors of its products differ: exact at round-off only
-        K3 = np.empty((m, m, m))
-        K3[:, j, k] = K3p
-        K3[:, k, j] = K3p
-        K4 = np.empty((m, m, m, m))
-        for a in range(j.size):
-            K4[j[a], k[a], j, k] = K4p[a]
-            K4[j[a], k[a], k, j] = K4p[a]
-            K4[k[a], j[a], j, k] = K4p[a]
-            K4[k[a], j[a], k, j] = K4p[a]
-        self._quartic = QuarticEnergy(0.5 * (K + K.T), K3, K4)
-        return self._quartic
+        return self.polynomial.discrete_gradient(y0, y1)
 
     def compiled_strain(self):
         """The compiled core's form of this energy (:func:`.kernel.kernel_data`): the quadratic part K and the
-        cubic and quartic tensors of :meth:`quartic`, folded by their symmetries
+        cubic and quartic tensors, folded by their symmetries once
         (:func:`~skfem_flex.bodies.modal.kernel.pack_quartic`)."""
-        energy = self.quartic()
-        return {"K": energy.K, "quartic": pack_quartic(energy.K3, energy.K4)}
+        if self._packed is None:
+            self._packed = pack_quartic(self.polynomial.K3, self.polynomial.K4)
+        return {"K": self.polynomial.K, "quartic": self._packed}
