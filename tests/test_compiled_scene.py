@@ -671,9 +671,10 @@ def test_large_scenes_compiled_equal_python(params, storage, solver, scheme):
     tol = dict(v=3e-9, energy_balance=np.inf if scheme != "energy-momentum" else 1e-10)
     if "body" in params:
         # the stiff strip's steps end at that floor after 4 or 5 iterations, not always the same number
-        # on both paths: positions agree to the Newton tolerance, 1.1e-10, velocities to 3.6e-9 and the
-        # multipliers and the pin's reaction (the trapezoidal rule's velocity-level rows) to 2.3e-9
-        tol.update(q=3e-10, probes=3e-10, v=1e-8, lam=1e-8, reactions=1e-8)
+        # on both paths: positions agree to a few Newton tolerances (1.1e-10 on one machine; 3.1e-10 at the
+        # tip probe on another, with numpy 2.4), velocities to 3.6e-9 and the multipliers and the pin's
+        # reaction (the trapezoidal rule's velocity-level rows) to 2.3e-9
+        tol.update(q=1e-9, probes=1e-9, v=1e-8, lam=1e-8, reactions=1e-8)
     assert_same_run(a, b, tol=tol)
 
 

@@ -72,7 +72,9 @@ def test_craig_bampton_beam_frequencies_against_the_full_model():
     red_ff = ritz_frequencies(K, M, B)[3:6]
     red_pp = ritz_frequencies(K, M, B @ sla.null_space(B[fixed]))[:3]
     assert np.all(np.abs(red_ff / ff - 1) <= 1e-3) and np.all(np.abs(red_pp / pp - 1) <= 1e-3)
-    assert np.all(red_ff >= ff * (1 - 1e-9)) and np.all(red_pp >= pp * (1 - 1e-9))
+    # from above up to the round-off of this Ritz basis, whose modal derivatives are orders of magnitude
+    # larger than its modes (seen 3e-9 below with numpy 2.4 and scipy 1.17)
+    assert np.all(red_ff >= ff * (1 - 1e-8)) and np.all(red_pp >= pp * (1 - 1e-8))
 
 
 def test_modal_derivatives_of_the_constraint_modes():
