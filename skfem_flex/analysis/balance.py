@@ -168,6 +168,22 @@ class StaticResidual:
         self.last_force = force
         return res, jac, (scale, inf_norm(floor[free]) if nf else 0.0, c_scale)
 
+    def external(self, x):
+        """(E, ∂E/∂x) at x: the scene's non-potential loads Q(q) (``external_force``) on the free rows, zero on
+        the constraint rows, and their derivative (the load stiffness); (None, None) without such loads."""
+        q = self.full_q(x)
+        ext = self.scene.external_force(q, self.v, self.t)
+        if ext is None:
+            return None, None
+        free, nf, m = self.free, self.nf, self.m
+        e = np.zeros(nf + m)
+        e[:nf] = ext[0][free]
+        de = submatrix(ext[1], free, free)
+        if m:
+            de = (sps.block_diag([sps.csr_matrix(de), sps.csr_matrix((m, m))], format="csr") if sps.issparse(de)
+                  else np.block([[de, np.zeros((nf, m))], [np.zeros((m, nf)), np.zeros((m, m))]]))
+        return e, de
+
     def error(self, res, scales):
         scale, floor, c_scale = scales
         st = self.settings

@@ -1,8 +1,16 @@
 r"""Following the load path to the equilibrium: pseudo-arc-length continuation, and settling from a singular start.
 
-:func:`continuation` runs the homotopy H(x, s) = R(x) − (1 − s) R(x₀) (R the residual of
-:class:`~skfem_flex.analysis.balance.StaticResidual`) from s = 0, the start, to s = 1, the scene's
-loads: predictor along the tangent, Newton corrector on the hyperplane orthogonal to it, step halved
+:func:`continuation` runs the homotopy
+
+    H(x, s) = R(x) − (1 − s) (R(x₀) + E(x₀) − E(x))
+
+(R the residual of :class:`~skfem_flex.analysis.balance.StaticResidual`, E the scene's non-potential
+loads, ``external_force``) from s = 0, the start, to s = 1, the scene's loads. With R = R_int − E this
+is R_int(x) − R_int(x₀) − s E(x): the potential forces (strain, gravity) are blended from the start's
+imbalance, and the loads that depend on the configuration (a moment in space axes on a beam's directors, a
+following force) are scaled by s where they act now, so every point of the path is an equilibrium under
+the share s of those loads (with R(x₀) frozen instead, a moment's director forces of the start would pull
+at a turned section, and a beam rolled up by an end moment finds no path). Then: predictor along the tangent, Newton corrector on the hyperplane orthogonal to it, step halved
 on failure and doubled after quick convergence, a last Newton solve at s = 1. A start where no
 stiffness meets the loads raises :class:`SingularStart`; :func:`settle` then lets the scene come to
 rest under its full loads by pseudo-transient continuation first. :func:`load_stepping` instead takes
@@ -105,6 +113,8 @@ def _start(scene, q0, v, a, t, settings, steady):
     nf = sys_.nf
     x0 = np.concatenate([q0[scene.free_index], initial_multipliers(scene, q0, v, a, t)])
     r0, jac0, sc0 = sys_.evaluate(x0)
+    # the loads that depend on the configuration, at the start (the homotopy scales them where they act)
+    sys_.external_start = sys_.external(x0)[0]
 
     def done(x, s, steps, its):
         # the force balance at x, for the prescribed coordinates' forces and the accepted imbalance
@@ -233,7 +243,7 @@ def continuation(scene, q0, v, a, t, settings, max_steps, min_step, steady):
             return done(y_new[:-1], 1.0, steps, its_total)
         res, jac, _ = _homotopy(sys_, y_new[:-1], float(y_new[-1]), r0)
         try:
-            aug = _bordered_matrix(jac, r0, weight[:-1] * tau[:-1], weight[-1] * tau[-1])
+            aug = _bordered_matrix(jac, sys_.path_column, weight[:-1] * tau[:-1], weight[-1] * tau[-1])
             rhs = np.zeros(nf + m + 1)
             rhs[-1] = 1.0
             tau_new = linear_solve(aug, rhs)
@@ -258,8 +268,16 @@ def continuation(scene, q0, v, a, t, settings, max_steps, min_step, steady):
 
 
 def _homotopy(sys_, x, s, r0):
+    """(H, ∂H/∂x, error) at (x, s) (module docstring); ``sys_.path_column`` is left at ∂H/∂s there."""
     res, jac, (scale, floor, c_scale) = sys_.evaluate(x)
-    h = res - (1.0 - s) * r0
+    col = r0
+    e0 = getattr(sys_, "external_start", None)
+    if e0 is not None:
+        e, de = sys_.external(x)
+        col = r0 + e0 - e
+        jac = add_matrices(jac, (1.0 - s) * de)
+    sys_.path_column = col
+    h = res - (1.0 - s) * col
     # the start's imbalance is a force scale of the path too: an equilibrium without loads
     # (all forces → 0) is then found to rtol of the forces that were out of balance
     return h, jac, sys_.error(h, (max(scale, inf_norm(r0[:sys_.nf])), floor, c_scale))
@@ -272,7 +290,7 @@ def _corrector(sys_, y_pred, tau, weight, r0, settings, name):
     def fun(y):
         h, jac, err = _homotopy(sys_, y[:-1], float(y[-1]), r0)
         row = float(wt @ (y - y_pred))
-        return np.concatenate([h, [row]]), _bordered_matrix(jac, r0, wt[:-1], wt[-1]), err
+        return np.concatenate([h, [row]]), _bordered_matrix(jac, sys_.path_column, wt[:-1], wt[-1]), err
 
     y, _, its = newton_solve(fun, y_pred, settings, name, f"load factor {y_pred[-1]:.4g}")
     return y, its

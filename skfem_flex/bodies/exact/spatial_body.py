@@ -32,6 +32,7 @@ from ...numerics.quaternions import check_rotation_matrix
 from ..base import DENSE_LIMIT, Body, BodyGeometry, StrainPointsPotential, check_finite_number, check_finite_vector
 from ..spatial import SpatialPoint
 from .director_strain import NODE_SIZE, DirectorStrainPoints
+from .rotation_strain import RotationStrainPoints
 
 __all__ = ["SpatialExactBeam", "straight_placement"]
 
@@ -91,6 +92,12 @@ class SpatialExactBeam(StrainPointsPotential, Body):
         Elements on a uniform mesh (or give ``mesh``).
     order : {1, 2}
         P1 or P2 interpolation (one or two strain points per element).
+    interpolation : {"rotations", "directors"}, optional
+        How the section turns between nodes. ``"rotations"`` (P1 only; the default there): by the
+        relative rotation of the two nodal triads, a constant curvature and twist per element
+        (:mod:`.rotation_strain`); any constant curvature is then exact. ``"directors"`` (the default
+        and only choice for P2): the directors interpolated like the positions (:mod:`.director_strain`),
+        which represents a constant curvature κ as sin(κh)/h.
     mesh : skfem.MeshLine, optional
         Own mesh over [0, L] instead of the uniform one.
     q0, v0 : array_like, optional
@@ -122,15 +129,25 @@ class SpatialExactBeam(StrainPointsPotential, Body):
     constant_mass = True
     has_potential = True
     dimension = 3
-    #: the compiled family of its strain energy (:mod:`skfem_flex.compiled.families.director_beam`)
-    strain_family = "director beam"
 
     def __init__(self, section, length, placement, n_elements=10, order=1, mesh=None, q0=None, v0=None,
-                 name="spatial_beam", section_size=None):
+                 name="spatial_beam", section_size=None, interpolation=None):
         if not isinstance(section, SpatialSection):
             raise ValueError(f"section must be a skfem_flex SpatialSection, got {section!r}")
         if order not in (1, 2):
             raise ValueError(f"order must be 1 or 2, got {order!r}")
+        if interpolation is None:
+            interpolation = "rotations" if order == 1 else "directors"
+        if interpolation not in ("rotations", "directors"):
+            raise ValueError(f"interpolation must be 'rotations' or 'directors', got {interpolation!r}")
+        if interpolation == "rotations" and order != 1:
+            raise ValueError("interpolation='rotations' is a two-node element: it needs order=1, "
+                             f"got order={order!r}")
+        #: how the section turns between nodes: "rotations" or "directors"
+        self.interpolation = interpolation
+        #: the compiled family of its strain energy (:mod:`skfem_flex.compiled.families.director_beam`,
+        #: :mod:`skfem_flex.compiled.families.rotation_beam`)
+        self.strain_family = "rotation beam" if interpolation == "rotations" else "director beam"
         self.section, self.order, self.name = section, int(order), str(name)
         if section_size is not None:
             size = check_finite_vector("section_size", section_size, 2)
@@ -172,9 +189,14 @@ class SpatialExactBeam(StrainPointsPotential, Body):
         self.q0 = qref.copy() if q0 is None else check_finite_vector("q0", q0, n)
         self.v0 = np.zeros(n) if v0 is None else check_finite_vector("v0", v0, n)
 
-        #: the strain points, strains and energy: :class:`.director_strain.DirectorStrainPoints`
-        self.strain_points = DirectorStrainPoints(mesh, self.order, node_of_dof, section.stiffness, qref,
-                                                  self.dense)
+        #: the strain points, strains and energy: :class:`.rotation_strain.RotationStrainPoints` or
+        #: :class:`.director_strain.DirectorStrainPoints`
+        if interpolation == "rotations":
+            self.strain_points = RotationStrainPoints(mesh, node_of_dof, section.stiffness, qref, self.dense,
+                                                      name=self.name)
+        else:
+            self.strain_points = DirectorStrainPoints(mesh, self.order, node_of_dof, section.stiffness, qref,
+                                                      self.dense)
 
         # constant operators, assembled once by scikit-fem
         m = asm(_scalar_mass, basis).tocoo()
@@ -259,11 +281,14 @@ class SpatialExactBeam(StrainPointsPotential, Body):
         return self.strain_points.discrete_gradient(q0, q1)
 
     def compiled_strain_data(self):
-        """The packed arrays of the compiled strain-energy kernels (:mod:`.director_kernel`), built once; None
+        """The packed arrays of the compiled strain-energy kernels (:mod:`.rotation_kernel` or
+        :mod:`.director_kernel`), built once; None
         for a subclass that changes the strain energy (it runs through its own methods)."""
         if any(getattr(type(self), m) is not getattr(SpatialExactBeam, m) for m in
                ("potential_energy", "potential_gradient", "potential_discrete_gradient")):
             return None
+        if self.interpolation == "rotations":
+            return self.strain_points.data
         kd = getattr(self, "_kernel_data", None)
         if kd is None:
             from .director_kernel import pack

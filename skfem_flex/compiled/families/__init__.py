@@ -38,6 +38,7 @@ FAMILY_MODULES = (
     "floating_frame",
     "exact_beam",
     "director_beam",
+    "rotation_beam",
     "rotated_rows",
     "quadratic_rows",
     "linear_potentials",

@@ -1,0 +1,82 @@
+r"""Spatial geometrically exact beams with rotation-interpolated two-node elements
+(:class:`~skfem_flex.bodies.exact.spatial_body.SpatialExactBeam` with ``interpolation="rotations"``): their
+strain energy.
+
+Their inertia is constant (the scheme's own mass matrix) and their rigidity rows are quadratic constraint
+rows; this family adds only the strain energy, by :mod:`skfem_flex.bodies.exact.rotation_kernel` (on each
+body's ``compiled_strain_data()``), the same kernel the Python path calls:
+
+* TASK_EVAL: g_p ← the exact discrete gradient D_V(q_a, q_b) (at q_a = q_b the gradient), the tangent
+  w_gp c_dg dq1 ∂D_V/∂q_b and the round-off floor w_gp c_dg dq1 Σ abs(∂D_V/∂q_b) (abs(q_a) + abs(q_b));
+* TASK_ENERGY: V(q₁) into ``out[0]``.
+
+Where an element of the step has turned half a turn (its rotation vector undefined), the kernel refuses the
+step (``STATUS_REFUSED``); the driver then asks :func:`refusal_error` (the exact-beam family's: the beams'
+own methods at the refused state) for the error to raise or to halve the step on.
+
+The tangent is the data of the beam's CSR pattern (the union of its element blocks), added through
+positions in the Newton matrix's storage fixed once per scene (:func:`.floating_frame.pattern_positions`).
+"""
+from __future__ import annotations
+
+import numba
+
+from ...bodies.exact.rotation_kernel import RotationKernelData, discrete_gradient_terms, potential_energy
+from ..abi import context_of, f1, family_of, fvec, i1, i2
+from ..registry import compiled_kernel
+from ..tasks import STATUS_REFUSED, TASK_ENERGY, TASK_EVAL
+from .exact_beam import REFUSAL_STATE, add_strain_terms, pack_strain_bodies, refusal_error
+
+__all__ = ["NAME", "FORMS", "pack", "kernel", "REFUSAL_STATE", "refusal_error"]
+
+NAME = "rotation-interpolated spatial beams"
+FORMS = ("rotation beam",)
+
+_HEAD = 3
+_NKD = len(RotationKernelData._fields)
+
+
+def pack(items, packer):
+    """The family's data: each beam's RotationKernelData fields one after another (``b<k>_<name>``), after
+    the offsets of the beams' blocks and the positions of their tangents' entries (set by ``finish``).
+
+    Parameters
+    ----------
+    items : list of (RotationKernelData, SpatialExactBeam, int)
+        Per beam its ``compiled_strain_data()``, the beam and the offset of its block.
+    packer : Packer
+    """
+    return pack_strain_bodies(items, (), "RotationBeamData")
+
+
+@numba.njit(cache=True)
+def _beams(ctx, fam):
+    """Every beam's part of TASK_EVAL or TASK_ENERGY (module docstring); ``fam``: the family record."""
+    n = ctx.n
+    offs, pos_all, ptr = i1(fam, 0), i1(fam, 1), i1(fam, 2)
+    for b in range(offs.size):
+        k = _HEAD + _NKD * b
+        kd = RotationKernelData(i1(fam, k), i2(fam, k + 1), f1(fam, k + 2), f1(fam, k + 3), f1(fam, k + 4),
+                                i1(fam, k + 5), i1(fam, k + 6), i1(fam, k + 7))
+        o, nb = offs[b], kd.n[0]
+        if ctx.task == TASK_ENERGY:
+            fvec(ctx.out, 7)[0] += potential_energy(kd, fvec(ctx.q1, n)[o:o + nb])
+            continue
+        qa, qb = fvec(ctx.qa, n), fvec(ctx.qb, n)
+        ok, g, data, fl = discrete_gradient_terms(kd, qa[o:o + nb], qb[o:o + nb])
+        if not ok:
+            ctx.status = STATUS_REFUSED
+            return
+        add_strain_terms(ctx, o, g, data, fl, pos_all, ptr[b])
+
+
+def _kernel(ctx_p, fam_p):
+    """The family's kernel (signature of :mod:`..abi`): TASK_EVAL and TASK_ENERGY."""
+    ctx = context_of(ctx_p)
+    if ctx.task == TASK_EVAL or ctx.task == TASK_ENERGY:
+        _beams(ctx, family_of(fam_p))
+
+
+def kernel():
+    """The compiled kernel (from the cache, or compiled now)."""
+    return compiled_kernel(_kernel, "the rotation-interpolated spatial-beam family", nrt=True)
