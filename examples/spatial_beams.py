@@ -1,13 +1,19 @@
 """Geometrically exact spatial beams: the 45° bend, the flying beam in space and the right-angle frame.
 
 * ``bend_45``: the tip displacement under the load 600 against the converged published value
-  (:data:`~skfem_flex.scenes.spatial_beams.BEND_45_REFERENCE`) for P1 and P2 meshes, and the same end state
-  after 3, 8 and 30 equal load steps (path independence).
+  (:data:`~skfem_flex.scenes.spatial_beams.BEND_45_REFERENCE`) for two-node elements interpolating the rotations
+  (the default), for the director interpolation (P1 and P2), and the same end state after 3, 8 and 30 equal
+  load steps on the default mesh (path independence).
+* the roll-up: a straight cantilever under the end moment 2πEI/L about the normal of its bending plane, in 8
+  load steps: how far its tip ends from the root (a full circle closes), for 4, 8 and 16 elements of each
+  interpolation.
 * ``flying_spaghetti_3d`` (Δt = 0.1 s): after the pulse (t ≥ 5 s) the linear momentum against the impulse
   (50, 0, 0) kg m/s, and the relative spread of the energy and of the angular momentum, under
   energy-momentum and the trapezoidal rule.
-* ``right_angle_frame``: the elbow's and the tip's out-of-plane displacement, their largest values and
-  times, on two meshes and steps (energy-momentum).
+* ``right_angle_frame``: the elbow's and the tip's out-of-plane displacement, their extreme values and
+  times, on four meshes and steps (energy-momentum), and the tip's history against Simo and Vu-Quoc's
+  published curve (``examples/data/simo_vu_quoc_1988_right_angle_tip.csv``, read off their figure):
+  ``right_angle_frame.png`` in OUT_DIR.
 * The rotating cantilever (the spatial floating-frame beam ``FloatingBeam3D``, nearly Euler–Bernoulli and
   inextensible, linearized about its steady spin about an axis through its root): the first flapwise and
   lead-lag frequencies over λ = Ω √(ρA L⁴/EI) from 0 to 12, with the Green–Lagrange and the linear axial
@@ -31,22 +37,46 @@ from skfem_flex.io.plots import pyplot_for
 from skfem_flex.scenes.spatial_beams import BEND_45_REFERENCE
 
 QUICK = os.environ.get("SKFEM_FLEX_EXAMPLE_QUICK", "") not in ("", "0")
-BEND_MESHES = () if QUICK else ((1, 8), (1, 16), (1, 32), (2, 4), (2, 8), (2, 16))
+BEND_MESHES = () if QUICK else ((1, "rotations", 4), (1, "rotations", 8), (1, "rotations", 16),
+                                 (1, "rotations", 32), (1, "directors", 8), (1, "directors", 16),
+                                 (2, "directors", 4), (2, "directors", 8), (2, "directors", 16))
 LOAD_STEPS = () if QUICK else (3, 8, 30)
+ROLL_UP = ((4, "rotations"),) if QUICK else tuple((n, i) for i in ("rotations", "directors") for n in (4, 8, 16))
 T_FLY = 6.0 if QUICK else 30.0
-FRAME_RUNS = ((2, 0.05, 3.5),) if QUICK else ((5, 0.05, 30.0), (10, 0.025, 30.0))
+FRAME_RUNS = ((2, 0.05, 3.5),) if QUICK else ((5, 0.05, 30.0), (10, 0.05, 30.0), (10, 0.025, 30.0),
+                                              (20, 0.01, 30.0))
+PUBLISHED_TIP = np.loadtxt(Path(__file__).parent / "data" / "simo_vu_quoc_1988_right_angle_tip.csv", delimiter=",")
 LAMBDAS = (0.0, 6.0, 12.0) if QUICK else tuple(np.linspace(0.0, 12.0, 25))
 
 
-def bend_tip(order, n, load_steps=None):
-    scene = sf.scenes.bend_45(n_elements=n, order=order)
+def bend_tip(order, interpolation, n, load_steps=None):
+    scene = sf.scenes.bend_45(n_elements=n, order=order, interpolation=interpolation)
     tip = scene.probes["tip"].point
     q = sf.static_equilibrium(scene, load_steps=load_steps).q
     return tip.position(q) - tip.position(scene.bodies[0].q0)
 
 
-bend = {(order, n): bend_tip(order, n) for order, n in BEND_MESHES}
-path = {steps: bend_tip(2, 4, load_steps=steps) for steps in LOAD_STEPS}
+bend = {mesh: bend_tip(*mesh) for mesh in BEND_MESHES}
+path = {steps: bend_tip(1, "rotations", 8, load_steps=steps) for steps in LOAD_STEPS}
+
+
+def roll_up(n, interpolation, length=10.0, EI=500.0):
+    """(tip distance from the root / L, load factor reached) of a cantilever under the end moment 2πEI/L."""
+    sec = sf.SpatialSection(EA=1e4, GA1=1e4, GA2=1e4, GJ=400.0, EI1=EI, EI2=700.0, rhoA=1.0, rhoI1=10.0,
+                            rhoI2=10.0)
+    beam = sf.SpatialExactBeam.straight(sec, (0.0, 0.0, 0.0), (length, 0.0, 0.0), n_elements=n,
+                                        normal=(0.0, 0.0, 1.0), interpolation=interpolation)
+    tip = beam.point(length)
+    scene = sf.Scene([beam], constraints=[sf.Weld3D(beam.point(0.0))],
+                     forces=[sf.SpatialMoment(tip, (0.0, 0.0, 2.0 * np.pi * EI / length))], name="roll-up")
+    try:
+        state = sf.static_equilibrium(scene, load_steps=8)
+    except sf.ConvergenceError as exc:
+        state = exc.state
+    return float(np.linalg.norm(tip.position(state.q))) / length, float(state.load_factor)
+
+
+rolled = {(n, interpolation): roll_up(n, interpolation) for n, interpolation in ROLL_UP}
 
 flying = {}
 for scheme in ("energy-momentum", "trapezoidal"):
@@ -57,18 +87,22 @@ for scheme in ("energy-momentum", "trapezoidal"):
                       float(np.ptp(E) / np.abs(E).max()), float(np.ptp(L, axis=0).max() / np.abs(L).max()),
                       r.wall_time, r.wall_time / r.steps * 1e3)
 
-frame = {}
+def extremes(t, z):
+    """(the largest value, its time), (the smallest, its time) of a history."""
+    i, j = int(np.argmax(z)), int(np.argmin(z))
+    return (float(z[i]), float(t[i])), (float(z[j]), float(t[j]))
+
+
+frame, frame_runs = {}, {}
 for n, dt, t_end in FRAME_RUNS:
     r = sf.simulate(sf.scenes.right_angle_frame(n_elements=n), t_end, dt, scheme="energy-momentum")
-    peaks = {}
-    for probe in ("elbow", "tip"):
-        z = r.probes[probe][:, 2] - r.probes[probe][0, 2]
-        k = int(np.argmax(np.abs(z)))
-        peaks[probe] = (float(z[k]), float(r.t[k]))
-    first = int(np.argmax(r.probes["elbow"][: int(5.0 / dt), 2]))
-    peaks["elbow, first peak"] = (float(r.probes["elbow"][first, 2]), float(r.t[first]))
+    elbow, tip = (r.probes[p][:, 2] - r.probes[p][0, 2] for p in ("elbow", "tip"))
+    early = r.t <= 5.0
+    peaks = {"elbow, first peak": extremes(r.t[early], elbow[early])[0], "elbow, least": extremes(r.t, elbow)[1]}
+    peaks["tip, largest"], peaks["tip, least"] = extremes(r.t, tip)
     peaks["wall"] = (r.wall_time, r.wall_time / r.steps * 1e3)
     frame[(n, dt)] = peaks
+    frame_runs[(n, dt)] = (r.t, elbow, tip)
 
 
 spin_section = sf.SpatialSection(EA=1e4, GA1=1e5, GA2=1e5, GJ=1.0, EI1=1.0, EI2=1.0, rhoA=1.0, rhoI1=1e-6,
@@ -106,25 +140,40 @@ spin_up = {body: sf.simulate(sf.scenes.spin_up_3d(body=body), SPIN_UP_T, 0.01) f
 def summary():
     ref = np.linalg.norm(BEND_45_REFERENCE)
     lines = ["45° bend, tip displacement under 600 (reference " + ", ".join(f"{x:.3f}" for x in BEND_45_REFERENCE)
-             + ")", "", "| order | elements | u | largest component error / ‖u_ref‖ |", "|---|---|---|---|"]
-    for (order, n), u in bend.items():
-        lines.append(f"| P{order} | {n} | ({u[0]:.3f}, {u[1]:.3f}, {u[2]:.3f}) | "
+             + ")", "", "| order | interpolation | elements | u | largest component error / ‖u_ref‖ |",
+             "|---|---|---|---|---|"]
+    for (order, interpolation, n), u in bend.items():
+        lines.append(f"| P{order} | {interpolation} | {n} | ({u[0]:.3f}, {u[1]:.3f}, {u[2]:.3f}) | "
                      f"{np.abs(u - BEND_45_REFERENCE).max() / ref:.2%} |")
     if path:
         spread = max(float(np.abs(u - path[LOAD_STEPS[0]]).max()) for u in path.values())
-        lines += ["", f"P2, 4 elements, load steps {LOAD_STEPS}: largest difference of the end states {spread:.1e}"]
+        lines += ["", f"P1, rotations, 8 elements, load steps {LOAD_STEPS}: largest difference of the end states "
+                  f"{spread:.1e}"]
+    lines += ["", "roll-up under the end moment 2πEI/L, 8 load steps:", "",
+              "| interpolation | elements | tip distance from the root / L | load factor reached |", "|---|---|---|---|"]
+    for (n, interpolation), (gap, s) in rolled.items():
+        lines.append(f"| {interpolation} | {n} | {gap:.1e} | {s:.4f} |")
     lines += ["",
               f"flying beam in space, Δt = 0.1 s, {T_FLY:g} s, after the pulse:", "",
               "| scheme | linear momentum − impulse | energy spread | angular momentum spread | wall (s) | ms a step |",
               "|---|---|---|---|---|---|"]
     for s, (p, e, L, w, ms) in flying.items():
         lines.append(f"| {s} | {p:.1e} | {e:.1e} | {L:.1e} | {w:.2f} | {ms:.2f} |")
-    lines += ["", "right-angle frame, out-of-plane displacement (energy-momentum):", "",
-              "| elements per leg | Δt | elbow: first peak (t) | elbow: largest (t) | tip: largest (t) | wall (s) | "
-              "ms a step |", "|---|---|---|---|---|---|---|"]
+    lines += ["", "right-angle frame, out-of-plane displacement (energy-momentum); the published tip curve (read "
+              "off Simo and Vu-Quoc's figure): largest " + "{:.2f} at {:.2f} s, least {:.2f} at {:.2f} s".format(
+                  *extremes(PUBLISHED_TIP[:, 0], PUBLISHED_TIP[:, 1])[0], *extremes(PUBLISHED_TIP[:, 0],
+                                                                                  PUBLISHED_TIP[:, 1])[1]), "",
+              "| elements per leg | Δt | elbow: first peak (t) | elbow: least (t) | tip: largest (t) | tip: least (t) | "
+              "wall (s) | ms a step |", "|---|---|---|---|---|---|---|---|"]
     for (n, dt), pk in frame.items():
-        cells = [f"{pk[k][0]:.3f} ({pk[k][1]:.2f} s)" for k in ("elbow, first peak", "elbow", "tip")]
+        cells = [f"{pk[k][0]:.3f} ({pk[k][1]:.2f} s)" for k in ("elbow, first peak", "elbow, least", "tip, largest",
+                                                                  "tip, least")]
         lines.append(f"| {n} | {dt:g} | " + " | ".join(cells) + f" | {pk['wall'][0]:.1f} | {pk['wall'][1]:.2f} |")
+    (pub_hi, t_hi), (pub_lo, t_lo) = extremes(PUBLISHED_TIP[:, 0], PUBLISHED_TIP[:, 1])
+    finest = frame[max(frame)]
+    lines += ["", f"the finest run's tip against the published curve: largest {finest['tip, largest'][0] / pub_hi - 1:+.1%}"
+              f" ({finest['tip, largest'][1] - t_hi:+.2f} s), least {finest['tip, least'][0] / pub_lo - 1:+.1%} "
+              f"({finest['tip, least'][1] - t_lo:+.2f} s)"]
     lines += ["", "rotating cantilever, first frequencies ω √(ρA L⁴/EI) over λ = Ω √(ρA L⁴/EI): the floating-frame beam "
               "about its steady spin, and the linear beam's spin forms:", "",
               "| λ | flapwise | lead-lag | lead-lag, linear strain (growth rate if it diverges) | linear beam: flapwise, "
@@ -167,3 +216,16 @@ if __name__ == "__main__":
     fig.tight_layout()
     fig.savefig(out / "rotating_beam_3d_campbell.png", dpi=120)
     print(f"wrote {out / 'rotating_beam_3d_campbell.png'}")
+    fig, ax = plt.subplots(figsize=(6, 3.6))
+    n, dt = max(frame_runs)
+    t, elbow, tip = frame_runs[(n, dt)]
+    ax.plot(t, tip, "-", label=f"tip ({n} elements per leg, Δt = {dt:g} s)")
+    ax.plot(t, elbow, "--", label="elbow")
+    ax.plot(PUBLISHED_TIP[:, 0], PUBLISHED_TIP[:, 1], "ko", ms=3, label="tip, Simo and Vu-Quoc 1988 (read off)")
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel("out-of-plane displacement (m)")
+    ax.set_title("Right-angle frame (energy-momentum)")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out / "right_angle_frame.png", dpi=120)
+    print(f"wrote {out / 'right_angle_frame.png'}")

@@ -53,11 +53,12 @@ class RotatingModes:
         """The modes of the eigenvalues ``lam`` (one of each conjugate pair, lowest first) and their ``shapes``
         (complex columns), classified by the size of their motion on ``flap_rows`` (along the spin axis)
         against ``lag_rows`` (in the plane of rotation). A repeated frequency (no spin and equal bending
-        stiffnesses) has any mix of its pair as a mode: the pair is turned into the one with the most and the
-        one with the least flapwise motion first."""
+        stiffnesses; eigenvalues within 1e-6 of each other, as the state-space eigensolver leaves them) has any
+        mix of its pair as a mode: the pair is turned into the one with the most and the one with the least
+        flapwise motion first."""
         shapes = np.array(shapes, dtype=complex)
         for k in range(lam.size - 1):
-            if abs(lam[k + 1] - lam[k]) <= 1e-8 * max(abs(lam[k]), 1e-300):
+            if abs(lam[k + 1] - lam[k]) <= 1e-6 * max(abs(lam[k]), 1e-300):
                 pair = shapes[:, k:k + 2]
                 _, _, vh = np.linalg.svd(pair[flap_rows])
                 shapes[:, k:k + 2] = pair @ vh.conj().T

@@ -38,8 +38,8 @@ def hat_pulse(peak, rise):
     return h
 
 
-@register(t_end=1.0, dt=0.1, n_elements="-", order="-")
-def bend_45(n_elements=8, order=1):
+@register(t_end=1.0, dt=0.1, n_elements="-", order="-", interpolation="-")
+def bend_45(n_elements=8, order=1, interpolation=None):
     """The Bathe–Bolourchi 45° bend: a cantilever curved on a radius of 100 through 45° in the x–y plane
     (root at the origin, tangent along x, the arc turning towards +y), unit square section, E = 1e7,
     ν = 0 (G = 5e6): EA = 1e7, kGA = 4.16667e6 (k = 5/6), EI = 8.3333e5 about both axes,
@@ -47,7 +47,9 @@ def bend_45(n_elements=8, order=1):
     the plane of the bend. Clamped at the root by a weld.
 
     Static: ``static_equilibrium(scene)`` or ``simulate(..., start="static")``. Probe ``"tip"`` (its
-    position, m); :data:`BEND_45_REFERENCE` is the converged tip displacement.
+    position, m); :data:`BEND_45_REFERENCE` is the converged tip displacement. ``interpolation``: of the
+    beam's elements (:class:`~skfem_flex.bodies.exact.spatial_body.SpatialExactBeam`; by default rotations for
+    P1, directors for P2).
     """
     n = positive_count("n_elements", n_elements)
     E, G, R = 1e7, 5e6, 100.0
@@ -60,57 +62,60 @@ def bend_45(n_elements=8, order=1):
         d1 = np.array([0.0, 0.0, 1.0])
         return np.array([R * np.sin(th), R * (1.0 - np.cos(th)), 0.0]), np.column_stack([d1, np.cross(d3, d1), d3])
 
-    beam = SpatialExactBeam(sec, R * np.pi / 4.0, placement, n_elements=n, order=_order(order), name="bend")
+    beam = SpatialExactBeam(sec, R * np.pi / 4.0, placement, n_elements=n, order=_order(order), name="bend",
+                            interpolation=interpolation)
     tip = beam.point(beam.length)
     return Scene([beam], constraints=[Weld3D(beam.point(0.0), name="clamp")],
                  forces=[SpatialPointForce(tip, (0.0, 0.0, 600.0), name="tip load")], name="bend_45",
-                 probes={"tip": PointProbe(tip)}, parameters=dict(n_elements=n, order=order))
+                 probes={"tip": PointProbe(tip)},
+                 parameters=dict(n_elements=n, order=order, interpolation=beam.interpolation))
 
 
-@register(t_end=30.0, dt=0.05, n_elements="-", order="-")
-def right_angle_frame(n_elements=10, order=1):
+@register(t_end=30.0, dt=0.05, n_elements="-", order="-", interpolation="-")
+def right_angle_frame(n_elements=10, order=1, interpolation=None):
     """The Simo–Vu-Quoc right-angle cantilever: two legs of 10 in the x–y plane, the first from the
     clamped root at the origin to the elbow at (0, 10, 0), the second from the elbow to the tip at
     (−10, 10, 0), welded at the elbow; EA = GA = 1e6, EI = GJ = 1e3, ρA = 1, ρI = diag(20, 10, 10) (polar,
     about d₁, about d₂); a force at the elbow along +z rising linearly to 50 at t = 1 and back to 0 at
-    t = 2. ``n_elements`` per leg. Probes ``"elbow"`` and ``"tip"`` (positions, m).
+    t = 2. ``n_elements`` per leg (``interpolation`` as for :func:`bend_45`). Probes ``"elbow"`` and ``"tip"``
+    (positions, m).
     """
     n = positive_count("n_elements", n_elements)
     sec = SpatialSection(EA=1e6, GA1=1e6, GA2=1e6, GJ=1e3, EI1=1e3, EI2=1e3, rhoA=1.0, rhoI1=10.0, rhoI2=10.0)
     p = _order(order)
     leg1 = SpatialExactBeam.straight(sec, (0.0, 0.0, 0.0), (0.0, 10.0, 0.0), n_elements=n, order=p,
-                                     normal=(0.0, 0.0, 1.0), name="leg 1")
+                                     normal=(0.0, 0.0, 1.0), name="leg 1", interpolation=interpolation)
     leg2 = SpatialExactBeam.straight(sec, (0.0, 10.0, 0.0), (-10.0, 10.0, 0.0), n_elements=n, order=p,
-                                     normal=(0.0, 0.0, 1.0), name="leg 2")
+                                     normal=(0.0, 0.0, 1.0), name="leg 2", interpolation=interpolation)
     elbow = leg1.point(leg1.length)
     return Scene([leg1, leg2],
                  constraints=[Weld3D(leg1.point(0.0), name="clamp"), Weld3D(elbow, leg2.point(0.0), name="elbow")],
                  forces=[SpatialPointForce(elbow, lambda t: np.array([0.0, 0.0, hat_pulse(50.0, 1.0)(t)]),
                                            name="elbow load")],
                  name="right_angle_frame", probes={"elbow": PointProbe(elbow), "tip": PointProbe(leg2.point(10.0))},
-                 parameters=dict(n_elements=n, order=order))
+                 parameters=dict(n_elements=n, order=order, interpolation=leg1.interpolation))
 
 
-@register(t_end=30.0, dt=0.1, n_elements="-", order="-")
-def flying_spaghetti_3d(n_elements=10, order=1):
+@register(t_end=30.0, dt=0.1, n_elements="-", order="-", interpolation="-")
+def flying_spaghetti_3d(n_elements=10, order=1, interpolation=None):
     """Simo and Vu-Quoc's flying beam in space: a free beam from (6, 0, 0) to (0, 0, 8) (length 10),
     EA = GA = 1e4, EI = GJ = 500, ρA = 1, ρI = diag(20, 10, 10); at the (6, 0, 0) end a force
     F_x = 0.1 h(t) and moments M_y = h(t), M_z = 0.5 h(t), fixed in space, with the hat pulse h rising
     from 0 to 200 at t = 2.5 and back to 0 at t = 5. After t = 5 the beam flies free: its linear momentum is
-    the impulse (50, 0, 0) kg m/s, and energy and angular momentum are constant.
-    Probe ``"tip"`` (the (0, 0, 8) end, m).
+    the impulse (50, 0, 0) kg m/s, and energy and angular momentum are constant. ``interpolation`` as for
+    :func:`bend_45`. Probe ``"tip"`` (the (0, 0, 8) end, m).
     """
     n = positive_count("n_elements", n_elements)
     sec = SpatialSection(EA=1e4, GA1=1e4, GA2=1e4, GJ=500.0, EI1=500.0, EI2=500.0, rhoA=1.0, rhoI1=10.0,
                          rhoI2=10.0)
     beam = SpatialExactBeam.straight(sec, (6.0, 0.0, 0.0), (0.0, 0.0, 8.0), n_elements=n, order=_order(order),
-                                     normal=(0.0, 1.0, 0.0), name="beam")
+                                     normal=(0.0, 1.0, 0.0), name="beam", interpolation=interpolation)
     end = beam.point(0.0)
     h = hat_pulse(200.0, 2.5)
     return Scene([beam], forces=[SpatialPointForce(end, lambda t: np.array([0.1 * h(t), 0.0, 0.0]), name="force"),
                                  SpatialMoment(end, lambda t: np.array([0.0, h(t), 0.5 * h(t)]), name="moment")],
                  name="flying_spaghetti_3d", probes={"tip": PointProbe(beam.point(beam.length))},
-                 parameters=dict(n_elements=n, order=order))
+                 parameters=dict(n_elements=n, order=order, interpolation=beam.interpolation))
 
 
 @register(t_end=30.0, dt=0.01, omega="rad/s", T="s", length="m", EA="N", EI="N m²", GJ="N m²", kGA="N",

@@ -155,10 +155,10 @@ def _skew(x, out):
 
 
 @numba.njit(cache=True)
-def _turn(w, x, second, y, yw, yx, yww, ywx, W, X, cr):
-    """y = exp(ŵ) x = γ x + α w × x + β (w·x) w and its derivatives ∂y/∂w, ∂y/∂x and (with ``second``)
-    ∂²y/∂w², ∂²y/∂w∂x (y_i, [i, l], [i, m], [i, l, m], [i, l, m]), written into the given arrays (W, X, cr:
-    work arrays)."""
+def _turn(w, x, level, y, yw, yx, yww, ywx, W, X, cr):
+    """y = exp(ŵ) x = γ x + α w × x + β (w·x) w and (``level`` ≥ 1) its derivatives ∂y/∂w, ∂y/∂x and
+    (``level`` 2) ∂²y/∂w², ∂²y/∂w∂x (y_i, [i, l], [i, m], [i, l, m], [i, l, m]), written into the given
+    arrays (W, X, cr: work arrays)."""
     tau = w[0] * w[0] + w[1] * w[1] + w[2] * w[2]
     ga, al, be, dga, dal, dbe, ddga, ddal, ddbe = _rodrigues(tau)
     wx = w[0] * x[0] + w[1] * x[1] + w[2] * x[2]
@@ -169,13 +169,16 @@ def _turn(w, x, second, y, yw, yx, yww, ywx, W, X, cr):
     cr[2] = w[0] * x[1] - w[1] * x[0]
     for i in range(3):
         y[i] = ga * x[i] + al * cr[i] + be * wx * w[i]
+    if level == 0:
+        return
+    for i in range(3):
         for m in range(3):
             dim = 1.0 if i == m else 0.0
             yx[i, m] = ga * dim + al * W[i, m] + be * w[i] * w[m]
             # ∂(w × x)/∂w = −x̂
             yw[i, m] = (2.0 * dga * w[m] * x[i] + 2.0 * dal * w[m] * cr[i] - al * X[i, m]
                         + 2.0 * dbe * wx * w[i] * w[m] + be * w[i] * x[m] + be * wx * dim)
-    if not second:
+    if level < 2:
         return
     for i in range(3):
         for l in range(3):
@@ -205,10 +208,10 @@ def _workspace():
 
 
 @numba.njit(cache=True)
-def _jets(z, h, second, eps, J, H, wk):
-    """The strains ε(z) (without reference values), J = ∂ε/∂z (6, 10) and, with ``second``, H = ∂²ε/∂z²
-    (6, 10, 10), into the given arrays (``wk``: :func:`_workspace`); False (and nothing written) where
-    1 + c ≤ 0 or z is not finite."""
+def _jets(z, h, level, eps, J, H, wk):
+    """The strains ε(z) (without reference values) and, by ``level`` (0, 1, 2), J = ∂ε/∂z (6, 10) and
+    H = ∂²ε/∂z² (6, 10, 10), into the given arrays (``wk``: :func:`_workspace`); False (and nothing
+    written) where 1 + c ≤ 0 or z is not finite."""
     psi, dpsi, ddpsi, w, y1, y2, yw1, yx1, yw2, yx2, yww1, ywx1, yww2, ywx2, W, X, cr = wk
     a = z[0:3]
     c = z[3]
@@ -232,10 +235,15 @@ def _jets(z, h, second, eps, J, H, wk):
     # the turned u and v: y₁ = exp(−ψ̂/2) u, y₂ = exp(ψ̂/2) v
     for k in range(3):
         w[k] = -0.5 * psi[k]
-    _turn(w, z[4:7], second, y1, yw1, yx1, yww1, ywx1, W, X, cr)
+    _turn(w, z[4:7], level, y1, yw1, yx1, yww1, ywx1, W, X, cr)
     for k in range(3):
         w[k] = 0.5 * psi[k]
-    _turn(w, z[7:10], second, y2, yw2, yx2, yww2, ywx2, W, X, cr)
+    _turn(w, z[7:10], level, y2, yw2, yx2, yww2, ywx2, W, X, cr)
+    if level == 0:
+        for i in range(3):
+            eps[i] = 0.5 * (y1[i] + y2[i])
+            eps[3 + i] = psi[i] / h
+        return True
     J[:, :] = 0.0
     for i in range(3):
         eps[i] = 0.5 * (y1[i] + y2[i])
@@ -250,7 +258,7 @@ def _jets(z, h, second, eps, J, H, wk):
         for m in range(3):
             J[i, 4 + m] = 0.5 * yx1[i, m]
             J[i, 7 + m] = 0.5 * yx2[i, m]
-    if not second:
+    if level < 2:
         return True
     Fss = 2.0 * p ** 5 * ddA
     Fsc = -6.0 * p ** 4 * dA - 4.0 * sig * p ** 6 * ddA
@@ -296,7 +304,7 @@ def strain_jets(z, h, second):
     (ok, ε (6,), J (6, 10), H (6, 10, 10)). ``ok`` is False (and the rest zero) where 1 + c ≤ 0 or z is not
     finite: the element's relative rotation has reached half a turn, where ψ is not defined."""
     eps, J, H = np.zeros(6), np.zeros((6, NZ)), np.zeros((6, NZ, NZ))
-    ok = _jets(z, h, second, eps, J, H, _workspace())
+    ok = _jets(z, h, 2 if second else 1, eps, J, H, _workspace())
     if not ok:
         eps[:], J[:, :] = 0.0, 0.0
     return ok, eps, J, H
@@ -393,7 +401,7 @@ def element_strains(kd, q):
         for a in range(NLOC):
             qe[a] = q[kd.ed[e, a]]
         _invariants(qe, kd.h[e], z, G)
-        ok = _jets(z, kd.h[e], False, eps, J, H, wk)
+        ok = _jets(z, kd.h[e], 0, eps, J, H, wk)
         for j in range(6):
             out[e, j] = eps[j] - kd.e_ref[6 * e + j] if ok else np.nan
     return out
@@ -455,8 +463,8 @@ def discrete_gradient_terms(kd, qa, qb):
             zb[k] = 0.5 * (z0[k] + z1[k])
             dz[k] = z1[k] - z0[k]
             nd += dz[k] * dz[k]
-        if not (_jets(z0, h, False, eps0, J0, none, wk) and _jets(z1, h, False, eps1, J1, none, wk)
-                and _jets(zb, h, True, epsb, Jb, Hb, wk)):
+        if not (_jets(z0, h, 0, eps0, J0, none, wk) and _jets(z1, h, 1, eps1, J1, none, wk)
+                and _jets(zb, h, 2, epsb, Jb, Hb, wk)):
             return False, g, data, floor
         B[:, :] = 0.0
         r[:] = 0.0

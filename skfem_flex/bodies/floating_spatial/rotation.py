@@ -147,8 +147,14 @@ def spinning_modes(body, omega, axis=(1.0, 0.0, 0.0), n_modes=8, flap_axis=0, la
     lam, vec = scipy.linalg.eig(A)
     big = np.abs(lam).max()
     keep = (lam.imag > 1e-9 * big) | ((np.abs(lam.imag) <= 1e-9 * big) & (lam.real > 0))
-    lam, vec = lam[keep], vec[:n, keep]
+    lam, vec = lam[keep], vec[:, keep]
     order = np.argsort(np.abs(lam))[:int(n_modes)]
-    lam, vec = lam[order], vec[:, order]
+    lam, vec = lam[order], vec[:n, order]
+    # a repeated frequency (no spin, equal bending stiffnesses): eig may return two nearly parallel vectors
+    # for it; its two-dimensional eigenspace is the null space of A − λI, taken from the SVD
+    for k in range(lam.size - 1):
+        if abs(lam[k + 1] - lam[k]) <= 1e-6 * max(abs(lam[k]), 1e-300):
+            _, _, vh = np.linalg.svd(A - 0.5 * (lam[k] + lam[k + 1]) * np.eye(2 * n))
+            vec[:, k:k + 2] = vh[-2:].conj().T[:n]
     return RotatingModes.from_eigenpairs(lam, body.mesh_shapes(vec), body.motion_rows(flap_axis),
                                          body.motion_rows(lag_axis))
