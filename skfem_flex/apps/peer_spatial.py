@@ -25,6 +25,9 @@ the three translations and one relative rotation locked).
 * :func:`beam_cantilever`: a spatial cantilever released under gravity (:data:`BEAM_CANTILEVER`) on exudyn's
   geometrically exact 3D beam (``ObjectBeamGeometricallyExact``, two nodes, constant strain, lumped mass)
   on Euler-parameter nodes. Probe: the tip, m.
+* :func:`right_angle_frame`: :func:`skfem_flex.scenes.spatial_beams.right_angle_frame` (Simo and Vu-Quoc's
+  right-angle cantilever) on the same beam elements, the legs welded at the elbow. Probe: the elbow's and the
+  tip's positions side by side (n, 6), m.
 * :func:`spatial_slider_crank`: the IFToMM spatial slider–crank of
   :func:`skfem_flex.scenes.spatial.spatial_slider_crank` (revolute, spherical, universal and prismatic
   joints). Probe: (slider position x_C m, crank angle θ rad unwrapped).
@@ -43,7 +46,7 @@ from ..numerics.quaternions import rotation_vector_matrix
 from .peer import exudyn_modules, peer_available, simulation_settings, solve_recorded, version
 
 __all__ = ["peer_available", "version", "heavy_top", "rigid_chain", "bricard", "spatial_slider_crank",
-           "beam_cantilever", "BEAM_CANTILEVER"]
+           "beam_cantilever", "BEAM_CANTILEVER", "right_angle_frame"]
 
 _TOP_VARIANTS = ("simo-wong", "bruls")
 
@@ -341,5 +344,76 @@ def beam_cantilever(n_elements=16, dt=2e-3, t_end=1.0, scheme="trapezoidal", rho
         settings = simulation_settings(t_end, dt, scheme, rho_inf, threads=1)
         t, (tip,), seconds = solve_recorded(mbs, sensors, settings, run.stats)
         return t, tip, seconds
+    run.stats = {}
+    return run
+
+
+def _turn_about_z(angle):
+    """Euler parameters (e₀, e₁, e₂, e₃) of a turn by ``angle`` (rad) about z."""
+    return [float(np.cos(0.5 * angle)), 0.0, 0.0, float(np.sin(0.5 * angle))]
+
+
+def right_angle_frame(n_elements=10, dt=0.05, t_end=30.0, scheme="generalized-alpha", rho_inf=1.0):
+    """Simo and Vu-Quoc's right-angle cantilever of :func:`skfem_flex.scenes.spatial_beams.right_angle_frame` on
+    exudyn's 3D geometrically exact beam; returns run() -> (t, [elbow, tip] positions (n, 6), seconds).
+
+    Notes
+    -----
+    Each leg (length 10) is ``n_elements`` ``ObjectBeamGeometricallyExact`` elements (two nodes, constant
+    strain, lumped mass) on ``NodeRigidBodyEP`` nodes whose local x runs along the leg: the first leg from the
+    origin along +y (a quarter turn about z), the second from the elbow (0, 10, 0) along −x (a half turn).
+    Section: ``stiffnessMatrix = diag(EA, GA, GA, GJ, EI, EI) = diag(1e6, 1e6, 1e6, 1e3, 1e3, 1e3)``,
+    ``inertia = diag(20, 10, 10)``, ``massPerLength = 1``. The clamp at the root and the weld of the two legs
+    at the elbow are ``ObjectJointGeneric`` locking all six relative coordinates (the elbow's markers turned
+    so that the two nodes' frames coincide). The elbow force along +z, 50 t for t < 1 and 50 (2 − t) for
+    1 ≤ t < 2, is a user function on the first leg's last node. ρ∞ = 1 by default: generalized-α without
+    numerical damping, as the energy of the free motion after t = 2 is the point of this problem; exudyn's
+    full Newton with relative and absolute tolerances 1e-8 and its sparse solver (with its defaults the
+    finer meshes stop in the first steps).
+    """
+    n = int(n_elements)
+    if n < 1:
+        raise ValueError(f"right_angle_frame: n_elements must be a positive integer, got {n_elements!r}")
+    h, L = 10.0 / n, 10.0
+
+    def run():
+        exu, ei = exudyn_modules()
+        mbs = exu.SystemContainer().AddSystem()
+        section = exu.BeamSection()
+        section.stiffnessMatrix = np.diag([1e6, 1e6, 1e6, 1e3, 1e3, 1e3])
+        section.inertia = np.diag([20.0, 10.0, 10.0])
+        section.massPerLength = 1.0
+        legs = []
+        for start, step, angle in (((0.0, 0.0), (0.0, h), 0.5 * np.pi), ((0.0, L), (-h, 0.0), np.pi)):
+            legs.append([mbs.AddNode(ei.NodeRigidBodyEP(referenceCoordinates=[
+                start[0] + i * step[0], start[1] + i * step[1], 0.0] + _turn_about_z(angle))) for i in range(n + 1)])
+            for i in range(n):
+                mbs.AddObject(ei.ObjectBeamGeometricallyExact(nodeNumbers=[legs[-1][i], legs[-1][i + 1]], length=h,
+                                                              sectionData=section,
+                                                              visualization=ei.VBeam3D(show=False)))
+        ground = mbs.AddObject(ei.ObjectGround(referencePosition=[0.0, 0.0, 0.0]))
+        quarter = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])     # the first leg's frame
+        # each joint's first marker turned into the frame of the node it holds (exudyn's localHT)
+        joints = ((mbs.AddMarker(ei.MarkerBodyRigid(bodyNumber=ground, localHT=exu.HT(rotation=quarter))),
+                   mbs.AddMarker(ei.MarkerNodeRigid(nodeNumber=legs[0][0]))),
+                  (mbs.AddMarker(ei.MarkerNodeRigid(nodeNumber=legs[0][-1], localHT=exu.HT(
+                      rotation=quarter.T @ np.diag([-1.0, -1.0, 1.0])))),
+                   mbs.AddMarker(ei.MarkerNodeRigid(nodeNumber=legs[1][0]))))
+        for m0, m1 in joints:
+            mbs.AddObject(ei.ObjectJointGeneric(markerNumbers=[m0, m1], constrainedAxes=[1] * 6,
+                                                visualization=ei.VObjectJointGeneric(show=False)))
+
+        def force(mbs, t, load):
+            f = 50.0 * t if t < 1.0 else (50.0 * (2.0 - t) if t < 2.0 else 0.0)
+            return [0.0, 0.0, f]
+        mbs.AddLoad(ei.Force(markerNumber=mbs.AddMarker(ei.MarkerNodePosition(nodeNumber=legs[0][-1])),
+                             loadVector=[0.0, 0.0, 0.0], loadVectorUserFunction=force))
+        sensors = [_sensor(mbs, "Position", node=legs[0][-1]), _sensor(mbs, "Position", node=legs[1][-1])]
+        settings = simulation_settings(t_end, dt, scheme, rho_inf, absolute_tolerance=1e-8,
+                                       linear_solver="EigenSparse", threads=1)
+        settings.timeIntegration.newton.useModifiedNewton = False
+        settings.timeIntegration.newton.relativeTolerance = 1e-8
+        t, (elbow, tip), seconds = solve_recorded(mbs, sensors, settings, run.stats)
+        return t, np.hstack([elbow, tip]), seconds
     run.stats = {}
     return run
