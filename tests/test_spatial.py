@@ -244,8 +244,9 @@ def test_redundant_planar_constraints_still_raise():
         drop_redundant_constraints(scene)
 
 
-def _driven_bar(law):
-    bar = sf.SpatialRigidBody(1.0, [0.001, 0.08, 0.08], position=[0.5, 0, 0])
+def _driven_bar(law, omega=0.0):
+    bar = sf.SpatialRigidBody(1.0, [0.001, 0.08, 0.08], position=[0.5, 0, 0], velocity=[0, 0.5 * omega, 0],
+                              angular_velocity=[0, 0, omega])
     hinge = sf.Revolute3D(bar.point([-0.5, 0, 0]), None, axis=(0, 0, 1))
     driver = sf.RotationDriver(bar, None, axis=(0, 0, 1), law=law)
     return bar, sf.Scene([bar], [hinge, driver], [sf.Gravity((0, -9.81, 0))])
@@ -266,6 +267,9 @@ def test_rotation_driver_time_derivatives():
                                                         abs=1e-7)
     second = (phi(h) - 2 * phi(0.0) + phi(-h)) / h ** 2
     assert c.time_terms(q0, v, t)[0] + v @ c.hessian_product(q0, [1.0], t) @ v == pytest.approx(second, abs=1e-5)
+    # Φ_qt, the velocity rows' extra Newton term, against central differences of Φ_t in q
+    fd = [(c.time_derivative(q0 + e, t)[0] - c.time_derivative(q0 - e, t)[0]) / (2 * h) for e in h * np.eye(12)]
+    assert np.abs(c.time_derivative_jacobian(q0, t)[0] - fd).max() <= 1e-7
 
 
 @pytest.mark.parametrize("scheme", ["energy-momentum", "trapezoidal", "generalized-alpha"])
@@ -282,6 +286,61 @@ def test_rotation_driver_turns_the_bar_by_its_law(scheme):
         E, W = r.total_energy, r.external_work
         assert np.abs(E - E[0] - W).max() < 1e-9 * np.abs(E).max()
         assert r.reactions["rotation driver"].shape == (len(r.t), 1)
+
+
+@pytest.mark.parametrize("spinning", [False, True], ids=["spin-up", "spinning"])
+@pytest.mark.parametrize("scheme", ["energy-momentum", "trapezoidal", "generalized-alpha"])
+def test_rotation_driver_runs_compiled_as_the_python_path(scheme, spinning):
+    """The rotation-driver family against the driver's own methods: the bar spun up by its law from rest, or
+    turning at a constant rate from the start (the consistent start then needs 2 Φ_qt v + Φ_tt), under gravity:
+    states and the driving moment to the Newton tolerance (the trapezoidal rule's velocity-level multipliers
+    to 1e-7), and the family's Newton matrix against central differences of its residual."""
+    from family_checks import fd_mismatch, loaded_stepper
+    law, omega = (sf.MotionLaw.constant_rate(2.0), 2.0) if spinning else (sf.spin_up_law(3.0, 1.0), 0.0)
+    fast = sf.simulate(_driven_bar(law, omega)[1], 1.5, 1e-2, scheme=scheme, compiled=True)
+    slow = sf.simulate(_driven_bar(law, omega)[1], 1.5, 1e-2, scheme=scheme, compiled=False)
+    assert not fast.run_path["python_elements"]
+    assert any("RotationDriver" in why for why in slow.run_path["python_elements"])
+    assert np.abs(fast.q - slow.q).max() <= 1e-9
+    assert np.abs(fast.v - slow.v).max() <= 1e-8 * np.abs(slow.v).max()
+    moment = slow.reactions["rotation driver"]
+    assert np.abs(fast.reactions["rotation driver"] - moment).max() <= 1e-7 * np.abs(moment).max()
+    scene = _driven_bar(law, omega)[1]
+    rng = np.random.default_rng(5)
+    q0, v0 = (np.concatenate([getattr(b, k) for b in scene.bodies]) for k in ("q0", "v0"))
+    st = loaded_stepper(scene, scheme, q0, v0, acc=rng.normal(size=q0.size))
+    x = np.concatenate([1e-3 * rng.normal(size=q0.size), 1e-2 * rng.normal(size=scene.n_constraints)])
+    assert fd_mismatch(st, 0.3, 0.01, x)[0] < 1e-8
+
+
+def test_rotation_driver_acceleration_row_is_the_drivers_own():
+    """The family's acceleration row (Φ_q q̈ + vᵀ(c H_Y − s H_X)v + 2 Φ_qt v + Φ_tt) in mid-turn, with
+    velocities off the constraints (on them Φ_qt v vanishes: the row's terms are seen one by one only off
+    them): the start's (q̈, λ), the solution of those rows with the balance of forces, equals the one through
+    the driver's numpy methods (a subclass the family does not take) to 1e-10."""
+    from family_checks import loaded_stepper
+    from skfem_flex.numerics.quaternions import rotation_vector_matrix
+
+    class OwnDriver(sf.RotationDriver):
+        def value(self, q, t):
+            return super().value(q, t)
+
+    law = sf.spin_up_law(3.0, 1.0)
+    t = 0.6
+    R = rotation_vector_matrix([0.0, 0.0, law(t)[0]])
+    starts = []
+    for cls in (sf.RotationDriver, OwnDriver):
+        bar = sf.SpatialRigidBody(1.0, [0.001, 0.08, 0.08], position=[0.5, 0, 0])
+        scene = sf.Scene([bar], [sf.Revolute3D(bar.point([-0.5, 0, 0]), None, axis=(0, 0, 1)),
+                                 cls(bar, None, axis=(0, 0, 1), law=law)], [sf.Gravity((0, -9.81, 0))])
+        q = np.concatenate([R @ [0.5, 0.0, 0.0], (R @ np.eye(3)).T.ravel()])
+        v = np.random.default_rng(7).normal(size=12)
+        st = loaded_stepper(scene, "generalized-alpha", q, v)
+        assert bool(st.packed.python_elements) == (cls is OwnDriver)
+        starts.append(st.start(t, q, v)[:2])
+    (a1, l1), (a2, l2) = starts
+    assert np.abs(a1 - a2).max() <= 1e-10 * np.abs(a2).max() and np.abs(a2).max() > 1.0
+    assert np.abs(l1 - l2).max() <= 1e-10 * np.abs(l2).max()
 
 
 def test_statics_and_modes_of_a_spatial_pendulum():

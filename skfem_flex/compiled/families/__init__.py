@@ -41,6 +41,7 @@ FAMILY_MODULES = (
     "rotation_beam",
     "rotated_rows",
     "quadratic_rows",
+    "rotation_drivers",
     "linear_potentials",
     "spatial_loads",
     "spatial_floating_frame",

@@ -247,6 +247,9 @@ def _constraint(ctx, c, idx, row):
         level = ctx["rows"]
         cv = _dense(c.velocity_jacobian(q1, v1, t1), m, idx.size) if level in (ROWS_VELOCITY, ROWS_ACCELERATION) \
             else np.zeros((m, idx.size))
+        if level == ROWS_VELOCITY:
+            # the velocity row Φ_q v + Φ_t: its q-derivative also holds Φ_qt (a driver whose Φ_t depends on q)
+            cv = cv + _dense(c.time_derivative_jacobian(q1, t1), m, idx.size)
         tt = np.atleast_1d(c.time_terms(q1, v1, t1)) if level == ROWS_ACCELERATION else np.zeros(m)
     else:
         d, cv, tt = cq, np.zeros((m, idx.size)), np.zeros(m)

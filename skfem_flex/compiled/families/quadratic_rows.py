@@ -29,6 +29,13 @@ def row_count(term):
     return int(np.shape(term[2])[0])
 
 
+def form_terms(H, b):
+    """The terms of one quadratic form ½ qᵀHq + b·q over a block's coordinates: pair terms h q_i q_j (i ≤ j,
+    the upper triangle of ½ H) as (hi, hj, h) and the linear terms' coordinates bi."""
+    hi, hj = np.nonzero(np.triu(H))
+    return hi, hj, np.where(hi == hj, 0.5, 1.0) * H[hi, hj], np.flatnonzero(b)
+
+
 class Data(NamedTuple):
     rows: np.ndarray        # (k, 7): row, first/end pair term, first/end linear term, first column, law column
     const: np.ndarray       # (k,) c
@@ -57,10 +64,7 @@ def pack(items, packer):
         _, H, b, c, laws, columns = term
         idx = np.asarray(idx, dtype=np.int64)[columns]
         for k in range(H.shape[0]):
-            # upper triangle of ½ H: Φ's pair terms h q_i q_j (i ≤ j)
-            hi, hj = np.nonzero(np.triu(H[k]))
-            hv = np.where(hi == hj, 0.5, 1.0) * H[k][hi, hj]
-            bi = np.flatnonzero(b[k])
+            hi, hj, hv, bi = form_terms(H[k], b[k])
             touched = np.unique(np.concatenate([hi, hj, bi])).astype(np.int64)
             slot = {int(t): s for s, t in enumerate(touched)}
             col = -1

@@ -79,6 +79,11 @@ class Constraint:
         rows = [np.asarray(self.hessian_product(q, e, t) @ v, dtype=float).ravel() for e in np.eye(self.n_equations)]
         return np.asarray(rows, dtype=float).reshape(self.n_equations, len(q))
 
+    def time_derivative_jacobian(self, q, t):
+        """Φ_qt = ∂Φ_t/∂q, shape (n_equations, len(q)): zero unless Φ_t depends on q (a rotation driver). The
+        velocity rows Φ_q v + Φ_t of the trapezoidal rule take it into their Newton matrix."""
+        return np.zeros((self.n_equations, len(q)))
+
     def acceleration_rhs(self, q, v, t):
         """γ with Φ_q q̈ = γ: γ = −(Φ_q v)_q v − 2 Φ_qt v − Φ_tt."""
         return -(self.velocity_jacobian(q, v, t) @ v) - self.time_terms(q, v, t)

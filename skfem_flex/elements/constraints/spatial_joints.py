@@ -329,6 +329,12 @@ class RotationDriver(Constraint):
         x, y, _, _ = self._xy(q)
         return np.array([-w * (np.sin(th) * y + np.cos(th) * x)])
 
+    def time_derivative_jacobian(self, q, t):
+        """Φ_qt = −θ̇ (sin θ ∇(u·n₂) + cos θ ∇(u·n₁))."""
+        th, w, _ = self.law(t)
+        _, _, gx, gy = self._xy(q)
+        return (-w * (np.sin(th) * gy + np.cos(th) * gx))[None, :]
+
     def time_terms(self, q, v, t):
         th, w, acc = self.law(t)
         x, y, gx, gy = self._xy(q)
@@ -342,3 +348,11 @@ class RotationDriver(Constraint):
 
     def reaction_history(self, q, lam):
         return np.asarray(lam, dtype=float).reshape(-1, 1).copy()
+
+    def compiled_form(self):
+        """``("rotation driver", H_X, b_X, c_X, H_Y, b_Y, c_Y, law)``: the rotation-driver family packs it; None
+        for a subclass that changes the equation (it runs through its own methods)."""
+        if any(getattr(type(self), m) is not getattr(RotationDriver, m) for m in
+               ("value", "jacobian", "time_derivative", "time_terms", "hessian_product", "time_derivative_jacobian")):
+            return None
+        return "rotation driver", self.Hx, self.bx, self.cx, self.Hy, self.by, self.cy, self.law

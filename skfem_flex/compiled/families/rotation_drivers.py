@@ -1,0 +1,173 @@
+r"""Rotation drivers (:class:`~skfem_flex.elements.constraints.spatial_joints.RotationDriver`): one row each,
+
+.. math::  Φ(q, t) = \cos θ(t)\, Y(q) − \sin θ(t)\, X(q),
+
+with X = ½ qᵀH_X q + b_X·q + c_X and Y likewise (the turning direction's components along the two
+directions normal to the axis) and θ(t) the driver's law, read at the step's end (columns θ, θ̇, θ̈ of the
+time table), as every row's time dependence. With c = cos θ, s = sin θ:
+
+* Φ_q = c ∇Y(q₁) − s ∇X(q₁); the exact discrete gradient at fixed t is D = c ∇Y(q_m) − s ∇X(q_m), q_m the
+  mid-point of q_a and q_b, and ∂(Dᵀμ)/∂q_b = ½ μ (c H_Y − s H_X);
+* Φ_t = −θ̇ (s Y + c X), which depends on q: Φ_qt = −θ̇ (s ∇Y + c ∇X);
+* the rate Jacobian handed to :func:`..rows.finish_row` is ∂(Φ_q v₁ + Φ_t)/∂q = (c H_Y − s H_X) v₁ + Φ_qt, so
+  that a velocity row's Newton row is exact; the acceleration row then holds Φ_q a₁ + vᵀ(c H_Y − s H_X) v +
+  Φ_qt·v + (Φ_qt·v + Φ_tt), the driver's 2 Φ_qt v + Φ_tt (its ``time_terms``), with
+  Φ_tt = −θ̈ (s Y + c X) − θ̇² (c Y − s X).
+"""
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import numba
+import numpy as np
+
+from ..abi import context_of, f1, f2, family_of, fvec, i1, i2
+from ..registry import compiled_kernel
+from ..rows import finish_row
+from ..storage import add_qq, storage_of
+from ..tasks import TASK_EVAL, TASK_ROWS
+from . import FamilyPack
+from .quadratic_rows import form_terms
+
+NAME = "rotation drivers"
+FORMS = ("rotation driver",)
+
+
+def row_count(term):
+    return 1
+
+
+class Data(NamedTuple):
+    rows: np.ndarray        # (k, 9): row, pair terms of X [p0, p1) and of Y [p1, p2), linear terms of X
+    #                         [l0, l1) and of Y [l1, l2), first column, law column (θ, θ̇, θ̈ follow)
+    const: np.ndarray       # (k, 2): c_X, c_Y
+    pi: np.ndarray          # pair terms h q_i q_j: i, j (global), their slots in the row's columns, h
+    pj: np.ndarray
+    psi: np.ndarray
+    psj: np.ndarray
+    ph: np.ndarray
+    li: np.ndarray          # linear terms b q_i: i, slot, b
+    lsl: np.ndarray
+    lb: np.ndarray
+    cols: np.ndarray        # the coordinates each row touches, row after row (end: the next row's first)
+
+
+@numba.njit(cache=True, _nrt=False)
+def _view(fam):
+    return Data(i2(fam, 0), f2(fam, 1), i1(fam, 2), i1(fam, 3), i1(fam, 4), i1(fam, 5), f1(fam, 6), i1(fam, 7),
+                i1(fam, 8), f1(fam, 9), i1(fam, 10))
+
+
+def pack(items, packer):
+    rows, const = [], []
+    pi, pj, psi, psj, ph, li, lsl, lb, cols = ([] for _ in range(9))
+    row_support, couplings = [], []
+    for ((term, _), constraint, (idx, first)) in items:
+        _, Hx, bx, cx, Hy, by, cy, law = term
+        idx = np.asarray(idx, dtype=np.int64)
+        fx, fy = form_terms(Hx, bx), form_terms(Hy, by)
+        touched = np.unique(np.concatenate([fx[0], fx[1], fx[3], fy[0], fy[1], fy[3]])).astype(np.int64)
+        slot = {int(t): s for s, t in enumerate(touched)}
+        col = packer.column(law, 0, "end")
+        packer.column(law, 1, "end")
+        packer.column(law, 2, "end")
+        p0, l0 = len(pi), len(li)
+        for hi, hj, hv, bi in (fx, fy):
+            pi.extend(idx[hi])
+            pj.extend(idx[hj])
+            psi.extend(slot[int(t)] for t in hi)
+            psj.extend(slot[int(t)] for t in hj)
+            ph.extend(hv)
+        for hi, hj, hv, bi in (fx, fy):
+            li.extend(idx[bi])
+            lsl.extend(slot[int(t)] for t in bi)
+        lb.extend(bx[fx[3]])
+        lb.extend(by[fy[3]])
+        rows.append((first, p0, p0 + fx[0].size, len(pi), l0, l0 + fx[3].size, len(li), len(cols), col))
+        cols.extend(idx[touched])
+        const.append((float(cx), float(cy)))
+        row_support.append((first, idx[touched]))
+        couplings.append(idx[touched])
+    n_rows = len(rows)
+    i64 = lambda a: np.asarray(a, dtype=np.int64)        # noqa: E731
+    data = Data(i64(rows).reshape(n_rows, 9), np.asarray(const, dtype=float).reshape(n_rows, 2), i64(pi), i64(pj),
+                i64(psi), i64(psj), np.asarray(ph, dtype=float), i64(li), i64(lsl), np.asarray(lb, dtype=float),
+                i64(cols + [0]))
+    return FamilyPack(data=data, count=n_rows, couplings=couplings, rows=row_support)
+
+
+@numba.njit(cache=True, _nrt=False)
+def _evaluate(ctx, d):
+    n = ctx.n
+    q1, qa, qb, v1 = fvec(ctx.q1, n), fvec(ctx.qa, n), fvec(ctx.qb, n), fvec(ctx.v1, n)
+    mu = fvec(ctx.mu, ctx.m)
+    trow = fvec(ctx.trow, ctx.ncol)
+    st = storage_of(ctx)
+    evaluate = ctx.task == TASK_EVAL
+    scratch = fvec(ctx.scratch, ctx.nscratch)
+    n_rows = d.rows.shape[0]
+    w = ctx.w_mu * ctx.c_dg * ctx.dq1
+    for r in range(n_rows):
+        row, p0, p1, p2, l0, l1, l2, c0, col = d.rows[r]
+        c1 = d.rows[r + 1, 7] if r + 1 < n_rows else d.cols.size - 1
+        nc = c1 - c0
+        # per form (X: 0, Y: 1) over the row's columns: ∇ at q₁, ∇ at the mid-point, H v₁
+        g, dm, hv = scratch[:2 * nc], scratch[2 * nc:4 * nc], scratch[4 * nc:6 * nc]
+        cq, dd, cv = scratch[6 * nc:7 * nc], scratch[7 * nc:8 * nc], scratch[8 * nc:9 * nc]
+        for t in range(2 * nc):
+            g[t] = 0.0
+            dm[t] = 0.0
+            hv[t] = 0.0
+        th, om, al = trow[col], trow[col + 1], trow[col + 2]
+        c, s = np.cos(th), np.sin(th)
+        vx, vy = d.const[r, 0], d.const[r, 1]
+        for t in range(l0, l2):
+            f = 0 if t < l1 else 1
+            b = d.lb[t]
+            if f == 0:
+                vx += b * q1[d.li[t]]
+            else:
+                vy += b * q1[d.li[t]]
+            g[f * nc + d.lsl[t]] += b
+            dm[f * nc + d.lsl[t]] += b
+        weight = (-s, c)
+        for t in range(p0, p2):
+            f = 0 if t < p1 else 1
+            i, j, h = d.pi[t], d.pj[t], d.ph[t]
+            si, sj = f * nc + d.psi[t], f * nc + d.psj[t]
+            if f == 0:
+                vx += h * q1[i] * q1[j]
+            else:
+                vy += h * q1[i] * q1[j]
+            g[si] += h * q1[j]
+            g[sj] += h * q1[i]
+            hv[si] += h * v1[j]
+            hv[sj] += h * v1[i]
+            if evaluate:
+                dm[si] += 0.5 * h * (qa[j] + qb[j])
+                dm[sj] += 0.5 * h * (qa[i] + qb[i])
+                # ∂(Dᵀμ)/∂q_b = ½ μ (c H_Y − s H_X): the pair's two entries
+                e = 0.5 * w * h * weight[f] * mu[row]
+                add_qq(ctx, st, i, j, e)
+                add_qq(ctx, st, j, i, e)
+        value = c * vy - s * vx
+        phi_t = -om * (s * vy + c * vx)
+        qt_v = 0.0
+        for t in range(nc):
+            cq[t] = c * g[nc + t] - s * g[t]
+            dd[t] = c * dm[nc + t] - s * dm[t]
+            qt = -om * (s * g[nc + t] + c * g[t])
+            cv[t] = c * hv[nc + t] - s * hv[t] + qt
+            qt_v += qt * v1[d.cols[c0 + t]]
+        phi_tt = qt_v - al * (s * vy + c * vx) - om * om * (c * vy - s * vx)
+        finish_row(ctx, st, row, value, phi_t, phi_tt, d.cols[c0:c1], cq, dd, cv, nc)
+
+
+def _kernel(ctx_p, fam_p):
+    ctx = context_of(ctx_p)
+    if ctx.task == TASK_EVAL or ctx.task == TASK_ROWS:
+        _evaluate(ctx, _view(family_of(fam_p)))
+
+
+def kernel():
+    return compiled_kernel(_kernel, "the rotation-driver family")
