@@ -155,10 +155,12 @@ def spatial_peer_problems(out, suffix):
                      peer_spatial.heavy_top("simo-wong", 1e-3, top_t, scheme="trapezoidal"),
                      "trapezoidal, index 2, Δt = 1e-3", top))
     # quick mode exercises the code on the short chain only (the long one's reference alone takes seconds)
-    for n, dts in ((10, (1e-3, 4e-3)),) + (() if QUICK else ((400, (1e-3,)),)):
+    # (the long chain and the slider–crank also at exudyn's relative Newton tolerance, 1e-8)
+    for n, runs in ((10, ((1e-3, "energy-momentum"), (4e-3, "energy-momentum"))),) + (() if QUICK else (
+            (400, ((1e-3, "energy-momentum"), (1e-3, ("energy-momentum", 1e-8)))),)):
         chain = converged(f"rigid_chain_{n}", lambda n=n: sf.scenes.rigid_chain(n), 1e-3, chain_t, "tip")
-        for dt in dts:
-            rows.append((f"rigid chain, {n} bodies", lambda n=n: sf.scenes.rigid_chain(n), "energy-momentum", dt,
+        for dt, scheme in runs:
+            rows.append((f"rigid chain, {n} bodies", lambda n=n: sf.scenes.rigid_chain(n), scheme, dt,
                          chain_t, "tip", peer_spatial.rigid_chain(n, 1e-3, chain_t),
                          "generalized-alpha 0.9, Δt = 1e-3", chain))
     brick = converged("bricard", sf.scenes.bricard, 1e-3, bricard_t, "P3")
@@ -195,8 +197,8 @@ def spatial_peer_problems(out, suffix):
     def slider_only():                      # exudyn's probe is (x_C, θ): the slider's position is compared
         t, p, seconds = exudyn_crank()
         return t, np.asarray(p)[:, 0], seconds
-    for dt in (1e-3, 2e-3):
-        rows.append(("spatial slider–crank (slider position)", sf.scenes.spatial_slider_crank, "energy-momentum", dt,
+    for dt, scheme in ((1e-3, "energy-momentum"), (1e-3, ("energy-momentum", 1e-8)), (2e-3, "energy-momentum")):
+        rows.append(("spatial slider–crank (slider position)", sf.scenes.spatial_slider_crank, scheme, dt,
                      crank_t, "slider", slider_only, "generalized-alpha 0.9, Δt = 1e-3", crank))
     return rows
 

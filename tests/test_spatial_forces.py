@@ -82,9 +82,10 @@ def test_free_pair_on_springs_conserves_energy_and_momenta():
     assert np.abs(L - L[0]).max() <= 1e-10 * np.abs(L[0]).max()
 
 
-def _sprung():
+def _sprung(dampers=False):
     """Two rigid bodies on two springs (one to a ground point, one with a rest length) and an exact beam whose tip
-    node hangs on a third, under gravity: every spring's points are affine in q."""
+    node hangs on a third, under gravity: every spring's points are affine in q; ``dampers``: a damper beside
+    the first two springs and one from the beam's tip to the ground."""
     a, b = _bodies()
     a.v0[:3] = (0.3, -0.2, 0.1)
     b.v0[3:] = np.concatenate([np.cross([1.0, -2.0, 3.0], b.q0[3 + 3 * k:6 + 3 * k]) for k in range(3)])
@@ -94,6 +95,10 @@ def _sprung():
     springs = [sf.SpatialSpring(a.point([0.1, 0.0, 0.05]), b.point([-0.1, 0.02, 0.0]), 200.0, rest_length=0.3),
                sf.SpatialSpring(a.point([0.0, 0.1, 0.0]), [0.3, 0.4, 0.5], 20.0, rest_length=0.0),
                sf.SpatialSpring(beam.point(1.0), [2.0, 0.0, 0.5], 300.0)]
+    if dampers:
+        springs += [sf.SpatialDamper(a.point([0.1, 0.0, 0.05]), b.point([-0.1, 0.02, 0.0]), 3.0),
+                    sf.SpatialDamper(a.point([0.0, 0.1, 0.0]), [0.3, 0.4, 0.5], 2.0),
+                    sf.SpatialDamper(beam.point(1.0), [2.0, 0.1, 0.5], 5.0)]
     return sf.Scene([a, b, beam], [sf.Weld3D(beam.point(0.0))], springs + [sf.Gravity((0.0, 0.0, -9.81))])
 
 
@@ -126,6 +131,49 @@ def test_spring_family_tangent_is_the_residuals_derivative(scheme):
     assert not st.packed.python_elements
     x = np.concatenate([0.01 * v0 + 1e-3 * rng.normal(size=q0.size), 1e-2 * rng.normal(size=scene.n_constraints)])
     assert fd_mismatch(st, 0.0, 0.01, x)[0] < 1e-8
+
+
+@pytest.mark.parametrize("scheme", ["energy-momentum", "trapezoidal", "generalized-alpha"])
+def test_dampers_run_compiled_as_the_python_path(scheme):
+    """The spatial dampers in the spring family against their numpy generalized_force: trajectories to 1e-10
+    under the three schemes; they dissipate, and under energy-momentum their work closes the energy balance."""
+    fast = sf.simulate(_sprung(dampers=True), 0.2, 0.01, scheme=scheme, compiled=True)
+    slow = sf.simulate(_sprung(dampers=True), 0.2, 0.01, scheme=scheme, compiled=False)
+    assert not fast.run_path["python_elements"]
+    assert any("SpatialDamper" in why for why in slow.run_path["python_elements"])
+    assert np.abs(fast.q - slow.q).max() <= 1e-10 * np.abs(slow.q).max()
+    assert np.abs(fast.v - slow.v).max() <= 1e-8 * np.abs(slow.v).max()
+    assert np.abs(fast.external_work - slow.external_work).max() <= 1e-9 * np.abs(slow.external_work).max()
+    assert fast.external_work[-1] < -1e-3
+    if scheme == "energy-momentum":
+        E, W = fast.total_energy, fast.external_work
+        assert np.abs(E - E[0] - W).max() <= 1e-10 * np.abs(E).max()
+
+
+@pytest.mark.parametrize("scheme", ["energy-momentum", "generalized-alpha"])
+def test_damper_tangent_is_the_residuals_derivative(scheme):
+    """The dampers' part of the Newton matrix (∂Q/∂q and ∂Q/∂v through the scheme's q_e, v_e) against central
+    differences of the residual."""
+    from family_checks import fd_mismatch, loaded_stepper
+    scene = _sprung(dampers=True)
+    q0 = np.concatenate([b.q0 for b in scene.bodies])
+    v0 = np.concatenate([b.v0 for b in scene.bodies])
+    rng = np.random.default_rng(5)
+    st = loaded_stepper(scene, scheme, q0, v0, acc=rng.normal(size=q0.size))
+    assert not st.packed.python_elements
+    x = np.concatenate([0.01 * v0 + 1e-3 * rng.normal(size=q0.size), 1e-2 * rng.normal(size=scene.n_constraints)])
+    assert fd_mismatch(st, 0.0, 0.01, x)[0] < 1e-8
+
+
+def test_a_compiled_damper_whose_points_coincide_raises_its_own_error():
+    """A damper between two points that coincide at the start has no direction: the compiled run stops with the
+    damper's own message, as the Python path does."""
+    a = sf.SpatialRigidBody(1.0, [0.01, 0.01, 0.01], position=[0.0, 0.0, 0.0], velocity=[1.0, 0.0, 0.0])
+    b = sf.SpatialRigidBody(1.0, [0.01, 0.01, 0.01], position=[0.0, 0.0, 0.0])
+    scene = sf.Scene([a, b], [], [sf.SpatialDamper(a.point([0.0, 0.0, 0.0]), b.point([0.0, 0.0, 0.0]), 0.0)])
+    for compiled in (True, False):
+        with pytest.raises(ValueError, match="its two points coincide"):
+            sf.simulate(scene, 0.2, 0.1, scheme="generalized-alpha", compiled=compiled)
 
 
 def test_damper_work_closes_the_energy_balance():

@@ -14,6 +14,19 @@ With s = d·d quadratic in q, the exact discrete gradient from q_a to q_b is (th
 
 (at q_a = q_b the gradient and half the Hessian). TASK_EVAL adds g into ``g_p``, w_gp c_dg dq1 times its
 derivative into the Newton matrix and the round-off floor into ``floor``; TASK_ENERGY adds V(q₁) (J).
+
+Dampers along the same lines (:class:`~skfem_flex.elements.forces.SpatialDamper`, "spatial damper"): with
+u = d/l and w = A v, the load at (q_e, v_e)
+
+.. math::
+
+    Q = −c\,(u·w)\,A^\mathsf{T} u,\quad
+    ∂Q/∂q = −c\,\bigl(A^\mathsf{T} u ⊗ A^\mathsf{T} ∂u^\mathsf{T} w + (u·w)\,A^\mathsf{T} ∂u\bigr),\quad
+    ∂Q/∂v = −c\,A^\mathsf{T} u ⊗ A^\mathsf{T} u,\quad ∂u = (I − u u^\mathsf{T}) A / l;
+
+TASK_EVAL_LOADS adds Q into ``ext`` and w_ext (∂Q/∂q dqe + ∂Q/∂v dve) into the Newton matrix, TASK_LOADS Q
+only. A damper whose points coincide (l = 0: no direction) refuses the step (``STATUS_REFUSED``);
+:func:`refusal_error` gives the element's own error.
 """
 from __future__ import annotations
 
@@ -25,40 +38,47 @@ import numpy as np
 from ..abi import context_of, f2, family_of, fvec, i1, i2
 from ..registry import compiled_kernel
 from ..storage import add_qq, storage_of
-from ..tasks import TASK_ENERGY, TASK_EVAL
+from ..tasks import STATUS_REFUSED, TASK_ENERGY, TASK_EVAL, TASK_EVAL_LOADS, TASK_LOADS
 from . import FamilyPack
 
-NAME = "spatial springs"
-FORMS = ("spatial spring",)
+NAME = "spatial springs and dampers"
+FORMS = ("spatial spring", "spatial damper")
+
+SPRING, DAMPER = 0, 1
 
 
 class Data(NamedTuple):
-    span: np.ndarray    # (k, 2) first and end of each spring's coordinates in ``coords`` (and of its A's columns)
-    coords: np.ndarray  # the scene coordinates of each spring's layout, concatenated
-    A: np.ndarray       # (3, Σ n) the columns of each spring's A, concatenated
-    par: np.ndarray     # (k, 5) stiffness k (N/m), rest length l₀ (m), a (m)
+    span: np.ndarray    # (k, 2) first and end of each element's coordinates in ``coords`` (and of its A's columns)
+    coords: np.ndarray  # the scene coordinates of each element's layout, concatenated
+    A: np.ndarray       # (3, Σ n) the columns of each element's A, concatenated
+    par: np.ndarray     # (k, 5) a spring's stiffness k (N/m) and rest length l₀ (m), or a damper's c (N s/m)
+    #                     and 0; then a (m)
+    kind: np.ndarray    # (k,) SPRING or DAMPER
 
 
 @numba.njit(cache=True, _nrt=False)
 def _view(fam):
-    return Data(i2(fam, 0), i1(fam, 1), f2(fam, 2), f2(fam, 3))
+    return Data(i2(fam, 0), i1(fam, 1), f2(fam, 2), f2(fam, 3), i1(fam, 4))
 
 
 def pack(items, packer):
-    """Spatial springs ("spatial spring", A (3, n), a (3,), k, l₀) on the scene coordinates ``where`` of their
-    layout; each couples its coordinates as one dense block."""
-    span, coords, cols, par, couplings = [], [], [], [], []
-    for (_, A, a, k, rest), element, where in items:
+    """Spatial springs ("spatial spring", A (3, n), a (3,), k, l₀) and dampers ("spatial damper", A, a, c) on the
+    scene coordinates ``where`` of their layout; each couples its coordinates as one dense block."""
+    span, coords, cols, par, kind, couplings = [], [], [], [], [], []
+    for form, element, where in items:
+        A, a = form[1], form[2]
         where = np.asarray(where, dtype=np.int64)
         A = np.asarray(A, dtype=float).reshape(3, where.size)
         span.append((len(coords), len(coords) + where.size))
         coords.extend(where)
         cols.append(A)
-        par.append((float(k), float(rest), *np.asarray(a, dtype=float).reshape(3)))
+        spring = form[0] == "spatial spring"
+        par.append((float(form[3]), float(form[4]) if spring else 0.0, *np.asarray(a, dtype=float).reshape(3)))
+        kind.append(SPRING if spring else DAMPER)
         couplings.append(np.unique(where))
     data = Data(np.asarray(span, dtype=np.int64).reshape(-1, 2), np.asarray(coords, dtype=np.int64),
                 np.ascontiguousarray(np.hstack(cols) if cols else np.zeros((3, 0))),
-                np.asarray(par, dtype=float).reshape(-1, 5))
+                np.asarray(par, dtype=float).reshape(-1, 5), np.asarray(kind, dtype=np.int64))
     return FamilyPack(data=data, count=len(items), couplings=couplings)
 
 
@@ -83,6 +103,8 @@ def _evaluate(ctx, fam):
     da, db = scratch[0:3], scratch[3:6]
     th = ctx.w_gp * ctx.c_dg * ctx.dq1
     for e in range(d.span.shape[0]):
+        if d.kind[e] != SPRING:
+            continue
         k, lr = d.par[e, 0], d.par[e, 1]
         la = _difference(d, e, qa, da)
         lb = _difference(d, e, qb, db)
@@ -117,8 +139,51 @@ def _energy(ctx, fam):
     r = fvec(ctx.scratch, 3)
     pot = 0.0
     for e in range(d.span.shape[0]):
-        pot += 0.5 * d.par[e, 0] * (_difference(d, e, q, r) - d.par[e, 1]) ** 2
+        if d.kind[e] == SPRING:
+            pot += 0.5 * d.par[e, 0] * (_difference(d, e, q, r) - d.par[e, 1]) ** 2
     out[0] += pot
+
+
+@numba.njit(cache=True, _nrt=False)
+def _dampers(ctx, fam, tangent):
+    """The dampers' loads (module docstring) and, with ``tangent``, their derivatives; STATUS_REFUSED where a
+    damper's points coincide."""
+    d = _view(fam)
+    n = ctx.n
+    q, v, ext, dve = fvec(ctx.qe, n), fvec(ctx.ve, n), fvec(ctx.ext, n), fvec(ctx.dve, n)
+    st = storage_of(ctx)
+    scratch = fvec(ctx.scratch, ctx.nscratch)
+    dd, u, w = scratch[0:3], scratch[3:6], scratch[6:9]
+    wq = ctx.w_ext * ctx.dqe
+    for e in range(d.span.shape[0]):
+        if d.kind[e] != DAMPER:
+            continue
+        c = d.par[e, 0]
+        ln = _difference(d, e, q, dd)
+        if ln == 0.0:                   # the direction is undefined: the Python path raises the damper's error
+            ctx.status = STATUS_REFUSED
+            return
+        j0, j1 = d.span[e, 0], d.span[e, 1]
+        for k in range(3):
+            u[k] = dd[k] / ln
+            w[k] = 0.0
+            for j in range(j0, j1):
+                w[k] += d.A[k, j] * v[d.coords[j]]
+        rate = u[0] * w[0] + u[1] * w[1] + u[2] * w[2]
+        for i in range(j0, j1):
+            jtu_i = d.A[0, i] * u[0] + d.A[1, i] * u[1] + d.A[2, i] * u[2]
+            ext[d.coords[i]] -= c * rate * jtu_i
+            if not tangent:
+                continue
+            for j in range(j0, j1):
+                jtu_j = d.A[0, j] * u[0] + d.A[1, j] * u[1] + d.A[2, j] * u[2]
+                aij = d.A[0, i] * d.A[0, j] + d.A[1, i] * d.A[1, j] + d.A[2, i] * d.A[2, j]
+                # (w − (u·w) u) · A_j / l = wᵀ ∂u/∂q_j;  A_iᵀ ∂u/∂q_j = (A_i·A_j − (u·A_i)(u·A_j)) / l
+                wdu = ((w[0] - rate * u[0]) * d.A[0, j] + (w[1] - rate * u[1]) * d.A[1, j]
+                       + (w[2] - rate * u[2]) * d.A[2, j]) / ln
+                fq = -c * (jtu_i * wdu + rate * (aij - jtu_i * jtu_j) / ln)
+                fv = -c * jtu_i * jtu_j
+                add_qq(ctx, st, d.coords[i], d.coords[j], wq * fq + ctx.w_ext * fv * dve[d.coords[j]])
 
 
 def _kernel(ctx_p, fam_p):
@@ -127,9 +192,29 @@ def _kernel(ctx_p, fam_p):
         _evaluate(ctx, family_of(fam_p))
     elif ctx.task == TASK_ENERGY:
         _energy(ctx, family_of(fam_p))
+    elif ctx.task == TASK_EVAL_LOADS or ctx.task == TASK_LOADS:
+        _dampers(ctx, family_of(fam_p), ctx.task == TASK_EVAL_LOADS)
+
+
+#: the driver's :func:`refusal_error` looks at the loads' evaluation point (q_e, v_e, t_e)
+REFUSAL_STATE = "loads"
+
+
+def refusal_error(scene, q, v, t):
+    """The ValueError of the first spatial damper whose own ``generalized_force`` raises at the loads' evaluation
+    point (q, v, t) (its points coincide), or None: what the Python path raises where this family refused."""
+    for f, idx in scene.loads:
+        form = f.compiled_form() if hasattr(f, "compiled_form") else None
+        if form is not None and form[0] == "spatial damper":
+            idx = np.asarray(idx)
+            try:
+                f.generalized_force(q[idx], v[idx], t)
+            except ValueError as exc:
+                return exc
+    return None
 
 
 def kernel():
     """The family's compiled kernel (:func:`~skfem_flex.compiled.registry.compiled_kernel`), from the cache or
     compiled on first use."""
-    return compiled_kernel(_kernel, "the spatial-spring family")
+    return compiled_kernel(_kernel, "the spatial-spring and damper family")

@@ -152,6 +152,13 @@ class SpatialDamper(_Line):
         self.c = check_nonnegative("damping", damping)
         self.name = name
 
+    def compiled_form(self):
+        """("spatial damper", A, a, c) of the spatial-spring and damper family (d = A q + a), when both points are
+        affine in q; None otherwise (the Python path)."""
+        if self.d.H is not None or not keeps_methods(self, SpatialDamper, ("generalized_force",)):
+            return None
+        return "spatial damper", self.d.A, self.d.a, self.c
+
     def generalized_force(self, q, v, t):
         d, A = self.d.value(q), self.d.A
         ln = float(np.linalg.norm(d))
