@@ -176,6 +176,55 @@ def test_a_compiled_damper_whose_points_coincide_raises_its_own_error():
             sf.simulate(scene, 0.2, 0.1, scheme="generalized-alpha", compiled=compiled)
 
 
+def _twisted(damped=True):
+    """Two bodies on a hinge (a cylindrical joint about z), a torsional spring and damper about it, and body b on a
+    torsional spring and damper about x against the ground (its direction turning off the axis), under gravity."""
+    a, b = _bodies()
+    a.v0[:3] = (0.3, -0.2, 0.1)
+    b.v0[3:] = np.concatenate([np.cross([1.0, -2.0, 3.0], b.q0[3 + 3 * k:6 + 3 * k]) for k in range(3)])
+    where = np.array([0.3, 0.1, -0.05])
+    joint = sf.Cylindrical(a.point(a.body_coordinates(where)), b.point(b.body_coordinates(where)), axis=(0, 0, 1))
+    forces = [sf.SpatialTorsionalSpring(a, b, axis=(0.0, 0.0, 1.0), stiffness=5.0, angle=0.3),
+              sf.SpatialTorsionalSpring(b, None, axis=(1.0, 0.0, 0.0), stiffness=3.0)]
+    if damped:
+        forces += [sf.SpatialTorsionalDamper(a, b, axis=(0.0, 0.0, 1.0), damping=0.4),
+                   sf.SpatialTorsionalDamper(b, None, axis=(1.0, 0.0, 0.0), damping=0.2)]
+    return sf.Scene([a, b], [joint], forces + [sf.Gravity((0.0, 0.0, -9.81))])
+
+
+@pytest.mark.parametrize("scheme", ["energy-momentum", "trapezoidal", "generalized-alpha"])
+def test_torsional_elements_run_compiled_as_the_python_path(scheme):
+    """The spatial torsional family against the springs' and dampers' numpy methods: trajectories and work to
+    1e-10 under the three schemes; undamped, energy-momentum keeps the energy."""
+    fast = sf.simulate(_twisted(), 0.3, 0.01, scheme=scheme, compiled=True)
+    slow = sf.simulate(_twisted(), 0.3, 0.01, scheme=scheme, compiled=False)
+    assert not fast.run_path["python_elements"]
+    assert any("SpatialTorsional" in why for why in slow.run_path["python_elements"])
+    assert np.abs(fast.q - slow.q).max() <= 1e-10 * np.abs(slow.q).max()
+    assert np.abs(fast.v - slow.v).max() <= 1e-8 * np.abs(slow.v).max()
+    assert np.abs(fast.potential - slow.potential).max() <= 1e-10 * np.abs(slow.potential).max()
+    assert np.abs(fast.external_work - slow.external_work).max() <= 1e-9 * np.abs(slow.external_work).max()
+    assert fast.external_work[-1] < -1e-4                   # the dampers dissipate
+    if scheme == "energy-momentum":
+        E = sf.simulate(_twisted(damped=False), 0.3, 0.01, scheme=scheme).total_energy
+        assert np.abs(E - E[0]).max() <= 1e-10 * np.abs(E).max()
+
+
+@pytest.mark.parametrize("scheme", ["energy-momentum", "generalized-alpha"])
+def test_torsional_family_tangent_is_the_residuals_derivative(scheme):
+    """The torsional family's Newton matrix (the spring's discrete-gradient derivative with its correction's
+    part, the dampers' ∂Q/∂q and ∂Q/∂v) against central differences of the residual."""
+    from family_checks import fd_mismatch, loaded_stepper
+    scene = _twisted()
+    q0 = np.concatenate([b.q0 for b in scene.bodies])
+    v0 = np.concatenate([b.v0 for b in scene.bodies])
+    rng = np.random.default_rng(5)
+    st = loaded_stepper(scene, scheme, q0, v0, acc=rng.normal(size=q0.size))
+    assert not st.packed.python_elements
+    x = np.concatenate([0.05 * v0 + 1e-2 * rng.normal(size=q0.size), 1e-2 * rng.normal(size=scene.n_constraints)])
+    assert fd_mismatch(st, 0.0, 0.05, x)[0] < 1e-8
+
+
 def test_damper_work_closes_the_energy_balance():
     r = sf.simulate(_free_pair(damping=5.0), 2.0, 0.02, scheme="energy-momentum")
     E, W = r.total_energy, r.external_work

@@ -46,6 +46,7 @@ FAMILY_MODULES = (
     "spatial_loads",
     "spatial_floating_frame",
     "spatial_springs",
+    "spatial_torsion",
 )
 
 

@@ -196,6 +196,11 @@ class _HingeAngle(ForceElement):
         u = self.u.value(q)
         return float(u @ self.n1.value(q)), float(u @ self.n2.value(q))
 
+    def _forms(self):
+        """(H_x, b_x, c_x, H_y, b_y, c_y) of x = u·n₁ = ½ qᵀH_x q + b_x·q + c_x and of y = u·n₂."""
+        return tuple(part for p in (self.u.dot(self.n1), self.u.dot(self.n2))
+                     for part in (p[0][0], p[1][0], float(p[2][0])))
+
     def _invariant_gradients(self, q):
         """∇x, ∇y (n,) of x = u·n₁, y = u·n₂."""
         u = self.u.value(q)
@@ -244,6 +249,13 @@ class SpatialTorsionalSpring(_HingeAngle):
             raise ValueError(f"stiffness must be finite and positive, got {stiffness!r} N m/rad")
         self.rest = float(angle)
         self.name = name
+
+    def compiled_form(self):
+        """("torsional spring", H_x, b_x, c_x, H_y, b_y, c_y, σ, k, θ₀): the spatial torsional family, with
+        x = u·n₁ and y = u·n₂ as quadratic forms; None for a subclass that changes the energy."""
+        if not keeps_methods(self, SpatialTorsionalSpring, CONSERVATIVE + ("angle", "angle_gradient", "_xy")):
+            return None
+        return ("torsional spring", *self._forms(), self.sign, self.k, self.rest)
 
     def potential_energy(self, q):
         return 0.5 * self.k * (self.angle(q) - self.rest) ** 2
@@ -294,6 +306,13 @@ class SpatialTorsionalDamper(_HingeAngle):
         self._setup(body_a, body_b, axis)
         self.c = check_nonnegative("damping", damping)
         self.name = name
+
+    def compiled_form(self):
+        """("torsional damper", H_x, b_x, c_x, H_y, b_y, c_y, σ, c, 0): the spatial torsional family; None for a
+        subclass that changes the load."""
+        if not keeps_methods(self, SpatialTorsionalDamper, ("generalized_force", "angle_gradient", "_xy")):
+            return None
+        return ("torsional damper", *self._forms(), self.sign, self.c, 0.0)
 
     def generalized_force(self, q, v, t):
         g, dg = self.angle_gradient(q)
