@@ -22,7 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from importlib import import_module
 
-__all__ = ["FamilyPack", "FAMILY_MODULES", "family_for", "families"]
+__all__ = ["FamilyPack", "FAMILY_MODULES", "family_for", "families", "first_refusal"]
 
 #: every family of the package, by module (imported when first needed: a scene loads only its own)
 FAMILY_MODULES = (
@@ -107,3 +107,17 @@ def family_for(form_name):
             for f in mod.FORMS:
                 _BY_FORM[f] = mod
     return _BY_FORM.get(form_name)
+
+
+def first_refusal(elements, forms, check):
+    """The ValueError that the first of ``elements`` ((element, its scene coordinates) pairs) whose compiled form
+    is one of ``forms`` raises from ``check(element, coordinates)``, or None: a family's ``refusal_error``,
+    what the Python path raises where the family refused a state."""
+    for element, idx in elements:
+        form = element.compiled_form() if hasattr(element, "compiled_form") else None
+        if form is not None and form[0] in forms:
+            try:
+                check(element, list(idx))
+            except ValueError as exc:
+                return exc
+    return None

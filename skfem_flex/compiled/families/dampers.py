@@ -33,7 +33,7 @@ from ..points import KIND, LINEAR, NB, OFF, hessian_parts, jacobian_into, maps_v
 from ..registry import compiled_kernel
 from ..storage import add_qq, storage_of
 from ..tasks import STATUS_REFUSED, TASK_EVAL_LOADS, TASK_LOADS
-from . import FamilyPack
+from . import FamilyPack, first_refusal
 from .two_point_springs import pack_pairs, pair_distance
 
 NAME = "dampers"
@@ -202,15 +202,7 @@ def refusal_error(scene, q, v, t):
     t : float
         Its time (the context's t_e), s.
     """
-    for f, idx in scene.loads:
-        form = f.compiled_form() if hasattr(f, "compiled_form") else None
-        if form is not None and form[0] == "two-point damper":
-            idx = np.asarray(idx)
-            try:
-                f.generalized_force(q[idx], v[idx], t)
-            except ValueError as exc:
-                return exc
-    return None
+    return first_refusal(scene.loads, ("two-point damper",), lambda f, i: f.generalized_force(q[i], v[i], t))
 
 
 def _kernel(ctx_p, fam_p):

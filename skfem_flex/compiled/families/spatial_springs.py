@@ -39,7 +39,7 @@ from ..abi import context_of, f2, family_of, fvec, i1, i2
 from ..registry import compiled_kernel
 from ..storage import add_qq, storage_of
 from ..tasks import STATUS_REFUSED, TASK_ENERGY, TASK_EVAL, TASK_EVAL_LOADS, TASK_LOADS
-from . import FamilyPack
+from . import FamilyPack, first_refusal
 
 NAME = "spatial springs and dampers"
 FORMS = ("spatial spring", "spatial damper")
@@ -203,15 +203,7 @@ REFUSAL_STATE = "loads"
 def refusal_error(scene, q, v, t):
     """The ValueError of the first spatial damper whose own ``generalized_force`` raises at the loads' evaluation
     point (q, v, t) (its points coincide), or None: what the Python path raises where this family refused."""
-    for f, idx in scene.loads:
-        form = f.compiled_form() if hasattr(f, "compiled_form") else None
-        if form is not None and form[0] == "spatial damper":
-            idx = np.asarray(idx)
-            try:
-                f.generalized_force(q[idx], v[idx], t)
-            except ValueError as exc:
-                return exc
-    return None
+    return first_refusal(scene.loads, ("spatial damper",), lambda f, i: f.generalized_force(q[i], v[i], t))
 
 
 def kernel():

@@ -31,7 +31,7 @@ from ..abi import context_of, f1, f2, family_of, fvec, i1, i2
 from ..registry import compiled_kernel
 from ..storage import add_qq, storage_of
 from ..tasks import STATUS_REFUSED, TASK_ENERGY, TASK_EVAL, TASK_EVAL_LOADS, TASK_LOADS
-from . import FamilyPack
+from . import FamilyPack, first_refusal
 
 NAME = "spatial torsional springs and dampers"
 FORMS = ("torsional spring", "torsional damper")
@@ -250,15 +250,8 @@ REFUSAL_STATE = "loads"
 def refusal_error(scene, q, v, t):
     """The ValueError of the first torsional element whose own methods raise at (q, v, t) (its turning direction
     along the axis), or None: what the Python path raises where this family refused."""
-    for f, idx in list(scene.loads) + list(scene.conservative_forces):
-        form = f.compiled_form() if hasattr(f, "compiled_form") else None
-        if form is not None and form[0] in FORMS:
-            idx = np.asarray(idx)
-            try:
-                f.angle_gradient(q[idx])
-            except ValueError as exc:
-                return exc
-    return None
+    return first_refusal(list(scene.loads) + list(scene.conservative_forces), FORMS,
+                         lambda f, i: f.angle_gradient(q[i]))
 
 
 def kernel():
