@@ -38,7 +38,7 @@ def form_terms(H, b):
 
 class Data(NamedTuple):
     rows: np.ndarray        # (k, 7): row, first/end pair term, first/end linear term, first column, law column
-    const: np.ndarray       # (k,) c
+    const: np.ndarray       # (k,) c (the rotation drivers: (c_X, c_Y) a row, raveled)
     pi: np.ndarray          # pair terms h q_i q_j: i, j (global), their slots in the row's columns, h
     pj: np.ndarray
     psi: np.ndarray
@@ -51,20 +51,50 @@ class Data(NamedTuple):
 
 
 @numba.njit(cache=True, _nrt=False)
-def _view(fam):
+def view_of(fam):
+    """The family record's arrays as :class:`Data`."""
     return Data(i2(fam, 0), f1(fam, 1), i1(fam, 2), i1(fam, 3), i1(fam, 4), i1(fam, 5), f1(fam, 6), i1(fam, 7),
                 i1(fam, 8), f1(fam, 9), i1(fam, 10))
 
 
+class TermLists:
+    """The pair and linear terms of quadratic forms and the coordinates of their rows, collected row after row:
+    the arrays of :class:`Data` but ``rows`` and ``const`` (shared with the rotation-driver family)."""
+
+    def __init__(self):
+        self.pi, self.pj, self.psi, self.psj, self.ph, self.li, self.lsl, self.lb, self.cols = ([] for _ in range(9))
+
+    def add(self, idx, slot, terms, b):
+        """Append one form's terms (:func:`form_terms`) on the block coordinates ``idx`` (global) with their
+        slots ``slot`` in the row's columns, and the linear coefficients ``b`` over the block."""
+        hi, hj, hv, bi = terms
+        self.pi.extend(idx[hi])
+        self.pj.extend(idx[hj])
+        self.psi.extend(slot[int(t)] for t in hi)
+        self.psj.extend(slot[int(t)] for t in hj)
+        self.ph.extend(hv)
+        self.li.extend(idx[bi])
+        self.lsl.extend(slot[int(t)] for t in bi)
+        self.lb.extend(np.asarray(b)[bi])
+
+    def data(self, rows, width, const):
+        """The :class:`Data` of the collected terms with the row table ``rows`` (``width`` entries a row) and
+        the constants ``const``."""
+        i64 = lambda a: np.asarray(a, dtype=np.int64)        # noqa: E731
+        return Data(i64(rows).reshape(len(rows), width), np.asarray(const, dtype=float).ravel(), i64(self.pi),
+                    i64(self.pj), i64(self.psi), i64(self.psj), np.asarray(self.ph, dtype=float), i64(self.li),
+                    i64(self.lsl), np.asarray(self.lb, dtype=float), i64(self.cols + [0]))
+
+
 def pack(items, packer):
     rows, const = [], []
-    pi, pj, psi, psj, ph, li, lsl, lb, cols = ([] for _ in range(9))
+    terms = TermLists()
     row_support, couplings = [], []
     for ((term, _), constraint, (idx, first)) in items:
         _, H, b, c, laws, columns = term
         idx = np.asarray(idx, dtype=np.int64)[columns]
         for k in range(H.shape[0]):
-            hi, hj, hv, bi = form_terms(H[k], b[k])
+            hi, hj, hv, bi = form = form_terms(H[k], b[k])
             touched = np.unique(np.concatenate([hi, hj, bi])).astype(np.int64)
             slot = {int(t): s for s, t in enumerate(touched)}
             col = -1
@@ -73,25 +103,15 @@ def pack(items, packer):
                 col = packer.column(law.position, 0, "end")
                 packer.column(law.velocity, 0, "end")
                 packer.column(law.acceleration, 0, "end")
-            rows.append((first + k, len(pi), len(pi) + hi.size, len(li), len(li) + bi.size, len(cols), col))
-            pi.extend(idx[hi])
-            pj.extend(idx[hj])
-            psi.extend(slot[int(t)] for t in hi)
-            psj.extend(slot[int(t)] for t in hj)
-            ph.extend(hv)
-            li.extend(idx[bi])
-            lsl.extend(slot[int(t)] for t in bi)
-            lb.extend(b[k][bi])
-            cols.extend(idx[touched])
+            rows.append((first + k, len(terms.pi), len(terms.pi) + hi.size, len(terms.li), len(terms.li) + bi.size,
+                         len(terms.cols), col))
+            terms.add(idx, slot, form, b[k])
+            terms.cols.extend(idx[touched])
             const.append(float(c[k]))
             row_support.append((first + k, idx[touched]))
             if hi.size:
                 couplings.append(np.unique(idx[np.concatenate([hi, hj])]))
-    n_rows = len(rows)
-    i64 = lambda a: np.asarray(a, dtype=np.int64)        # noqa: E731
-    data = Data(i64(rows).reshape(n_rows, 7), np.asarray(const, dtype=float), i64(pi), i64(pj), i64(psi), i64(psj),
-                np.asarray(ph, dtype=float), i64(li), i64(lsl), np.asarray(lb, dtype=float), i64(cols + [0]))
-    return FamilyPack(data=data, count=n_rows, couplings=couplings, rows=row_support)
+    return FamilyPack(data=terms.data(rows, 7, const), count=len(rows), couplings=couplings, rows=row_support)
 
 
 @numba.njit(cache=True, _nrt=False)
@@ -143,7 +163,7 @@ def _evaluate(ctx, d):
 def _kernel(ctx_p, fam_p):
     ctx = context_of(ctx_p)
     if ctx.task == TASK_EVAL or ctx.task == TASK_ROWS:
-        _evaluate(ctx, _view(family_of(fam_p)))
+        _evaluate(ctx, view_of(family_of(fam_p)))
 
 
 def kernel():

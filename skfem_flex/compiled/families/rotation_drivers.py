@@ -16,18 +16,16 @@ time table), as every row's time dependence. With c = cos θ, s = sin θ:
 """
 from __future__ import annotations
 
-from typing import NamedTuple
-
 import numba
 import numpy as np
 
-from ..abi import context_of, f1, f2, family_of, fvec, i1, i2
+from ..abi import context_of, family_of, fvec
 from ..registry import compiled_kernel
 from ..rows import finish_row
 from ..storage import add_qq, storage_of
 from ..tasks import TASK_EVAL, TASK_ROWS
 from . import FamilyPack
-from .quadratic_rows import form_terms
+from .quadratic_rows import TermLists, form_terms, view_of
 
 NAME = "rotation drivers"
 FORMS = ("rotation driver",)
@@ -37,30 +35,13 @@ def row_count(term):
     return 1
 
 
-class Data(NamedTuple):
-    rows: np.ndarray        # (k, 9): row, pair terms of X [p0, p1) and of Y [p1, p2), linear terms of X
-    #                         [l0, l1) and of Y [l1, l2), first column, law column (θ, θ̇, θ̈ follow)
-    const: np.ndarray       # (k, 2): c_X, c_Y
-    pi: np.ndarray          # pair terms h q_i q_j: i, j (global), their slots in the row's columns, h
-    pj: np.ndarray
-    psi: np.ndarray
-    psj: np.ndarray
-    ph: np.ndarray
-    li: np.ndarray          # linear terms b q_i: i, slot, b
-    lsl: np.ndarray
-    lb: np.ndarray
-    cols: np.ndarray        # the coordinates each row touches, row after row (end: the next row's first)
-
-
-@numba.njit(cache=True, _nrt=False)
-def _view(fam):
-    return Data(i2(fam, 0), f2(fam, 1), i1(fam, 2), i1(fam, 3), i1(fam, 4), i1(fam, 5), f1(fam, 6), i1(fam, 7),
-                i1(fam, 8), f1(fam, 9), i1(fam, 10))
-
-
 def pack(items, packer):
+    """The drivers' rows in the quadratic-row family's :class:`~.quadratic_rows.Data`: per row the pair terms of
+    X then of Y, their linear terms likewise, (c_X, c_Y) in ``const``; the row table (k, 9): row, pair terms
+    of X [p0, p1) and of Y [p1, p2), linear terms of X [l0, l1) and of Y [l1, l2), first column, law column
+    (θ, θ̇, θ̈ follow)."""
     rows, const = [], []
-    pi, pj, psi, psj, ph, li, lsl, lb, cols = ([] for _ in range(9))
+    terms = TermLists()
     row_support, couplings = [], []
     for ((term, _), constraint, (idx, first)) in items:
         _, Hx, bx, cx, Hy, by, cy, law = term
@@ -71,29 +52,16 @@ def pack(items, packer):
         col = packer.column(law, 0, "end")
         packer.column(law, 1, "end")
         packer.column(law, 2, "end")
-        p0, l0 = len(pi), len(li)
-        for hi, hj, hv, bi in (fx, fy):
-            pi.extend(idx[hi])
-            pj.extend(idx[hj])
-            psi.extend(slot[int(t)] for t in hi)
-            psj.extend(slot[int(t)] for t in hj)
-            ph.extend(hv)
-        for hi, hj, hv, bi in (fx, fy):
-            li.extend(idx[bi])
-            lsl.extend(slot[int(t)] for t in bi)
-        lb.extend(bx[fx[3]])
-        lb.extend(by[fy[3]])
-        rows.append((first, p0, p0 + fx[0].size, len(pi), l0, l0 + fx[3].size, len(li), len(cols), col))
-        cols.extend(idx[touched])
+        p0, l0 = len(terms.pi), len(terms.li)
+        terms.add(idx, slot, fx, bx)
+        terms.add(idx, slot, fy, by)
+        rows.append((first, p0, p0 + fx[0].size, len(terms.pi), l0, l0 + fx[3].size, len(terms.li), len(terms.cols),
+                     col))
+        terms.cols.extend(idx[touched])
         const.append((float(cx), float(cy)))
         row_support.append((first, idx[touched]))
         couplings.append(idx[touched])
-    n_rows = len(rows)
-    i64 = lambda a: np.asarray(a, dtype=np.int64)        # noqa: E731
-    data = Data(i64(rows).reshape(n_rows, 9), np.asarray(const, dtype=float).reshape(n_rows, 2), i64(pi), i64(pj),
-                i64(psi), i64(psj), np.asarray(ph, dtype=float), i64(li), i64(lsl), np.asarray(lb, dtype=float),
-                i64(cols + [0]))
-    return FamilyPack(data=data, count=n_rows, couplings=couplings, rows=row_support)
+    return FamilyPack(data=terms.data(rows, 9, const), count=len(rows), couplings=couplings, rows=row_support)
 
 
 @numba.njit(cache=True, _nrt=False)
@@ -120,7 +88,7 @@ def _evaluate(ctx, d):
             hv[t] = 0.0
         th, om, al = trow[col], trow[col + 1], trow[col + 2]
         c, s = np.cos(th), np.sin(th)
-        vx, vy = d.const[r, 0], d.const[r, 1]
+        vx, vy = d.const[2 * r], d.const[2 * r + 1]
         for t in range(l0, l2):
             f = 0 if t < l1 else 1
             b = d.lb[t]
@@ -166,7 +134,7 @@ def _evaluate(ctx, d):
 def _kernel(ctx_p, fam_p):
     ctx = context_of(ctx_p)
     if ctx.task == TASK_EVAL or ctx.task == TASK_ROWS:
-        _evaluate(ctx, _view(family_of(fam_p)))
+        _evaluate(ctx, view_of(family_of(fam_p)))
 
 
 def kernel():
