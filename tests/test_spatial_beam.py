@@ -268,7 +268,7 @@ def test_end_moment_rolls_the_cantilever_into_a_full_circle(load_steps):
     """A straight cantilever (8 elements) under the end moment 2πEI/L about the normal of its bending plane
     (fixed in space) closes into a full circle: the tip back at the root to 1e-8 L, the end section turned
     by a full turn, every node on one circle. The curvature of an element is its nodes' relative rotation,
-    so the constant curvature 2π/L is exact on any mesh (the interpolated directors of ``"directors"``
+    so the constant curvature 2π/L is exact on any mesh of three or more elements (the interpolated directors of ``"directors"``
     give sin(κh)/h and cannot reach it)."""
     L, EI = 10.0, 500.0
     beam = SpatialExactBeam.straight(SECTION.__class__(EA=1e4, GA1=1e4, GA2=1e4, GJ=400.0, EI1=EI, EI2=700.0,
@@ -286,6 +286,37 @@ def test_end_moment_rolls_the_cantilever_into_a_full_circle(load_steps):
     x = beam.node_positions(q)[:-1]
     r = np.linalg.norm(x - x.mean(axis=0), axis=1)
     assert np.ptp(r) <= 1e-8 * r.mean()
+
+
+def test_rotation_element_derivatives_at_large_relative_rotations_and_tiny_steps():
+    """Off the series branch (nodal triads turned against each other by 0.5–2.5 rad): the gradient, Hessian
+    and the discrete gradient's derivative against central differences; and on a step of 1e-12, where the
+    Gonzalez correction would be round-off over |Δz|², the discrete gradient is the gradient and its
+    derivative half the Hessian to 1e-6."""
+    beam = SpatialExactBeam.straight(SECTION, (0.0, 0.0, 0.0), (2.0, 0.0, 1.0), n_elements=3)
+    rng = np.random.default_rng(11)
+    q = beam.q0.copy()
+    for i, angle in enumerate((0.0, 0.5, 1.6, 2.5)):
+        axis = rng.normal(size=3)
+        R = Rotation.from_rotvec(angle * axis / np.linalg.norm(axis)).as_matrix()
+        o = 12 * i
+        q[o:o + 3] += 0.1 * rng.normal(size=3)
+        q[o + 3:o + 12] = (q[o + 3:o + 12].reshape(3, 3) @ R.T).ravel()
+    q0, q1 = q, q + 0.05 * rng.normal(size=q.size)
+    h = 1e-6
+    V = beam.potential_energy
+    for i in (4, 17, 30, 45):
+        e = np.zeros(beam.n_dofs)
+        e[i] = h
+        assert beam.potential_gradient(q0)[i] == pytest.approx((V(q0 + e) - V(q0 - e)) / (2 * h), rel=1e-6)
+        col = (beam.potential_gradient(q0 + e) - beam.potential_gradient(q0 - e)) / (2 * h)
+        assert np.abs(dense(beam.potential_hessian(q0))[:, i] - col).max() <= 1e-6 * np.abs(col).max()
+        col = (beam.potential_discrete_gradient(q0, q1 + e)[0] - beam.potential_discrete_gradient(q0, q1 - e)[0]) / (2 * h)
+        assert np.abs(dense(beam.potential_discrete_gradient(q0, q1)[1])[:, i] - col).max() <= 1e-6 * np.abs(col).max()
+    g, jac = beam.potential_discrete_gradient(q0, q0 + 1e-12 * rng.normal(size=q.size))
+    assert np.abs(g - beam.potential_gradient(q0)).max() <= 1e-6 * np.abs(g).max()
+    half = 0.5 * dense(beam.potential_hessian(q0))
+    assert np.abs(dense(jac) - half).max() <= 1e-6 * np.abs(half).max()
 
 
 def test_an_element_turned_half_a_turn_is_named():
@@ -362,3 +393,6 @@ def test_bad_input_names_the_value():
         SpatialExactBeam.straight(SECTION, (0, 0, 0), (1, 0, 0), order=2, interpolation="rotations")
     with pytest.raises(ValueError, match="interpolation must be 'rotations' or 'directors', got 'linear'"):
         SpatialExactBeam.straight(SECTION, (0, 0, 0), (1, 0, 0), interpolation="linear")
+    with pytest.raises(ValueError, match="reference placement turns element 0 by half a turn"):
+        SpatialExactBeam(SECTION, 1.0, lambda s: (np.array([s, 0.0, 0.0]), Rotation.from_rotvec(
+            [np.pi * s, 0.0, 0.0]).as_matrix()), n_elements=1)

@@ -131,6 +131,8 @@ class StaticResidual:
         self.nf, self.m = self.free.size, scene.n_constraints
         self.settings = settings
         self.rows = np.arange(self.m)
+        #: E(x₀), the configuration-dependent loads at the start of a load path (set by its homotopy), or None
+        self.external_start = None
 
     def full_q(self, x):
         q = self.q.copy()

@@ -6,8 +6,8 @@ r"""Following the load path to the equilibrium: pseudo-arc-length continuation, 
 
 (R the residual of :class:`~skfem_flex.analysis.balance.StaticResidual`, E the scene's non-potential
 loads, ``external_force``) from s = 0, the start, to s = 1, the scene's loads. With R = R_int − E this
-is R_int(x) − R_int(x₀) − s E(x): the potential forces (strain, gravity) are blended from the start's
-imbalance, and the loads that depend on the configuration (a moment in space axes on a beam's directors, a
+is R_int(x) − (1 − s) R_int(x₀) − s E(x): the potential forces (strain, gravity) are blended from the
+start's imbalance, and the loads that depend on the configuration (a moment in space axes on a beam's directors, a
 following force) are scaled by s where they act now, so every point of the path is an equilibrium under
 the share s of those loads (with R(x₀) frozen instead, a moment's director forces of the start would pull
 at a turned section, and a beam rolled up by an end moment finds no path). Then: predictor along the tangent, Newton corrector on the hyperplane orthogonal to it, step halved
@@ -113,8 +113,11 @@ def _start(scene, q0, v, a, t, settings, steady):
     nf = sys_.nf
     x0 = np.concatenate([q0[scene.free_index], initial_multipliers(scene, q0, v, a, t)])
     r0, jac0, sc0 = sys_.evaluate(x0)
-    # the loads that depend on the configuration, at the start (the homotopy scales them where they act)
+    # the loads that depend on the configuration, at the start (the homotopy scales them where they act);
+    # the path's tangent at s = 0 takes their derivative too
     sys_.external_start = sys_.external(x0)[0]
+    if sys_.external_start is not None:
+        jac0 = _homotopy(sys_, x0, 0.0, r0)[1]
 
     def done(x, s, steps, its):
         # the force balance at x, for the prescribed coordinates' forces and the accepted imbalance
@@ -150,7 +153,7 @@ def load_stepping(scene, q0, v, a, t, settings, n_steps, min_step, steady):
         s_new = min(s + target, 1.0)
         pred = x + (s_new - s) * dxds if x_before is None else x + (x - x_before) * ((s_new - s) / (s - s_before))
         try:
-            x_new, _, its = newton_solve(lambda y, s_new=s_new: _homotopy(sys_, y, s_new, r0), pred, settings,
+            x_new, _, its = newton_solve(_level(sys_, s_new, r0), pred, settings,
                                          name, f"load factor {s_new:.6g}")
         except (ConvergenceError, np.linalg.LinAlgError):
             target *= 0.5
@@ -209,9 +212,6 @@ def continuation(scene, q0, v, a, t, settings, max_steps, min_step, steady):
     h_max = 4.0 * h
     steps = its_total = 0
 
-    def level(s):
-        return lambda x: _homotopy(sys_, x, s, r0)
-
     while steps < max_steps:
         s = float(y[-1])
         y_pred = y + h * tau
@@ -219,7 +219,7 @@ def continuation(scene, q0, v, a, t, settings, max_steps, min_step, steady):
         try:
             if final:                # land on the full load: Newton at s = 1 from the predictor there
                 y_pred = y + ((1.0 - s) / tau[-1]) * tau
-                x, _, its = newton_solve(level(1.0), y_pred[:-1], settings, name, "load factor 1")
+                x, _, its = newton_solve(_level(sys_, 1.0, r0), y_pred[:-1], settings, name, "load factor 1")
                 y_new = np.concatenate([x, [1.0]])
             else:
                 y_new, its = _corrector(sys_, y_pred, tau, weight, r0, settings, name)
@@ -241,9 +241,9 @@ def continuation(scene, q0, v, a, t, settings, max_steps, min_step, steady):
         its_total += its
         if final:
             return done(y_new[:-1], 1.0, steps, its_total)
-        res, jac, _ = _homotopy(sys_, y_new[:-1], float(y_new[-1]), r0)
+        res, jac, _, col = _homotopy(sys_, y_new[:-1], float(y_new[-1]), r0)
         try:
-            aug = _bordered_matrix(jac, sys_.path_column, weight[:-1] * tau[:-1], weight[-1] * tau[-1])
+            aug = _bordered_matrix(jac, col, weight[:-1] * tau[:-1], weight[-1] * tau[-1])
             rhs = np.zeros(nf + m + 1)
             rhs[-1] = 1.0
             tau_new = linear_solve(aug, rhs)
@@ -268,19 +268,22 @@ def continuation(scene, q0, v, a, t, settings, max_steps, min_step, steady):
 
 
 def _homotopy(sys_, x, s, r0):
-    """(H, ∂H/∂x, error) at (x, s) (module docstring); ``sys_.path_column`` is left at ∂H/∂s there."""
+    """(H, ∂H/∂x, error, ∂H/∂s) at (x, s) (module docstring)."""
     res, jac, (scale, floor, c_scale) = sys_.evaluate(x)
     col = r0
-    e0 = getattr(sys_, "external_start", None)
-    if e0 is not None:
+    if sys_.external_start is not None:
         e, de = sys_.external(x)
-        col = r0 + e0 - e
+        col = r0 + sys_.external_start - e
         jac = add_matrices(jac, (1.0 - s) * de)
-    sys_.path_column = col
     h = res - (1.0 - s) * col
     # the start's imbalance is a force scale of the path too: an equilibrium without loads
     # (all forces → 0) is then found to rtol of the forces that were out of balance
-    return h, jac, sys_.error(h, (max(scale, inf_norm(r0[:sys_.nf])), floor, c_scale))
+    return h, jac, sys_.error(h, (max(scale, inf_norm(r0[:sys_.nf])), floor, c_scale)), col
+
+
+def _level(sys_, s, r0):
+    """x ↦ (H, ∂H/∂x, error) at the load factor s: the function Newton solves."""
+    return lambda x: _homotopy(sys_, x, s, r0)[:3]
 
 
 def _corrector(sys_, y_pred, tau, weight, r0, settings, name):
@@ -288,9 +291,9 @@ def _corrector(sys_, y_pred, tau, weight, r0, settings, name):
     wt = weight * tau
 
     def fun(y):
-        h, jac, err = _homotopy(sys_, y[:-1], float(y[-1]), r0)
+        h, jac, err, col = _homotopy(sys_, y[:-1], float(y[-1]), r0)
         row = float(wt @ (y - y_pred))
-        return np.concatenate([h, [row]]), _bordered_matrix(jac, sys_.path_column, wt[:-1], wt[-1]), err
+        return np.concatenate([h, [row]]), _bordered_matrix(jac, col, wt[:-1], wt[-1]), err
 
     y, _, its = newton_solve(fun, y_pred, settings, name, f"load factor {y_pred[-1]:.4g}")
     return y, its

@@ -42,6 +42,8 @@ class RotationStrainPoints:
 
     Raises
     ------
+    ValueError
+        When the reference placement itself turns an element by half a turn or more.
     ElementInversionError
         From every method, at a state where an element has turned half a turn or more between its nodes
         (its rotation vector is not defined; a Newton iterate that went there, or too coarse a mesh).
@@ -76,6 +78,10 @@ class RotationStrainPoints:
         self.dense = bool(dense)
         self.data = kernel.pack(self.ed, h, self.C, np.asarray(q_reference, dtype=float), self.n_dofs)
         self.e_reference = self.data.e_ref.reshape(self.n_elements, 1, 6)
+        bad = np.flatnonzero(~np.all(np.isfinite(self.data.e_ref.reshape(self.n_elements, 6)), axis=1))
+        if bad.size:
+            raise ValueError(f"{self.name}: the reference placement turns element {int(bad[0])} by half a turn or "
+                             f"more between its nodes (s = {s[0, bad[0]]:g} to {s[1, bad[0]]:g} m): refine the mesh")
 
     def _checked(self, q):
         q = np.ascontiguousarray(q, dtype=float)

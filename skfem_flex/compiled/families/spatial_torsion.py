@@ -145,7 +145,8 @@ def _springs(ctx, d):
         dzx, dzy = x1 - x0, y1 - y0
         nd = dzx * dzx + dzy * dzy
         c, dcx, dcy = 0.0, 0.0, 0.0
-        if nd > 0.0:
+        # below |Δz| = 1e-5 |z̄| the correction is round-off divided by |Δz|²: left out there
+        if nd > 1e-10 * max(1.0, xb * xb + yb * yb):
             c = (v1 - v0 - gbx * dzx - gby * dzy) / nd
             dcx = (g1x - gbx - 0.5 * (hbxx * dzx + hbxy * dzy) - 2.0 * c * dzx) / nd
             dcy = (g1y - gby - 0.5 * (hbxy * dzx + hbyy * dzy) - 2.0 * c * dzy) / nd

@@ -29,10 +29,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...bodies.base import BodyPoint, check_finite_vector
+from ...bodies.base import BodyPoint, check_finite_vector, keeps_methods
 from ..point_terms import PointLayout
 from ..motion import MotionLaw
-from .base import Constraint
+from .base import CONTRACT, Constraint
 from .quadratic import (Affine, QuadraticConstraint, hinge_directions, perpendiculars, spatial_reaction, stack,
                         unit_vector)
 
@@ -352,7 +352,6 @@ class RotationDriver(Constraint):
     def compiled_form(self):
         """``("rotation driver", H_X, b_X, c_X, H_Y, b_Y, c_Y, law)``: the rotation-driver family packs it; None
         for a subclass that changes the equation (it runs through its own methods)."""
-        if any(getattr(type(self), m) is not getattr(RotationDriver, m) for m in
-               ("value", "jacobian", "time_derivative", "time_terms", "hessian_product", "time_derivative_jacobian")):
+        if not keeps_methods(self, RotationDriver, CONTRACT + ("time_derivative_jacobian", "_xy")):
             return None
         return "rotation driver", self.Hx, self.bx, self.cx, self.Hy, self.by, self.cy, self.law
