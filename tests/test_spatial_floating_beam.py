@@ -224,6 +224,39 @@ def test_reduced_beam_keeps_the_stiffening_and_follows_the_full_one():
         full.reduced(0)
 
 
+def test_following_force_at_a_point_of_the_axis_turns_with_its_section():
+    """A force given in the section's axes at a point of a floating-frame beam's axis: at the undeformed state it
+    is the frame's turn of f; a section turned elastically by θ about d₁ turns it by θ about d₁ too (to the
+    first order of the linear elastic kinematics); its Jacobian (the point's and the turning's parts) by
+    central differences; and it works on the Python path (the compiled core refuses it and names it)."""
+    body = small_body("clamped", n=4)
+    tip = body.point(2.0)
+    f = np.array([0.3, -0.2, 0.5])
+    load = SpatialPointForce(tip, f, following=True)
+    R = Rotation.from_rotvec([0.4, -0.3, 0.2]).as_matrix()
+    q = turned(R, body.q0)
+    Q = load.generalized_force(q, np.zeros_like(q), 0.0)[0]
+    assert np.abs(Q[:3] - R @ f).max() <= 1e-14
+    # the tip section turned by a small θ about d₁: f turns with it
+    _, Nth = body.shape_at(2.0)
+    y = 1e-4 * np.linalg.lstsq(Nth, np.array([1.0, 0.0, 0.0]), rcond=None)[0]
+    qy = q.copy()
+    qy[12:] = y
+    F = tip.turned(qy, f)[0]
+    theta = Nth @ y
+    assert np.abs(F - R @ (f + np.cross(theta, f))).max() <= 1e-14
+    rng = np.random.default_rng(4)
+    q1 = q + 0.01 * rng.normal(size=q.size)
+    _, fq, _ = load.generalized_force(q1, np.zeros_like(q1), 0.0)
+    fd = central_jacobian(lambda x: load.generalized_force(x, np.zeros_like(x), 0.0)[0], q1)
+    assert np.abs(fq - fd).max() <= 1e-7 * np.abs(fd).max()
+    scene = sf.Scene([body], constraints=[sf.Weld3D(body.point(0.0))], forces=[load])
+    r = sf.simulate(scene, 0.02, 0.01)
+    assert any("SpatialPointForce" in why for why in r.run_path["python_elements"])
+    with pytest.raises(ValueError, match="needs a point with an orientation"):
+        SpatialPointForce(sf.SpatialPointMass(1.0).point(), f, following=True)
+
+
 def test_spherical_joint_at_a_point_of_the_axis():
     """A clamped–pinned (propped) cantilever: the frame welded to the ground at the root, the tip held by a
     spherical joint at a point of the elastic axis (its position is quadratic in q), a force P at mid-span:

@@ -159,12 +159,13 @@ class FloatingBeam3D(FloatingFrame3D):
     def point(self, locator=None):
         """The material point of the axis at arc length ``locator`` (m; default the tip). Where the
         reference condition clamps the beam it is the frame's own point (affine in q, with the frame's
-        orientation, so spatial joints take it); elsewhere an :class:`~.frame.ElasticPoint` (loads and probes)."""
+        orientation, so spatial joints take it); elsewhere an :class:`~.frame.ElasticPoint` (loads and probes),
+        which turns with the section's elastic rotation (following forces)."""
         s = self.s_tip if locator is None else locator
         S, Nth = self.shape_at(s)
         if not S.any() and not Nth.any():
             return SpatialPoint(self, np.array([0.0, 0.0, float(s)]))
-        return ElasticPoint(self, np.array([0.0, 0.0, float(s)]), S)
+        return ElasticPoint(self, np.array([0.0, 0.0, float(s)]), S, Theta=Nth)
 
     def mesh_shapes(self, vectors):
         """Columns on the elastic coordinates as columns on the beam's DOFs (zero where the reference condition

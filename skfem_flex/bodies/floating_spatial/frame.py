@@ -150,13 +150,33 @@ class ElasticPoint(BodyPoint):
         The point in the frame's axes, undeformed, m.
     S : ndarray (3, n_elastic)
         Its elastic displacement per unit y, in the frame's axes.
+    Theta : ndarray (3, n_elastic), optional
+        The small elastic rotation of the material there per unit y, in the frame's axes (a beam's section, a
+        rigid interface): a direction e of the material turns into D (e + (Θ y) × e), the body's linear
+        elastic kinematics (:meth:`turned`). None: the point has no orientation of its own.
     """
 
     dimension = 3
     triad = None
 
-    def __init__(self, body, X0, S):
+    def __init__(self, body, X0, S, Theta=None):
         self.body, self.X0, self.S = body, np.asarray(X0, dtype=float), np.asarray(S, dtype=float)
+        self.Theta = None if Theta is None else np.asarray(Theta, dtype=float)
+
+    def turned(self, q, f):
+        """F = D (f + (Θ y) × f) = D (f − f̂ Θ y), the material vector f (frame axes) at the point as it has
+        turned with the frame and the elastic rotation, and ∂F/∂q (3, n); ValueError without Θ."""
+        if self.Theta is None:
+            raise ValueError("this material point has no orientation of its own (no elastic rotation field)")
+        _, D, y = kinetics.split(q)
+        f = np.asarray(f, dtype=float)
+        fhat = np.array([[0.0, -f[2], f[1]], [f[2], 0.0, -f[0]], [-f[1], f[0], 0.0]])
+        g = f - fhat @ (self.Theta @ y)
+        J = np.zeros((3, self.body.n_dofs))
+        for i in range(3):
+            J[:, 3 + 3 * i:6 + 3 * i] = g[i] * np.eye(3)
+        J[:, 12:] = -D @ fhat @ self.Theta
+        return D @ g, J
 
     def position(self, q):
         x, D, y = kinetics.split(q)

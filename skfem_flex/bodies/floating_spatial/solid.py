@@ -360,7 +360,8 @@ class FloatingSolid3D(FloatingFrame3D):
             if locator not in self.interface_names:
                 raise ValueError(f"body {self.name!r} has no interface {locator!r}; it has "
                                  f"{['frame', *self.interface_names, *self.averaged_names]}")
-            return ElasticPoint(self, self.centres[locator], self._interface_motion[locator][:3])
+            motion = self._interface_motion[locator]
+            return ElasticPoint(self, self.centres[locator], motion[:3], Theta=motion[3:6])
         X = check_finite_vector("point", locator, 3)
         node = int(np.argmin(np.sum((self.solid.node_positions - X) ** 2, axis=1)))
         S = np.stack([self.basis[self.solid.component_dofs[k, node]] for k in range(3)])

@@ -329,7 +329,9 @@ class SpatialPointForce(ForceElement):
     force : array_like (3,) or callable t -> (3,)
         N. In space axes, or with ``following=True`` in the body's axes (F = R F_body).
     following : bool
-        The force turns with the body (a rigid body only).
+        The force turns with the body: with a rigid body, a beam's node, or a floating-frame body's material
+        point that has an orientation (a beam's section, a rigid interface of a solid: F = D (f + (Θy) × f),
+        :meth:`~skfem_flex.bodies.floating_spatial.frame.ElasticPoint.turned`; on the Python path).
     name : str
     """
 
@@ -338,9 +340,9 @@ class SpatialPointForce(ForceElement):
     def __init__(self, point, force, following=False, name="point force"):
         self.point = _spatial_point("point", point)
         body = point.body
-        if following and point.triad is None:
-            raise ValueError("a following force needs a point with an orientation (of a spatial rigid body or "
-                             "a beam)")
+        if following and point.triad is None and getattr(point, "Theta", None) is None:
+            raise ValueError("a following force needs a point with an orientation (of a spatial rigid body, a "
+                             "beam's node, or a floating-frame beam's section), got one without")
         self.force = time_function(force, 3, "force")
         self.following = bool(following)
         self.bodies = (body,)
@@ -348,7 +350,8 @@ class SpatialPointForce(ForceElement):
         # a point whose position is affine in q (rigid bodies, beam nodes) has a constant Jacobian G; any
         # other (a floating-frame beam's axis) gives its Jacobian and Hessian at each state
         self.G = getattr(point, "G", None)
-        self._axes = [Affine.of(point.axis(e), slice(0, n), n).A for e in np.eye(3)] if following else None
+        self._axes = ([Affine.of(point.axis(e), slice(0, n), n).A for e in np.eye(3)]
+                      if following and self.G is not None else None)
         self.name = name
 
     def compiled_form(self):
@@ -371,7 +374,12 @@ class SpatialPointForce(ForceElement):
     def generalized_force(self, q, v, t):
         F = self.force(t)
         if self.G is None:
-            return self.point.position_jacobian(q).T @ F, self.point.position_hessian_product(q, F), None
+            J = self.point.position_jacobian(q)
+            if self.following:
+                # Q = Jᵀ F(q): ∂Q/∂q = (∂J/∂q)ᵀ F + Jᵀ ∂F/∂q
+                F, dF = self.point.turned(q, F)
+                return J.T @ F, self.point.position_hessian_product(q, F) + J.T @ dF, None
+            return J.T @ F, self.point.position_hessian_product(q, F), None
         n = self.G.shape[1]
         if not self.following:
             return self.G.T @ F, np.zeros((n, n)), np.zeros((n, n))
