@@ -257,6 +257,33 @@ def test_following_force_at_a_point_of_the_axis_turns_with_its_section():
         SpatialPointForce(sf.SpatialPointMass(1.0).point(), f, following=True)
 
 
+@pytest.mark.parametrize("following", [False, True])
+def test_moment_at_a_point_of_the_axis_bends_the_cantilever(following):
+    """A moment M about d₁ at the tip of a clamped floating-frame beam (linear strain, nearly Euler–Bernoulli):
+    the tip deflects by M L²/(2 EI) and turns by M L/EI (1e-3; the following moment is the same to first
+    order); the moment's generalized force and its Jacobian by central differences at a turned, deformed
+    state."""
+    sec = SpatialSection(EA=1e9, GA1=1e9, GA2=1e9, GJ=1e3, EI1=1e3, EI2=1e3, rhoA=1.0, rhoI1=1e-4, rhoI2=1e-4)
+    beam = TimoshenkoBeam3D(skfem.MeshLine(np.linspace(0.0, 2.0, 9)), sec, order=2)
+    body = FloatingBeam3D(beam, strain="linear")
+    M, L, EI = 1e-3, 2.0, 1e3
+    tip = body.point(L)
+    moment = sf.SpatialMoment(tip, (M, 0.0, 0.0), following=following)
+    assert moment.compiled_form() is None
+    scene = sf.Scene([body], constraints=[sf.Weld3D(body.point(0.0))], forces=[moment])
+    q = sf.static_equilibrium(scene, load_steps=2).q
+    u = tip.position(q) - tip.position(body.q0)
+    assert abs(u[1]) == pytest.approx(M * L ** 2 / (2 * EI), rel=1e-3)
+    assert np.linalg.norm(body.shape_at(L)[1] @ q[12:]) == pytest.approx(M * L / EI, rel=1e-3)
+    rng = np.random.default_rng(8)
+    q1 = turned(Rotation.from_rotvec([0.3, 0.2, -0.5]).as_matrix(), body.q0)
+    q1[12:] = 1e-2 * rng.normal(size=body.n_elastic)
+    q1 += 1e-3 * rng.normal(size=q1.size)
+    _, fq, _ = moment.generalized_force(q1, np.zeros_like(q1), 0.0)
+    fd = central_jacobian(lambda x: moment.generalized_force(x, np.zeros_like(x), 0.0)[0], q1)
+    assert np.abs(fq - fd).max() <= 1e-7 * np.abs(fd).max()
+
+
 def test_spherical_joint_at_a_point_of_the_axis():
     """A clamped–pinned (propped) cantilever: the frame welded to the ground at the root, the tip held by a
     spherical joint at a point of the elastic axis (its position is quadratic in q), a force P at mid-span:

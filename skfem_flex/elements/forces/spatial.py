@@ -398,20 +398,28 @@ class SpatialMoment(ForceElement):
 
     Parameters
     ----------
-    target : SpatialRigidBody or SpatialPoint
-        A rigid body, or a point whose frame carries the moment (a beam's node: ``beam.point(s)``).
+    target : SpatialRigidBody or SpatialPoint or ElasticPoint
+        A rigid body, or a point whose frame carries the moment (a beam's node: ``beam.point(s)``), or a
+        floating-frame body's material point with an orientation (a beam's section, a solid's rigid
+        interface): the moment then works on the frame's rotation and on the section's small elastic
+        rotation θ = Θ y, Q_y = Θᵀ Dᵀ M (the Python path).
     moment : array_like (3,) or callable t -> (3,)
         N m.
     following : bool
-        M given in the body's (node's) axes (M = Σ M_j d_j turns with it).
+        M given in the body's (node's, section's) axes (M = Σ M_j d_j turns with it; at a material point
+        M = D (m + θ × m)).
     name : str
     """
 
     conservative = False
 
     def __init__(self, target, moment, following=False, name="moment"):
+        #: the floating-frame material point the moment acts at, or None
+        self.elastic = None
         if isinstance(target, BodyPoint):
             body, triad = target.body, getattr(target, "triad", None)
+            if triad is None and getattr(target, "Theta", None) is not None:
+                self.elastic, triad = target, (3, 6, 9)           # the frame's directors
         else:
             body, triad = target, (tuple(target.directors) if hasattr(target, "director_triads") else None)
         if triad is None:
@@ -426,11 +434,13 @@ class SpatialMoment(ForceElement):
 
     def compiled_form(self):
         """("spatial moment", triad, following, M): the spatial-load family."""
-        if type(self).generalized_force is not SpatialMoment.generalized_force:
+        if type(self).generalized_force is not SpatialMoment.generalized_force or self.elastic is not None:
             return None
         return "spatial moment", self.triad, self.following, self.moment
 
     def generalized_force(self, q, v, t):
+        if self.elastic is not None:
+            return self._at_material_point(q, t)
         n = self.body.n_dofs
         M = self.moment(t)
         offs = self.triad
@@ -451,6 +461,36 @@ class SpatialMoment(ForceElement):
             block = -skew(d[i]) @ dW                      # f_i = −d_i × W
             for j, oj in enumerate(offs):
                 fq[oi:oi + 3, oj:oj + 3] = block[:, 3 * j:3 * j + 3] + (skew(W) if i == j else 0.0)
+        return f, fq, np.zeros((n, n))
+
+
+    def _at_material_point(self, q, t):
+        """At a floating-frame material point: M (fixed, or turned with the section) on the frame's directors as
+        for a rigid body, f_{d_i} = W × d_i with S W = M, and on the elastic coordinates Q_y = Θᵀ Dᵀ M; with
+        their derivatives (M's own through ``ElasticPoint.turned``)."""
+        n = self.body.n_dofs
+        point = self.elastic
+        m = self.moment(t)
+        M, dM = point.turned(q, m) if self.following else (m, np.zeros((3, n)))
+        d = np.array([q[o:o + 3] for o in self.triad], dtype=float)         # rows d_i
+        S = float(np.sum(d * d)) * np.eye(3) - d.T @ d
+        W = np.linalg.solve(S, M)
+        # ∂W/∂q = S⁻¹ (∂M/∂q − ∂S/∂q W), ∂S/∂(d_j)_c W = 2 d_jc W − e_c (d_j·W) − d_j W_c
+        rhs = dM.copy()
+        for j, o in enumerate(self.triad):
+            rhs[:, o:o + 3] -= 2.0 * np.outer(W, d[j]) - (d[j] @ W) * np.eye(3) - np.outer(d[j], W)
+        dW = np.linalg.solve(S, rhs)
+        f, fq = np.zeros(n), np.zeros((n, n))
+        for i, o in enumerate(self.triad):
+            f[o:o + 3] = skew(W) @ d[i]
+            fq[o:o + 3] = -skew(d[i]) @ dW
+            fq[o:o + 3, o:o + 3] += skew(W)
+        # the elastic part: Q_y = Θᵀ (d_i · M)_i
+        Theta = point.Theta
+        f[12:] += Theta.T @ (d @ M)
+        fq[12:] += Theta.T @ (d @ dM)
+        for i, o in enumerate(self.triad):
+            fq[12:, o:o + 3] += np.outer(Theta[i], M)
         return f, fq, np.zeros((n, n))
 
 
