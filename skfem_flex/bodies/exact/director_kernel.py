@@ -27,7 +27,7 @@ from collections import namedtuple
 import numba
 import numpy as np
 
-__all__ = ["DirectorKernelData", "pack", "potential_energy", "discrete_gradient_terms"]
+__all__ = ["DirectorKernelData", "pack", "potential_energy", "discrete_gradient_terms", "scatter_element"]
 
 DirectorKernelData = namedtuple("DirectorKernelData", ["n", "ed", "h_ptr", "h_a", "h_b", "h_v", "W", "C", "e_ref",
                                                        "pat_ptr", "pat_idx", "map_el"])
@@ -133,10 +133,18 @@ def discrete_gradient_terms(kd, qa, qb):
                     for j in range(6):
                         t += kd.C[j] * hm[j, a] * h1[j, b]
                     ke[a, b] += 0.5 * w * t
-        for a in range(nloc):
-            fa = 0.0
-            for b in range(nloc):
-                data[mp[e, a, b]] += ke[a, b]
-                fa += abs(ke[a, b]) * (abs(q0[b]) + abs(q1[b]))
-            floor[kd.ed[e, a]] += fa
+        scatter_element(ke, mp[e], kd.ed[e], q0, q1, data, floor)
     return g, data, floor
+
+
+@numba.njit(cache=True)
+def scatter_element(ke, positions, coords, q0, q1, data, floor):
+    """Add an element's tangent ``ke`` into the body's CSR ``data`` (``positions[a, b]``: each entry's slot) and
+    its round-off size Σ_b abs(ke_ab) (abs(q0_b) + abs(q1_b)) into ``floor`` at the element's ``coords``."""
+    nloc = ke.shape[0]
+    for a in range(nloc):
+        fa = 0.0
+        for b in range(nloc):
+            data[positions[a, b]] += ke[a, b]
+            fa += abs(ke[a, b]) * (abs(q0[b]) + abs(q1[b]))
+        floor[coords[a]] += fa

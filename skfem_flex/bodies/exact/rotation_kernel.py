@@ -54,6 +54,8 @@ from collections import namedtuple
 import numba
 import numpy as np
 
+from .director_kernel import scatter_element
+
 __all__ = ["RotationKernelData", "pack", "strain_jets", "element_strains", "first_turned", "potential_energy",
            "discrete_gradient_terms"]
 
@@ -512,10 +514,5 @@ def discrete_gradient_terms(kd, qa, qb):
                     t += Gm[k, a] * T[k, b]
                 ke[a, b] = t
         _add_invariant_hessians(ke, r, 0.5, h)
-        for a in range(NLOC):
-            fa = 0.0
-            for b in range(NLOC):
-                data[mp[e, a, b]] += ke[a, b]
-                fa += abs(ke[a, b]) * (abs(q0[b]) + abs(q1[b]))
-            floor[kd.ed[e, a]] += fa
+        scatter_element(ke, mp[e], kd.ed[e], q0, q1, data, floor)
     return True, g, data, floor
