@@ -284,11 +284,44 @@ def test_moment_at_a_point_of_the_axis_bends_the_cantilever(following):
     assert np.abs(fq - fd).max() <= 1e-7 * np.abs(fd).max()
 
 
+@pytest.mark.parametrize("joint, closed_form", [("weld", 1.0 / 192.0), ("hinge", 7.0 / 768.0)])
+def test_joints_with_an_axis_at_a_point_of_the_axis_hold_it_against_the_ground(joint, closed_form):
+    """The frame welded at the root and the tip held to the ground at a point of the elastic axis by a weld
+    (clamped–clamped) or by a hinge about the normal of the bending plane (propped): the mid-span deflection
+    under P is P L³/(192 EI) or 7 P L³/(768 EI) (1e-3); the joint's rows are quadratic (the section's turned
+    direction against fixed ones) and run compiled; a hinge between two material points is refused."""
+    sec = SpatialSection(EA=1e9, GA1=1e9, GA2=1e9, GJ=1e3, EI1=1e3, EI2=1e3, rhoA=1.0, rhoI1=1e-4, rhoI2=1e-4)
+    beam = TimoshenkoBeam3D(skfem.MeshLine(np.linspace(0.0, 2.0, 9)), sec, order=2)
+    body = FloatingBeam3D(beam, strain="linear")
+    P, L, EI = 1e-3, 2.0, 1e3
+    held = sf.Weld3D(body.point(L)) if joint == "weld" else sf.Revolute3D(body.point(L), None, axis=(0, 1, 0))
+    scene = sf.Scene([body], constraints=[sf.Weld3D(body.point(0.0)), held],
+                     forces=[SpatialPointForce(body.point(1.0), (P, 0.0, 0.0))])
+    q = sf.static_equilibrium(scene).q
+    mid = body.point(1.0)
+    assert (mid.position(q) - mid.position(body.q0))[0] == pytest.approx(closed_form * P * L ** 3 / EI, rel=1e-3)
+    assert held.compiled_form() is not None
+    # the rows' quadratic form of a turned direction is the section's turn of it (ElasticPoint.turned)
+    rng = np.random.default_rng(2)
+    qr = turned(Rotation.from_rotvec([0.2, -0.4, 0.3]).as_matrix(), body.q0)
+    qr[12:] = 1e-2 * rng.normal(size=body.n_elastic)
+    e = np.array([0.6, 0.0, 0.8])
+    H, A, a = body.point(L).direction(e).quadratic()
+    u = 0.5 * np.einsum("cij,i,j->c", H, qr, qr) + A @ qr + a
+    assert np.abs(u - body.point(L).turned(qr, kinetics.split(body.q0)[1].T @ e)[0]).max() <= 1e-14
+    r = sf.simulate(scene, 0.05, 0.01)
+    assert not r.run_path["python_elements"]
+    other = FloatingBeam3D(beam, strain="linear", position=(0.0, 0.0, 2.0), name="other")
+    with pytest.raises(ValueError, match="cubic or quartic"):
+        sf.Revolute3D(body.point(L), other.point(1.0), axis=(0, 1, 0))
+
+
 def test_spherical_joint_at_a_point_of_the_axis():
     """A clamped–pinned (propped) cantilever: the frame welded to the ground at the root, the tip held by a
     spherical joint at a point of the elastic axis (its position is quadratic in q), a force P at mid-span:
     the deflection there is 7 P L³/(768 EI) (linear strain, nearly Euler–Bernoulli); the joint's reaction is
-    the propped end's 5P/16; and a free swing on the joint keeps its energy and the joint."""
+    the propped end's 5P/16; and a free swing on the joint, or on a hinge there, keeps its energy and the
+    joint."""
     sec = SpatialSection(EA=1e9, GA1=1e9, GA2=1e9, GJ=1e3, EI1=1e3, EI2=1e3, rhoA=1.0, rhoI1=1e-4, rhoI2=1e-4)
     beam = TimoshenkoBeam3D(skfem.MeshLine(np.linspace(0.0, 2.0, 9)), sec, order=2)
     body = FloatingBeam3D(beam, strain="linear")
@@ -308,8 +341,14 @@ def test_spherical_joint_at_a_point_of_the_axis():
     swung = np.asarray(res.kinetic).max()
     assert swung > 1e-3                                        # it does swing (T reaches m g Δh)
     assert np.ptp(np.asarray(res.total_energy)) <= 1e-9 * swung and np.max(res.constraint_residual) <= 1e-9
-    with pytest.raises(ValueError, match="orientation of its own"):
-        sf.Revolute3D(body.point(1.0), axis=(1.0, 0.0, 0.0))
+    # the same swing on a hinge to the ground at the tip (about the normal of the plane it swings in): the
+    # frame turns, the section's elastic turn adds to it in the hinge's rows, and the energy is kept
+    swing = FloatingBeam3D(beam, reference="chord", strain="linear", velocity=(0.0, 0.0, 0.0))
+    hinge = sf.Revolute3D(swing.point(L), None, axis=(0.0, 1.0, 0.0))
+    res = sf.simulate(sf.Scene([swing], constraints=[hinge], forces=[sf.Gravity((-9.81, 0.0, 0.0))]), 0.2, 0.01)
+    swung = np.asarray(res.kinetic).max()
+    assert swung > 1e-3 and not res.run_path["python_elements"]
+    assert np.ptp(np.asarray(res.total_energy)) <= 1e-9 * swung and np.max(res.constraint_residual) <= 1e-9
 
 
 def test_bad_input():

@@ -163,6 +163,15 @@ class ElasticPoint(BodyPoint):
         self.body, self.X0, self.S = body, np.asarray(X0, dtype=float), np.asarray(S, dtype=float)
         self.Theta = None if Theta is None else np.asarray(Theta, dtype=float)
 
+    def direction(self, e_space):
+        """The material direction that lies along ``e_space`` (space axes) at the body's initial state, as it turns:
+        u(q) = D (e₀ + (Θ y) × e₀), e₀ = D₀ᵀ e_space, quadratic in q (``quadratic()``: spatial joints against the
+        ground take it); ValueError without Θ."""
+        if self.Theta is None:
+            raise ValueError("this material point has no orientation of its own (no elastic rotation field)")
+        _, D0, _ = kinetics.split(np.asarray(self.body.q0, dtype=float))
+        return _TurnedDirection(self, D0.T @ np.asarray(e_space, dtype=float))
+
     def turned(self, q, f):
         """F = D (f + (Θ y) × f) = D (f − f̂ Θ y), the material vector f (frame axes) at the point as it has
         turned with the frame and the elastic rotation, and ∂F/∂q (3, n); ValueError without Θ."""
@@ -227,3 +236,24 @@ class ElasticPoint(BodyPoint):
 
     def compiled_map(self):
         return None
+
+
+class _TurnedDirection:
+    """u(q) = D (e₀ + (Θ y) × e₀) of an :class:`ElasticPoint`: ``quadratic()`` gives (H (3, n, n), A (3, n), a) with
+    u_c = ½ qᵀ H_c q + A_c·q + a_c (the products d_i[c] (ê₀ Θ)_ik y_k make H, e₀ makes A)."""
+
+    def __init__(self, point, e0):
+        self.point, self.e0 = point, e0
+
+    def quadratic(self):
+        body, e0 = self.point.body, self.e0
+        n = body.n_dofs
+        E = np.array([[0.0, -e0[2], e0[1]], [e0[2], 0.0, -e0[0]], [-e0[1], e0[0], 0.0]]) @ self.point.Theta
+        H = np.zeros((3, n, n))
+        A = np.zeros((3, n))
+        for c in range(3):
+            for i in range(3):
+                A[c, 3 + 3 * i + c] = e0[i]
+                H[c, 3 + 3 * i + c, 12:] = -E[i]
+                H[c, 12:, 3 + 3 * i + c] = -E[i]
+        return H, A, np.zeros(3)

@@ -119,11 +119,21 @@ class Affine:
         d = self - other
         return d._second(d.A.shape[1]).copy(), d.A.copy(), d.a.copy()
 
+    def _constant(self):
+        return self.H is None and not self.A.any()
+
     def dot(self, other, value=0.0):
-        """One equation u·w − value = 0 as (H, b, c) with one row (both u and w affine: the product is quadratic)."""
+        """One equation u·w − value = 0 as (H, b, c) with one row: both u and w affine (the product is quadratic),
+        or one quadratic and the other constant (a direction of a floating-frame body's material point against
+        a direction fixed in space)."""
         if self.H is not None or other.H is not None:
-            raise ValueError("a dot product of a quadratic point would be quartic: joints with axes need points "
-                             "affine in q (rigid bodies, beam nodes, a floating frame's own points)")
+            quad, fixed = (self, other) if other._constant() else (other, self) if self._constant() else (None, None)
+            if quad is None:
+                raise ValueError("a dot product of a quadratic vector with a moving one would be cubic or quartic: "
+                                 "joints with axes at a floating-frame body's material points hold them against the "
+                                 "ground only (rigid bodies, beam nodes and a floating frame's own points take any)")
+            H = np.einsum("c,cij->ij", fixed.a, quad.H)
+            return H[None], (fixed.a @ quad.A)[None], np.array([quad.a @ fixed.a - float(value)])
         H = self.A.T @ other.A + other.A.T @ self.A
         b = self.a @ other.A + other.a @ self.A
         return H[None], b[None], np.array([self.a @ other.a - float(value)])

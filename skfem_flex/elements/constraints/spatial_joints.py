@@ -77,9 +77,9 @@ class _Joint(QuadraticConstraint):
         n = self._layout.n
         if point is None:
             return Affine.constant(e_space, n)
-        if point.triad is None:
+        if point.triad is None and getattr(point, "Theta", None) is None:
             raise ValueError(f"this point of body {point.body.name!r} has no orientation of its own (a point mass, "
-                             f"or a point of a floating frame's elastic body): it cannot carry a "
+                             f"or a node of a floating frame's elastic body): it cannot carry a "
                              f"joint axis")
         sl = self._layout.slices[0 if which == "a" else 1]
         return Affine.of(point.direction(e_space), sl, n)
