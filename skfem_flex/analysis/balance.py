@@ -21,7 +21,7 @@ from .matrix_tools import EPS, TINY, abs_entries, inf_norm, submatrix
 __all__ = ["force_balance", "EquilibriumState", "equilibrium_state", "StaticResidual", "initial_multipliers"]
 
 
-def force_balance(scene, q, v, a, t):
+def force_balance(scene, q, v, a, t, loads=None):
     r"""The generalized force balance without constraint forces and its derivatives.
 
     .. math::  F = M(q) a − Q_v(q, v) + ∇V(q) − Q(q, v, t)
@@ -33,6 +33,8 @@ def force_balance(scene, q, v, a, t):
         Coordinates, velocities and accelerations (global vectors).
     t : float
         Time, s.
+    loads : list, optional
+        Receives ``scene.external_force``'s (Q, ∂Q/∂q, ∂Q/∂v) (or None): the non-potential loads on their own.
 
     Returns
     -------
@@ -65,6 +67,8 @@ def force_balance(scene, q, v, a, t):
         stiff = add_matrices(stiff, -qv[1])
         damp = -qv[2]
     ext = scene.external_force(q, v, t)
+    if loads is not None:
+        loads.append(ext)
     if ext is not None:
         force -= ext[0]
         scale = max(scale, inf_norm(ext[0]))
@@ -133,6 +137,8 @@ class StaticResidual:
         self.rows = np.arange(self.m)
         #: E(x₀), the configuration-dependent loads at the start of a load path (set by its homotopy), or None
         self.external_start = None
+        #: (E, ∂E/∂x) of the last :meth:`evaluate`: the non-potential loads there, or (None, None)
+        self.last_external = (None, None)
 
     def full_q(self, x):
         q = self.q.copy()
@@ -144,7 +150,9 @@ class StaticResidual:
         s, free, nf, m = self.scene, self.free, self.nf, self.m
         q = self.full_q(x)
         lam = x[nf:]
-        force, stiff, _, scale, floor = force_balance(s, q, self.v, self.a, self.t)
+        loads = []
+        force, stiff, _, scale, floor = force_balance(s, q, self.v, self.a, self.t, loads)
+        self.last_external = self._padded(loads[0])
         if m:
             cq = s.constraint_jacobian(q, self.t)
             ctl = cq.T @ lam
@@ -170,11 +178,9 @@ class StaticResidual:
         self.last_force = force
         return res, jac, (scale, inf_norm(floor[free]) if nf else 0.0, c_scale)
 
-    def external(self, x):
-        """(E, ∂E/∂x) at x: the scene's non-potential loads Q(q) (``external_force``) on the free rows, zero on
-        the constraint rows, and their derivative (the load stiffness); (None, None) without such loads."""
-        q = self.full_q(x)
-        ext = self.scene.external_force(q, self.v, self.t)
+    def _padded(self, ext):
+        """(E, ∂E/∂x) of the scene's non-potential loads Q(q) (``external_force``'s (Q, ∂Q/∂q, …)) on the free
+        rows, zero on the constraint rows; (None, None) without such loads."""
         if ext is None:
             return None, None
         free, nf, m = self.free, self.nf, self.m

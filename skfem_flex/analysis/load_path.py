@@ -5,7 +5,7 @@ r"""Following the load path to the equilibrium: pseudo-arc-length continuation, 
     H(x, s) = R(x) − (1 − s) (R(x₀) + E(x₀) − E(x))
 
 (R the residual of :class:`~skfem_flex.analysis.balance.StaticResidual`, E the scene's non-potential
-loads, ``external_force``) from s = 0, the start, to s = 1, the scene's loads. With R = R_int − E this
+loads, ``external_force``, from the same evaluation as R) from s = 0, the start, to s = 1, the scene's loads. With R = R_int − E this
 is R_int(x) − (1 − s) R_int(x₀) − s E(x): the potential forces (strain, gravity) are blended from the
 start's imbalance, and the loads that depend on the configuration (a moment in space axes on a beam's directors, a
 following force) are scaled by s where they act now, so every point of the path is an equilibrium under
@@ -115,7 +115,7 @@ def _start(scene, q0, v, a, t, settings, steady):
     r0, jac0, sc0 = sys_.evaluate(x0)
     # the loads that depend on the configuration, at the start (the homotopy scales them where they act);
     # the path's tangent at s = 0 takes their derivative too
-    sys_.external_start = sys_.external(x0)[0]
+    sys_.external_start = sys_.last_external[0]
     if sys_.external_start is not None:
         jac0 = _homotopy(sys_, x0, 0.0, r0)[1]
 
@@ -272,7 +272,7 @@ def _homotopy(sys_, x, s, r0):
     res, jac, (scale, floor, c_scale) = sys_.evaluate(x)
     col = r0
     if sys_.external_start is not None:
-        e, de = sys_.external(x)
+        e, de = sys_.last_external
         col = r0 + sys_.external_start - e
         jac = add_matrices(jac, (1.0 - s) * de)
     h = res - (1.0 - s) * col

@@ -20,10 +20,16 @@ from .beam import LinearBeamAnalyses, check_mesh, gauss_line
 from .spatial_section import SpatialSection
 from ..numerics.resources import BYTES_PER_ELEMENT, check_fits
 
-__all__ = ["TimoshenkoBeam3D", "FIELDS_3D", "RotatingModes"]
+__all__ = ["TimoshenkoBeam3D", "FIELDS_3D", "RotatingModes", "repeated_pairs"]
 
 #: the fields of a node, in order
 FIELDS_3D = ("u1", "u2", "u3", "theta1", "theta2", "theta3")
+
+
+def repeated_pairs(lam):
+    """The k whose eigenvalues lam[k], lam[k + 1] are one repeated value (within 1e-6 of each other, as a
+    state-space eigensolver leaves a repeated frequency)."""
+    return [k for k in range(len(lam) - 1) if abs(lam[k + 1] - lam[k]) <= 1e-6 * max(abs(lam[k]), 1e-300)]
 
 
 @dataclass(frozen=True)
@@ -57,8 +63,7 @@ class RotatingModes:
         mix of its pair as a mode: the pair is turned into the one with the most and the one with the least
         flapwise motion first."""
         shapes = np.array(shapes, dtype=complex)
-        for k in range(lam.size - 1):
-            if abs(lam[k + 1] - lam[k]) <= 1e-6 * max(abs(lam[k]), 1e-300):
+        for k in repeated_pairs(lam):
                 pair = shapes[:, k:k + 2]
                 _, _, vh = np.linalg.svd(pair[flap_rows])
                 shapes[:, k:k + 2] = pair @ vh.conj().T

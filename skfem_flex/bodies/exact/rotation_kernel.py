@@ -56,7 +56,7 @@ import numpy as np
 
 from .director_kernel import scatter_element
 
-__all__ = ["RotationKernelData", "pack", "strain_jets", "element_strains", "first_turned", "potential_energy",
+__all__ = ["RotationKernelData", "pack", "element_strains", "first_turned", "potential_energy",
            "discrete_gradient_terms"]
 
 RotationKernelData = namedtuple("RotationKernelData", ["n", "ed", "h", "C", "e_ref", "pat_ptr", "pat_idx",
@@ -297,19 +297,6 @@ def _jets(z, h, level, eps, J, H, wk):
                 H[i, q, 4 + m] = H[i, 4 + m, q] = su
                 H[i, q, 7 + m] = H[i, 7 + m, q] = sv
     return True
-
-
-@numba.njit(cache=True)
-def strain_jets(z, h, second):
-    """The six strains (Γ₁, Γ₂, Γ₃, K₁, K₂, K₃) as functions of z = (a, c, u, v) (module docstring), without
-    the reference values, and their first and (with ``second``) second derivatives in z:
-    (ok, ε (6,), J (6, 10), H (6, 10, 10)). ``ok`` is False (and the rest zero) where 1 + c ≤ 1e-12 or z is
-    not finite: the element's relative rotation has reached half a turn, where ψ is not defined."""
-    eps, J, H = np.zeros(6), np.zeros((6, NZ)), np.zeros((6, NZ, NZ))
-    ok = _jets(z, h, 2 if second else 1, eps, J, H, _workspace())
-    if not ok:
-        eps[:], J[:, :] = 0.0, 0.0
-    return ok, eps, J, H
 
 
 @numba.njit(cache=True)

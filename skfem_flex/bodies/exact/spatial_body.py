@@ -145,9 +145,6 @@ class SpatialExactBeam(StrainPointsPotential, Body):
                              f"got order={order!r}")
         #: how the section turns between nodes: "rotations" or "directors"
         self.interpolation = interpolation
-        #: the compiled family of its strain energy (:mod:`skfem_flex.compiled.families.director_beam`,
-        #: :mod:`skfem_flex.compiled.families.rotation_beam`)
-        self.strain_family = "rotation beam" if interpolation == "rotations" else "director beam"
         self.section, self.order, self.name = section, int(order), str(name)
         if section_size is not None:
             size = check_finite_vector("section_size", section_size, 2)
@@ -274,6 +271,12 @@ class SpatialExactBeam(StrainPointsPotential, Body):
         """Shear forces and normal force (N), bending moments and torque (N m) in the directors' axes at
         the strain points, (n_elements, n_points, 6)."""
         return self.strain_points.section_forces(q)
+
+    @property
+    def strain_family(self):
+        """The compiled family of its strain energy, by its interpolation
+        (:mod:`skfem_flex.compiled.families.rotation_beam`, :mod:`skfem_flex.compiled.families.director_beam`)."""
+        return "rotation beam" if self.interpolation == "rotations" else "director beam"
 
     # ------------------------------------------------------------- potential
     def potential_discrete_gradient(self, q0, q1):

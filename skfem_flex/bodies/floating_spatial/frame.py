@@ -239,21 +239,16 @@ class ElasticPoint(BodyPoint):
 
 
 class _TurnedDirection:
-    """u(q) = D (e₀ + (Θ y) × e₀) of an :class:`ElasticPoint`: ``quadratic()`` gives (H (3, n, n), A (3, n), a) with
-    u_c = ½ qᵀ H_c q + A_c·q + a_c (the products d_i[c] (ê₀ Θ)_ik y_k make H, e₀ makes A)."""
+    """u(q) = D (e₀ + (Θ y) × e₀) of an :class:`ElasticPoint` as a quadratic form, for the quadratic rows:
+    ``quadratic()`` gives (H (3, n, n), A (3, n), a) with u_c = ½ qᵀ H_c q + A_c·q + a_c, read off the point's own
+    :meth:`ElasticPoint.turned` (u is quadratic and u(0) = 0, so its Jacobian J(q) = H q + A: A = J(0) and
+    H_c's column k is J(e_k)_c − A_c)."""
 
     def __init__(self, point, e0):
         self.point, self.e0 = point, e0
 
     def quadratic(self):
-        body, e0 = self.point.body, self.e0
-        n = body.n_dofs
-        E = np.array([[0.0, -e0[2], e0[1]], [e0[2], 0.0, -e0[0]], [-e0[1], e0[0], 0.0]]) @ self.point.Theta
-        H = np.zeros((3, n, n))
-        A = np.zeros((3, n))
-        for c in range(3):
-            for i in range(3):
-                A[c, 3 + 3 * i + c] = e0[i]
-                H[c, 3 + 3 * i + c, 12:] = -E[i]
-                H[c, 12:, 3 + 3 * i + c] = -E[i]
+        n = self.point.body.n_dofs
+        A = self.point.turned(np.zeros(n), self.e0)[1]
+        H = np.stack([self.point.turned(e, self.e0)[1] - A for e in np.eye(n)], axis=2)
         return H, A, np.zeros(3)

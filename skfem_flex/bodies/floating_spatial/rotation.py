@@ -23,7 +23,7 @@ from typing import NamedTuple
 import numpy as np
 import scipy.linalg
 
-from ...fem.spatial_beam import RotatingModes
+from ...fem.spatial_beam import RotatingModes, repeated_pairs
 from ...numerics.newton import NewtonSettings, newton_solve
 from . import kinetics
 
@@ -152,9 +152,8 @@ def spinning_modes(body, omega, axis=(1.0, 0.0, 0.0), n_modes=8, flap_axis=0, la
     lam, vec = lam[order], vec[:n, order]
     # a repeated frequency (no spin, equal bending stiffnesses): eig may return two nearly parallel vectors
     # for it; its two-dimensional eigenspace is the null space of A − λI, taken from the SVD
-    for k in range(lam.size - 1):
-        if abs(lam[k + 1] - lam[k]) <= 1e-6 * max(abs(lam[k]), 1e-300):
-            _, _, vh = np.linalg.svd(A - 0.5 * (lam[k] + lam[k + 1]) * np.eye(2 * n))
-            vec[:, k:k + 2] = vh[-2:].conj().T[:n]
+    for k in repeated_pairs(lam):
+        _, _, vh = np.linalg.svd(A - 0.5 * (lam[k] + lam[k + 1]) * np.eye(2 * n))
+        vec[:, k:k + 2] = vh[-2:].conj().T[:n]
     return RotatingModes.from_eigenpairs(lam, body.mesh_shapes(vec), body.motion_rows(flap_axis),
                                          body.motion_rows(lag_axis))

@@ -210,17 +210,19 @@ def _dampers(ctx, d, tangent):
             ext[d.coords[j0 + a]] -= c * rate * gt[a]
         if not tangent:
             continue
-        # −c (∇θ ⊗ ∇²θ v + θ̇ ∇²θ) dqe − c ∇θ ∇θᵀ dve
+        # −c (∇θ ⊗ ∇²θ v + θ̇ ∇²θ) dqe − c ∇θ ∇θᵀ dve, with ∇²θ built once
+        hth = scratch[4 * ne:4 * ne + ne * ne].reshape(ne, ne)
         for a in range(ne):
             s = 0.0
             for b in range(ne):
-                s += _theta_hessian(d, ne, hx, hy, sign, x, y, r2, g, a, b) * v[d.coords[j0 + b]]
+                hth[a, b] = _theta_hessian(d, ne, hx, hy, sign, x, y, r2, g, a, b)
+                s += hth[a, b] * v[d.coords[j0 + b]]
             hv[a] = s
         for a in range(ne):
             ia = d.coords[j0 + a]
             for b in range(ne):
                 ib = d.coords[j0 + b]
-                fq = -c * (gt[a] * hv[b] + rate * _theta_hessian(d, ne, hx, hy, sign, x, y, r2, g, a, b))
+                fq = -c * (gt[a] * hv[b] + rate * hth[a, b])
                 fv = -c * gt[a] * gt[b]
                 add_qq(ctx, st, ia, ib, wq * fq + ctx.w_ext * fv * dve[ib])
 

@@ -439,40 +439,18 @@ class SpatialMoment(ForceElement):
         return "spatial moment", self.triad, self.following, self.moment
 
     def generalized_force(self, q, v, t):
-        if self.elastic is not None:
-            return self._at_material_point(q, t)
+        """(Q, ∂Q/∂q, 0): the class docstring's director forces f_{d_i} = W × d_i with S W = M(q), and at a
+        floating-frame material point also Q_y = Θᵀ Dᵀ M; M's own derivative enters through ∂W/∂q."""
         n = self.body.n_dofs
-        M = self.moment(t)
-        offs = self.triad
-        d = np.array([q[o:o + 3] for o in offs], dtype=float)           # rows d_i
-        S = float(np.sum(d * d)) * np.eye(3) - d.T @ d
-        Mw = d.T @ M if self.following else M
-        W = np.linalg.solve(S, Mw)
-        f, fq = np.zeros(n), np.zeros((n, n))
-        for o, di in zip(offs, d):
-            f[o:o + 3] = skew(W) @ di
-        # ∂W/∂(d_j)_c = S⁻¹ (M_j e_c [following] − ∂S/∂(d_j)_c W), ∂S/∂(d_j)_c W = 2 d_jc W − e_c (d_j·W) − d_j W_c
-        rhs = np.zeros((3, 9))
-        for j in range(3):
-            rhs[:, 3 * j:3 * j + 3] = (-2.0 * np.outer(W, d[j]) + (d[j] @ W) * np.eye(3) + np.outer(d[j], W)
-                                       + (M[j] * np.eye(3) if self.following else 0.0))
-        dW = np.linalg.solve(S, rhs)
-        for i, oi in enumerate(offs):
-            block = -skew(d[i]) @ dW                      # f_i = −d_i × W
-            for j, oj in enumerate(offs):
-                fq[oi:oi + 3, oj:oj + 3] = block[:, 3 * j:3 * j + 3] + (skew(W) if i == j else 0.0)
-        return f, fq, np.zeros((n, n))
-
-
-    def _at_material_point(self, q, t):
-        """At a floating-frame material point: M (fixed, or turned with the section) on the frame's directors as
-        for a rigid body, f_{d_i} = W × d_i with S W = M, and on the elastic coordinates Q_y = Θᵀ Dᵀ M; with
-        their derivatives (M's own through ``ElasticPoint.turned``)."""
-        n = self.body.n_dofs
-        point = self.elastic
         m = self.moment(t)
-        M, dM = point.turned(q, m) if self.following else (m, np.zeros((3, n)))
         d = np.array([q[o:o + 3] for o in self.triad], dtype=float)         # rows d_i
+        if self.elastic is not None and self.following:
+            M, dM = self.elastic.turned(q, m)                                 # D (m + θ × m)
+        else:
+            M, dM = (d.T @ m if self.following else m), np.zeros((3, n))
+            if self.following:                                                # M = Σ m_j d_j
+                for j, o in enumerate(self.triad):
+                    dM[:, o:o + 3] = m[j] * np.eye(3)
         S = float(np.sum(d * d)) * np.eye(3) - d.T @ d
         W = np.linalg.solve(S, M)
         # ∂W/∂q = S⁻¹ (∂M/∂q − ∂S/∂q W), ∂S/∂(d_j)_c W = 2 d_jc W − e_c (d_j·W) − d_j W_c
@@ -482,15 +460,16 @@ class SpatialMoment(ForceElement):
         dW = np.linalg.solve(S, rhs)
         f, fq = np.zeros(n), np.zeros((n, n))
         for i, o in enumerate(self.triad):
-            f[o:o + 3] = skew(W) @ d[i]
+            f[o:o + 3] = skew(W) @ d[i]                                       # f_i = −d_i × W
             fq[o:o + 3] = -skew(d[i]) @ dW
             fq[o:o + 3, o:o + 3] += skew(W)
-        # the elastic part: Q_y = Θᵀ (d_i · M)_i
-        Theta = point.Theta
-        f[12:] += Theta.T @ (d @ M)
-        fq[12:] += Theta.T @ (d @ dM)
-        for i, o in enumerate(self.triad):
-            fq[12:, o:o + 3] += np.outer(Theta[i], M)
+        if self.elastic is not None:
+            # the section's elastic rotation: Q_y = Θᵀ (d_i · M)_i
+            Theta = self.elastic.Theta
+            f[12:] += Theta.T @ (d @ M)
+            fq[12:] += Theta.T @ (d @ dM)
+            for i, o in enumerate(self.triad):
+                fq[12:, o:o + 3] += np.outer(Theta[i], M)
         return f, fq, np.zeros((n, n))
 
 
