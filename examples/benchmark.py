@@ -60,7 +60,13 @@ import statistics
 import time
 from pathlib import Path
 
-import numpy as np
+# OpenBLAS keeps a helper thread spinning for a while after each threaded call (the eigensolver that builds
+# a reduced body makes one): the spin lands on the CPU time of the next short run, up to twice its own
+# work. Threads do not speed up the time loop's small solves (bend_45: the same wall time); with one BLAS
+# thread the CPU times are the loop's own work (set OPENBLAS_NUM_THREADS before running to override)
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402  (after the BLAS setting, which takes effect when numpy loads)
 
 import skfem_flex as sf
 

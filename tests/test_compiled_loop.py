@@ -121,3 +121,19 @@ def test_energies_and_momenta_computed_in_the_loop_equal_the_scene_methods():
     """The compiled loop evaluates T, V and the momenta of the recorded states itself; they must be the
     scene's values at the recorded (q, v)."""
     assert_loop_measures_are_the_scenes(free_flying_beam("clamped"), rel=1e-13)
+
+
+@pytest.mark.parametrize("scheme", ["energy-momentum", "generalized-alpha"])
+def test_results_do_not_depend_on_the_chunks(monkeypatch, scheme):
+    """A run is cut into chunks by the wall time its steps take; each step's times are the run's exact
+    t₀ + k Δt whatever the chunks, so that a run in chunks of one step and one in the default chunks are the
+    same run, bit for bit (the hub's law of the spin-up and the last, shortened step included)."""
+    from skfem_flex.run import driver
+    runs = []
+    for chunk_seconds in (driver.CHUNK_SECONDS, 0.0):
+        monkeypatch.setattr(driver, "CHUNK_SECONDS", chunk_seconds)
+        runs.append(sf.simulate(sf.scenes.spin_up_beam(n_elements=4), t_end=0.1037, dt=2e-3, integrator=scheme))
+    a, b = runs
+    assert a.steps == b.steps == 52
+    for name in ("t", "q", "v", "lam", "total_energy", "external_work"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)

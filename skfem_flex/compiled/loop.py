@@ -107,20 +107,21 @@ def record_step(ctx, records, i, t):
 
 
 @numba.njit(cache=True, _nrt=False)
-def run_steps(ctx, scheme, solver, hs, t0, recorded, records, newton, max_iterations, line_search, table):
-    """Advance ``hs.size`` steps from time t0; returns (status, steps done, records written, Newton iterations).
+def run_steps(ctx, scheme, solver, hs, times, recorded, records, newton, max_iterations, line_search, table):
+    """Advance ``hs.size`` steps; returns (status, steps done, records written, Newton iterations).
 
     ``ctx``: the context array (one record, :mod:`.abi`); ``scheme``, ``solver``: one FAMILY record each;
-    ``table``: the chunk's functions of time, row 0 at t0 and row k + 1 for step k; ``recorded[k]``:
-    record step k. On a status other than CONVERGED the state is the one before the failing step."""
+    ``hs[k]``: the size of step k, from ``times[k]`` to ``times[k + 1]`` (the caller's exact times, so that
+    how a run is cut into chunks changes nothing); ``table``: the chunk's functions of time, row 0 at
+    times[0] and row k + 1 for step k; ``recorded[k]``: record step k. On a status other than CONVERGED the
+    state is the one before the failing step."""
     c = ctx[0]
     n_rec = 0
     its_total = 0
     sch, sol = scheme.ctypes.data, solver.ctypes.data
-    t = t0
     c.x = newton.x_try.ctypes.data
     for k in range(hs.size):
-        c.t = t
+        c.t = times[k]
         c.h = hs[k]
         c.trow = table.ctypes.data + 8 * (k + 1) * c.ncol
         c.status, c.bad_family, c.refusal = STATUS_OK, -1, REFUSAL_NONE
@@ -146,9 +147,8 @@ def run_steps(ctx, scheme, solver, hs, t0, recorded, records, newton, max_iterat
         call(scheme[0].kernel, c.self, sch)
         if c.status != STATUS_OK:
             return REFUSED, k, n_rec, its_total
-        t = t + hs[k]
         if recorded[k]:
-            record_step(c, records, n_rec, t)
+            record_step(c, records, n_rec, times[k + 1])
             n_rec += 1
     return CONVERGED, hs.size, n_rec, its_total
 
@@ -211,7 +211,7 @@ def entry_types():
 
     def types(*args):
         return tuple(numba.typeof(a) for a in args)
-    return {"run_steps": types(ctx, rec, rec, vector, 0.0, np.zeros(1, dtype=np.bool_), records,
+    return {"run_steps": types(ctx, rec, rec, vector, vector, np.zeros(1, dtype=np.bool_), records,
                                NewtonArrays.empty(1), 0, False, table),
             "record_at": types(ctx, records, 0.0, table),
             "start_state": types(ctx, rec, rec, table, 0.0)}

@@ -411,13 +411,13 @@ def _plan(packed, scene, packs):
         packed.families.append((mod, Fields(data), pk.count))
 
 
-def time_table(columns, t0, hs, scheme_mid):
-    """The chunk's functions of time: row 0 at t0, row k + 1 for step k (from t_k, size hs[k]); an
-    "end" column at t_k+1, a "force" column at t_k + hs[k]/2 when ``scheme_mid`` (energy-momentum)
-    else at t_k+1."""
+def time_table(columns, times, hs, scheme_mid):
+    """The chunk's functions of time: row 0 at times[0], row k + 1 for step k (from times[k] to times[k + 1],
+    of size hs[k]); an "end" column at times[k + 1], a "force" column at times[k] + hs[k]/2 when
+    ``scheme_mid`` (energy-momentum) else at times[k + 1]."""
     ns = hs.size
-    ends = t0 + np.cumsum(hs)
-    starts = ends - hs
+    times = np.asarray(times, dtype=float)
+    t0, starts, ends = times[0], times[:-1], times[1:]
     table = np.zeros((ns + 1, max(len(columns), 1)))
     cache = {}
     for j, (when, fun, comp) in enumerate(columns):

@@ -9,7 +9,12 @@ Which one a scene gets is fixed once with its storage (:func:`skfem_flex.compile
   such a plan (beams: frame coordinates and multipliers in the border), LAPACK if that solve is not
   backward stable (:func:`skfem_flex.numerics.band_kernels.bordered_band_solve`);
 * ``bordered band (CSR)``: stored as the values of its pattern, the same elimination; a solve that is
-  not backward stable is reported singular, and the step goes back to Python.
+  not backward stable is reported singular, and the step goes back to Python;
+* ``sparse LU (static pivots)``: chosen by :meth:`~skfem_flex.schemes.stepper.Stepper.plan_sparse_lu` from an
+  evaluated matrix when it models faster than the above (closed loops of rigid bodies): the refactorization
+  of :func:`skfem_flex.numerics.sparse_lu.static_lu_solve`, its solution's backward error checked; a
+  failed one is solved by the kernel the scene had before (after :data:`STATIC_LU_FAILURES` failures
+  always).
 """
 from __future__ import annotations
 
@@ -20,11 +25,13 @@ import numba
 import numpy as np
 from scipy.linalg import cython_lapack
 
-from ..numerics.band_kernels import bordered_band_solve, bordered_band_solve_csr
-from .abi import call_pointers, context_of, family_of, fmat, fvec, i1, i32vec, ivec
+from ..numerics.band_kernels import bordered_band_solve, bordered_band_solve_csr, pattern_backward_stable
+from ..numerics.sparse_lu import static_lu_solve
+from .abi import call_pointers, context_of, f1, family_of, fmat, fvec, i1, i32vec, ivec
 from .registry import compiled_kernel
 
-__all__ = ["SolverPlan", "dense_solver", "bordered_band_solver", "csr_bordered_band_solver", "SMALL_DENSE"]
+__all__ = ["SolverPlan", "StaticLUFields", "dense_solver", "bordered_band_solver", "csr_bordered_band_solver",
+           "static_lu_solver", "SMALL_DENSE", "STATIC_LU_FAILURES"]
 
 #: below this many unknowns the written-out LU is faster than LAPACK's
 SMALL_DENSE = 24
@@ -43,6 +50,50 @@ class SolverPlan(NamedTuple):
 @numba.njit(cache=True, _nrt=False)
 def _view(fam):
     return SolverPlan(i1(fam, 0), i1(fam, 1), i1(fam, 2), i1(fam, 3))
+
+
+#: after this many failed solves the static-pivot LU is no longer tried in the run (its pivots no longer fit)
+STATIC_LU_FAILURES = 8
+
+
+class StaticLUFields(NamedTuple):
+    """The static-pivot LU solver's data: the fields of the scene's earlier solver (a :class:`SolverPlan`, the
+    fallback) followed by the :class:`~skfem_flex.numerics.sparse_lu.StaticLUPlan`, the work arrays of
+    :func:`~skfem_flex.numerics.sparse_lu.static_lu_solve`, the pattern (for the backward error) and ``state`` =
+    (the earlier solver: 0 dense, 1 bordered band, 2 bordered band on CSR storage; failures so far)."""
+    interior: np.ndarray
+    border: np.ndarray
+    bands: np.ndarray
+    lapack: np.ndarray
+    prow: np.ndarray
+    qcol: np.ndarray
+    ptr: np.ndarray
+    idx: np.ndarray
+    diag: np.ndarray
+    src: np.ndarray
+    lu: np.ndarray
+    w: np.ndarray
+    mark: np.ndarray
+    z: np.ndarray
+    pattern_ptr: np.ndarray
+    pattern_idx: np.ndarray
+    state: np.ndarray
+
+    @classmethod
+    def of(cls, fallback, plan, pattern, fallback_kind):
+        """The fields for the LU ``plan`` of matrices with the sorted CSR ``pattern``, with the earlier solver's
+        :class:`SolverPlan` ``fallback`` (kind 0, 1 or 2 as ``state`` says)."""
+        n = plan.prow.size
+        return cls(*fallback, *plan, np.zeros(plan.idx.size), np.zeros(n), np.full(n, -1, dtype=np.int64),
+                   np.zeros(n), pattern.indptr.astype(np.int64), pattern.indices.astype(np.int64),
+                   np.array([fallback_kind, 0], dtype=np.int64))
+
+
+@numba.njit(cache=True, _nrt=False)
+def _static_view(fam):
+    return StaticLUFields(i1(fam, 0), i1(fam, 1), i1(fam, 2), i1(fam, 3), i1(fam, 4), i1(fam, 5), i1(fam, 6),
+                          i1(fam, 7), i1(fam, 8), i1(fam, 9), f1(fam, 10), f1(fam, 11), i1(fam, 12), f1(fam, 13),
+                          i1(fam, 14), i1(fam, 15), i1(fam, 16))
 
 
 def lapack_address(name):
@@ -166,6 +217,40 @@ def _bordered_csr(ctx, plan):
 
 def _csr_kernel(ctx_p, fam_p):
     _bordered_csr(context_of(ctx_p), _view(family_of(fam_p)))
+
+
+@numba.njit(cache=True)
+def _static_lu(ctx, f):
+    nx = ctx.nx
+    res, y = fvec(ctx.res, nx), fvec(ctx.y, nx)
+    kind = f.state[0]
+    dense = kind != 2
+    if f.state[1] < STATIC_LU_FAILURES:
+        if dense:
+            vals = fvec(ctx.mat, nx * nx)
+        else:
+            vals = fvec(ctx.mat, ivec(ctx.csr_ptr, nx + 1)[nx])
+        if static_lu_solve(vals, res, y, f.prow, f.qcol, f.ptr, f.idx, f.diag, f.src, f.lu, f.w, f.mark, f.z) \
+                and pattern_backward_stable(vals, f.pattern_ptr, f.pattern_idx, res, y, 1e-12, nx if dense else 0):
+            ctx.regular = 1
+            return
+        f.state[1] += 1
+    plan = SolverPlan(f.interior, f.border, f.bands, f.lapack)
+    if kind == 0:
+        _dense(ctx, fmat(ctx.mat, nx, nx), res, y, f.lapack)
+    elif kind == 1:
+        _bordered(ctx, plan)
+    else:
+        _bordered_csr(ctx, plan)
+
+
+def _static_lu_kernel(ctx_p, fam_p):
+    _static_lu(context_of(ctx_p), _static_view(family_of(fam_p)))
+
+
+def static_lu_solver():
+    """The static-pivot sparse LU solver's kernel."""
+    return compiled_kernel(_static_lu_kernel, "the static-pivot sparse LU solver", nrt=True)
 
 
 def dense_solver():

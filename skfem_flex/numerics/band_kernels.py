@@ -11,7 +11,7 @@ import numba
 import numpy as np
 from numba import uint64
 
-__all__ = ["bordered_band_solve", "bordered_band_solve_csr"]
+__all__ = ["bordered_band_solve", "bordered_band_solve_csr", "dense_backward_stable", "pattern_backward_stable"]
 
 
 @numba.njit(inline="always")
@@ -69,7 +69,7 @@ def _finite_norm(x):
 
 
 @numba.njit(cache=True)
-def _dense_backward_stable(mat, rhs, x, tol):
+def dense_backward_stable(mat, rhs, x, tol):
     """True if x is finite and ‖mat x − rhs‖∞ ≤ ``tol`` · (‖mat‖∞ ‖x‖∞ + ‖rhs‖∞), from every entry of mat.
 
     Every entry, not only the planned ones: an entry the plan did not know about (a pattern
@@ -306,7 +306,7 @@ def bordered_band_solve(mat, rhs, interior, border, lo, up):
     x = np.empty(n)
     if not _bordered_core(ab, y, gb, sch, interior, border, lo, up, x):
         return x, False
-    return x, _dense_backward_stable(mat, rhs, x, 1e-12)
+    return x, dense_backward_stable(mat, rhs, x, 1e-12)
 
 
 @numba.njit(cache=True, fastmath={"contract"})
@@ -356,18 +356,28 @@ def bordered_band_solve_csr(vals, ptr, idx, rhs, interior, border, lo, up):
     x = np.empty(n)
     if not _bordered_core(ab, y, gb, sch, interior, border, lo, up, x):
         return x, False
+    return x, pattern_backward_stable(vals, ptr, idx, rhs, x, 1e-12, 0)
+
+
+@numba.njit(cache=True, _nrt=False)
+def pattern_backward_stable(vals, ptr, idx, rhs, x, tol, row_stride):
+    """True if x is finite and ‖A x − rhs‖∞ ≤ ``tol`` · (‖A‖∞ ‖x‖∞ + ‖rhs‖∞), from A's entries on the CSR
+    pattern (ptr, idx) (O(nnz)): stored as the pattern's values (``row_stride`` 0) or dense, row-major,
+    a_ij = vals[row_stride · i + j]."""
+    n = rhs.size
     x_inf = _finite_norm(x)
     if x_inf < 0.0:
-        return x, False
+        return False
     r_inf, a_inf, b_inf = 0.0, 0.0, 0.0
     for i in range(n):
         s, a = -rhs[i], 0.0
         for t in range(ptr[i], ptr[i + 1]):
-            s += vals[t] * x[idx[t]]
-            a += abs(vals[t])
+            v = vals[t] if row_stride == 0 else vals[row_stride * i + idx[t]]
+            s += v * x[idx[t]]
+            a += abs(v)
         if not (abs(s) < np.inf and a < np.inf):
-            return x, False
+            return False
         r_inf = max(r_inf, abs(s))
         a_inf = max(a_inf, a)
         b_inf = max(b_inf, abs(rhs[i]))
-    return x, r_inf <= 1e-12 * max(a_inf * x_inf + b_inf, 1e-300)
+    return r_inf <= tol * max(a_inf * x_inf + b_inf, 1e-300)

@@ -32,6 +32,9 @@ __all__ = ["Run", "CHECKPOINT_COST", "CHUNK_SECONDS"]
 CHECKPOINT_COST = 20.0
 #: wall time a chunk of compiled steps aims at (Ctrl-C, progress and checkpoints are served between chunks)
 CHUNK_SECONDS = 0.1
+#: a chunk is at most this many times longer than the one before (its cost per step is estimated from that
+#: one); each chunk costs some 30 µs of Python, so a short run of a small scene pays per chunk it takes
+CHUNK_GROWTH = 16
 _FAILURES = {NONFINITE_RESIDUAL: "residual is not finite (the solution escaped or the step is far too large)",
              NONFINITE_UPDATE: "Newton update is not finite", SINGULAR: "singular Newton matrix (redundant "
              "constraints or a coordinate without inertia or stiffness)"}
@@ -127,8 +130,7 @@ class Run:
         """Sizes of the next k steps (the last step of the run lands on t_end)."""
         hs = np.full(k, self.dt)
         if self.step + k == self.n_steps:
-            t_last = self.t + (k - 1) * self.dt
-            hs[-1] = max(self.t_end - t_last, 0.0) or self.dt
+            hs[-1] = max(self.t_end - self._time_of(self.n_steps - 1), 0.0) or self.dt
         return hs
 
     def _recorded(self, k):
@@ -139,7 +141,7 @@ class Run:
         """Advance k steps (fewer if one fails: that one is halved). Returns the steps done."""
         hs, recorded = self._hs(k), self._recorded(k)
         ch = self.stepper.advance(self.t, hs, recorded, self.scheme.newton.max_iterations,
-                                  self.scheme.newton.line_search)
+                                  self.scheme.newton.line_search, times=self._times(self.step + 1 + np.arange(k)))
         done = ch.steps
         self._stamp(self.step + 1 + np.flatnonzero(recorded[:done]), ch.records, ch.n_records)
         self._take(ch.records, ch.n_records)
@@ -157,7 +159,7 @@ class Run:
             # the band plan's interior was singular (a coordinate without inertia of its own): the same step
             # again, factorized with pivoting from now on
             ch = self.stepper.advance(self.t, np.array([h]), np.array([record]), self.scheme.newton.max_iterations,
-                                      self.scheme.newton.line_search)
+                                      self.scheme.newton.line_search, times=self._times(np.array([self.step + 1])))
             self.its += ch.iterations
             if ch.steps == 1:
                 if record:
@@ -178,10 +180,15 @@ class Run:
         the chunks (a sum of step sizes would differ in its last bits from one chunking to another)."""
         return self.t_end if step == self.n_steps else self.t_first + (step - self.step_first) * self.dt
 
+    def _times(self, steps):
+        """:meth:`_time_of` of an array of step numbers (the same floating-point operations)."""
+        return np.where(steps == self.n_steps, self.t_end, self.t_first + (steps - self.step_first) * self.dt)
+
     def _stamp(self, steps, records, n_rec):
-        """The recorded steps' times from their numbers (:meth:`_time_of`)."""
-        for i in range(min(n_rec, steps.size)):
-            records.t[i] = self._time_of(int(steps[i]))
+        """The recorded steps' times from their numbers (:meth:`_times`: a Python loop over the records cost a
+        third of a small scene's step)."""
+        m = min(n_rec, steps.size)
+        records.t[:m] = self._times(steps[:m])
 
     def _halve(self, t, h, depth, record, status):
         """Step (t, h) split in two halves, recursively (depth levels at most); the records of its end."""
@@ -271,6 +278,7 @@ class Run:
         try:
             self._open(stop)
             self._first_state()
+            self.stepper.plan_sparse_lu(self.t, self.dt)
             self.stepper.advance(self.t, np.zeros(0), np.zeros(0, dtype=bool), 1, False)   # compiles the loop
             self.wall0, self.compile_loop0 = time.perf_counter(), registry.compile_seconds()
             self._open_bar()
@@ -279,8 +287,8 @@ class Run:
                 start = time.perf_counter()
                 done = self._chunk(min(length, self.n_steps - self.step))
                 spent = time.perf_counter() - start
-                length = int(min(max(1, length * CHUNK_SECONDS / max(spent, 1e-6)), 4 * length + 1, 10_000))
-                self.guard.check_state(self.stepper.state(self.t))
+                length = int(min(max(1, length * CHUNK_SECONDS / max(spent, 1e-6)), CHUNK_GROWTH * length + 1, 10_000))
+                self.guard.check_state(self.t, *self.stepper.positions())
                 self._progress(done)
                 if stop.signum is not None:
                     raise Interrupted(f"interrupted at t = {self.t:.6g} s by {signal.Signals(stop.signum).name}",

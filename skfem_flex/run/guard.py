@@ -73,12 +73,13 @@ class DivergenceGuard:
     def _start(self, body):
         return min(i for i, b in self.owner.items() if b is body)
 
-    def check_state(self, state):
-        if not (np.all(np.isfinite(state.q)) and np.all(np.isfinite(state.v))):
-            raise DivergenceError(f"diverged at t = {state.t:.6g} s: the state is not finite")
-        big = float(np.max(np.abs(state.q), initial=0.0))
+    def check_state(self, t, q, v):
+        """Raise a DivergenceError if the state (q, v) at time t (s) is not finite or beyond the scene's size."""
+        if not (np.isfinite(q).all() and np.isfinite(v).all()):
+            raise DivergenceError(f"diverged at t = {t:.6g} s: the state is not finite")
+        big = float(np.max(np.abs(q), initial=0.0))
         if big > self.q_bound:
-            raise DivergenceError(f"diverged at t = {state.t:.6g} s: a coordinate reached {big:.3g}, more than "
+            raise DivergenceError(f"diverged at t = {t:.6g} s: a coordinate reached {big:.3g}, more than "
                                   f"{DIVERGENCE_FACTOR:.0e} times the scene's size ({self.q_bound / DIVERGENCE_FACTOR:.3g})")
 
     def first_energy_violation(self, t, kinetic, potential, work):

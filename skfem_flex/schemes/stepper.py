@@ -25,12 +25,17 @@ from ..compiled.pack import packed_scene, time_table
 from ..compiled.registry import Unit, compiled_function, planning
 from ..compiled.sparse_solver import sparse_solver
 from ..compiled.storage import DENSE
+from ..numerics.band_plans import plan_work
+from ..numerics.sparse_lu import SECONDS_PER_CALL, SECONDS_PER_ENTRY, modeled_seconds, static_lu_plan
 from ..compiled.tasks import (PHASE_EVALUATE, PHASE_PREDICT, STATUS_MISSED, STATUS_OK, STATUS_PYTHON_ERROR,
                               STATUS_REFUSED)
 from ..compiled.workspace import Workspace
 from ..errors import ConvergenceError
 
-__all__ = ["Stepper", "Chunk", "units"]
+__all__ = ["Stepper", "Chunk", "units", "STATIC_LU", "STATIC_LU_GAIN"]
+
+#: the name of the static-pivot sparse LU solver (:meth:`Stepper.plan_sparse_lu`)
+STATIC_LU = "sparse LU (static pivots)"
 
 
 @dataclass
@@ -47,7 +52,22 @@ class Chunk:
 
 _READY = set()
 _SOLVERS = {"dense": solvers.dense_solver, "bordered band": solvers.bordered_band_solver,
-            "bordered band (CSR)": solvers.csr_bordered_band_solver, "sparse (SuperLU)": sparse_solver}
+            "bordered band (CSR)": solvers.csr_bordered_band_solver, "sparse (SuperLU)": sparse_solver,
+            STATIC_LU: solvers.static_lu_solver}
+#: the solvers the static-pivot LU can replace, with the kind its kernel falls back to
+_STATIC_LU_FALLBACK = {"dense": 0, "bordered band": 1, "bordered band (CSR)": 2}
+#: the static-pivot LU replaces the scene's solver when its modeled time is below this share of that solver's
+STATIC_LU_GAIN = 0.8
+
+
+def _solver_seconds(name, nx, plan):
+    """Modeled time of one solve (s) by the solver ``name`` for nx unknowns (band plan ``plan``), as measured
+    on the catalogue's matrices on one core: the written-out LU about 1 ns a multiply-add up to
+    :data:`~skfem_flex.compiled.solvers.SMALL_DENSE` unknowns, LAPACK's 0.3 ns above; the band about
+    0.1 ns per multiply-add of its model (:func:`~skfem_flex.numerics.band_plans.plan_work`); a few µs a call."""
+    if name == "dense":
+        return (1e-9 if nx <= solvers.SMALL_DENSE else 3e-10) * nx ** 3 / 3.0 + 2e-6
+    return 1e-10 * plan_work(plan) + 2e-6
 
 
 def units(packed, scheme):
@@ -72,6 +92,11 @@ def units(packed, scheme):
     # the band solvers) are the largest to compile, 7-15 s each: first, so that neither process is left
     # with one of them at the end while the other waits
     return [u for u in ordered if u.nrt] + [u for u in ordered if not u.nrt]
+
+
+def _times(t0, hs):
+    """t0 and the ends of steps of sizes hs from it: (hs.size + 1,)."""
+    return float(t0) + np.concatenate([[0.0], np.cumsum(np.asarray(hs, dtype=float))])
 
 
 def _call(fn, what, *args):
@@ -126,6 +151,10 @@ class Stepper:
         """The scheme's state now (a new dataclass; arrays copied)."""
         return self.scheme.unpack_state(self.data, t)
 
+    def positions(self):
+        """(q, v) now: views of the scheme's data, not copies (read them before the next step)."""
+        return self.data.array("q"), self.data.array("v")
+
     # ------------------------------------------------------------------ start, steps, evaluations
     def pivot(self):
         """Leave the band plan for a factorization with pivoting (dense LU, or SuperLU on CSR storage), once;
@@ -144,6 +173,44 @@ class Stepper:
         self.solver_name = "sparse (SuperLU)" if pk.storage != DENSE else "dense"
         return True
 
+    def plan_sparse_lu(self, t, h):
+        """Solve with the static-pivot sparse LU from now on (:mod:`skfem_flex.numerics.sparse_lu`) if it models
+        at most :data:`STATIC_LU_GAIN` of the scene's solver's time; its pivots are chosen on the Newton matrix
+        of a step of size h (s) from the loaded state at time t, at the scheme's Newton start. True if it
+        switched. The earlier solver stays as the fallback of a solve whose pivots fail."""
+        pk = self.packed
+        kind = _STATIC_LU_FALLBACK.get(self.solver_name)
+        if kind is None or pk.nx < solvers.SMALL_DENSE or getattr(self, "_pivoting", None) is not None:
+            return False
+        pattern = pk.pattern.tocsr()
+        pattern.sort_indices()
+        now = _solver_seconds(self.solver_name, pk.nx, pk.plan)
+        if SECONDS_PER_ENTRY * pattern.nnz + SECONDS_PER_CALL > STATIC_LU_GAIN * now:
+            return False                # not even the entries of A would pay (the band of a beam)
+        c = self.ws.ctx[0]
+        table = time_table(pk.columns, _times(t, [h]), np.array([float(h)]), self.scheme.mid_point_loads)
+        c["h"], c["t"] = float(h), float(t)
+        c["trow"] = table.ctypes.data + 8 * c["ncol"]
+        c["status"], c["bad_family"], c["refusal"] = STATUS_OK, -1, 0
+        _call(evaluate_once, "the single evaluation", self.ws.ctx, self.record, PHASE_PREDICT)
+        try:
+            _, sample, _ = self.evaluate(t, h, self.newton.x_try.copy())
+        except (AssertionError, ConvergenceError, ValueError):
+            return False
+        if c["status"] != STATUS_OK:
+            return False
+        plan = static_lu_plan(pattern, sample, pk.storage == DENSE)
+        if plan is None:
+            return False
+        check = 1e-9 * pattern.nnz                     # the backward error of each solution
+        if modeled_seconds(plan) + check > STATIC_LU_GAIN * now:
+            return False
+        compile_units(units(replace(pk, solver=STATIC_LU), self.scheme))
+        self._static_lu = Fields(solvers.StaticLUFields.of(_plan_fields(pk.plan, self.lapack), plan, pattern, kind))
+        self.solver[0] = self._static_lu.record(solvers.static_lu_solver().address, -1, 0)
+        self.solver_name = STATIC_LU
+        return True
+
     def start(self, t, q, v):
         """(acceleration, λ, prescribed forces) consistent with (q, v) at time t: M q̈ + Φ_qᵀλ = Q + Q_v − ∇V,
         Φ_q q̈ = −∂(Φ_q v)/∂q v − Φ_tt; the prescribed coordinates take their laws' accelerations.
@@ -159,7 +226,7 @@ class Stepper:
         self.ws.bind_state(data)
         rec = np.zeros(1, dtype=FAMILY)
         rec[0] = data.record(start_kernel().address, -1, 0)
-        table = time_table(pk.columns, float(t), np.zeros(0), False)
+        table = time_table(pk.columns, [float(t)], np.zeros(0), False)
         ok = _call(start_state, "the consistent start's driver", self.ws.ctx, rec, self.solver, table, float(t))
         if not ok and self.pivot():
             ok = _call(start_state, "the consistent start's driver", self.ws.ctx, rec, self.solver, table, float(t))
@@ -191,7 +258,7 @@ class Stepper:
         """One record (:class:`~skfem_flex.compiled.loop.Records`) of the loaded state at time t."""
         pk = self.packed
         records = self._records(1)
-        table = time_table(pk.columns, float(t), np.zeros(0), False)
+        table = time_table(pk.columns, [float(t)], np.zeros(0), False)
         self.ws.vectors["q1"][:self.scene.n] = self.data.array("q")
         self.ws.vectors["v1"][:self.scene.n] = self.data.array("v")
         _call(record_at, "the recorder", self.ws.ctx, records, float(t), table)
@@ -203,14 +270,17 @@ class Stepper:
         from ..compiled.families import python_elements
         python_elements.raise_pending()
 
-    def advance(self, t0, hs, recorded, max_iterations, line_search):
-        """Steps of sizes ``hs`` from time t0 (the loaded state); ``recorded[k]``: record step k."""
+    def advance(self, t0, hs, recorded, max_iterations, line_search, times=None):
+        """Steps of sizes ``hs`` from time t0 (the loaded state); ``recorded[k]``: record step k; ``times``: the
+        times of the steps' ends (hs.size), t0 + the sums of ``hs`` by default (a run passes its exact times:
+        its results do not depend on how it is cut into chunks)."""
         pk = self.packed
         hs = np.ascontiguousarray(hs, dtype=float)
-        table = time_table(pk.columns, float(t0), hs, self.scheme.mid_point_loads)
+        times = _times(t0, hs) if times is None else np.concatenate([[float(t0)], np.asarray(times, dtype=float)])
+        table = time_table(pk.columns, times, hs, self.scheme.mid_point_loads)
         records = self._records(int(np.count_nonzero(recorded)))
         status, steps, n_rec, its = _call(run_steps, "the time loop", self.ws.ctx, self.record, self.solver, hs,
-                                          float(t0), np.ascontiguousarray(recorded, dtype=np.bool_), records,
+                                          times, np.ascontiguousarray(recorded, dtype=np.bool_), records,
                                           self.newton, int(max_iterations), bool(line_search), table)
         self._check_status()
         return Chunk(int(status), int(steps), int(n_rec), int(its), records)
@@ -219,7 +289,7 @@ class Stepper:
         """The scheme's residual (nx,) and Newton matrix (dense (nx, nx) or CSR) at unknowns ``x`` for a step
         of size h from the loaded state at time t0, and the scaled error."""
         pk = self.packed
-        table = time_table(pk.columns, float(t0), np.array([float(h)]), self.scheme.mid_point_loads)
+        table = time_table(pk.columns, _times(t0, [h]), np.array([float(h)]), self.scheme.mid_point_loads)
         c = self.ws.ctx[0]
         c["h"], c["t"] = float(h), float(t0)
         c["trow"] = table.ctypes.data + 8 * c["ncol"]
