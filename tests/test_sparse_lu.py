@@ -15,6 +15,7 @@
 import numpy as np
 import pytest
 import scipy.sparse as sps
+import scipy.sparse.linalg as spla
 
 import skfem_flex as sf
 from skfem_flex.compiled import solvers
@@ -57,16 +58,38 @@ def test_refactorization_solves_later_matrices(dense_storage, seed):
     for _ in range(4):                                 # other matrices of the pattern, the same plan
         a = values(rng)
         b = rng.standard_normal(n)
-        vals = a.ravel() if dense_storage else sps.csr_matrix(a)[pattern.nonzero()].A1
-        if not dense_storage:                          # the pattern's own order
+        if dense_storage:
+            vals = a.ravel()
+        else:                                          # the values in the pattern's own order
             s = sps.csr_matrix(pattern, dtype=float)
             s.sort_indices()
-            r, c = np.repeat(np.arange(n), np.diff(s.indptr)), s.indices
-            vals = a[r, c]
+            vals = a[np.repeat(np.arange(n), np.diff(s.indptr)), s.indices]
         x = np.zeros(n)
         assert sparse_lu.static_lu_solve(vals, b, x, *plan, lu, w, mark, z)
         ref = np.linalg.solve(a, b)
         assert np.abs(x - ref).max() <= 1e-10 * np.abs(ref).max()
+
+
+def test_pivots_are_superlus(monkeypatch):
+    """On the sample itself the refactorization meets SuperLU's factors: its pivots u_ii are SuperLU's, in the
+    same order (the row and column permutations read the right way round), and they are the pivots of B =
+    P A Q eliminated in order."""
+    monkeypatch.setattr(sparse_lu, "ORDERINGS", ("COLAMD",))
+    pattern, values = saddle_point(30, 8, 0.1, 7)
+    a = values(np.random.default_rng(3))
+    plan = sparse_lu.static_lu_plan(pattern, a, True)
+    n = a.shape[0]
+    lu = np.zeros(plan.idx.size)
+    assert sparse_lu.static_lu_solve(a.ravel(), np.ones(n), np.zeros(n), *plan, lu, np.zeros(n),
+                                     np.full(n, -1, dtype=np.int64), np.zeros(n))
+    ref = spla.splu(sps.csc_matrix(a + sps.csr_matrix(pattern, dtype=float) * (1e-30 * np.abs(a).max())),
+                    permc_spec="COLAMD", diag_pivot_thresh=1.0)
+    np.testing.assert_allclose(lu[plan.diag], ref.U.diagonal(), rtol=1e-10)
+    b = a[plan.prow][:, plan.qcol]
+    u = b.copy()
+    for k in range(n):
+        u[k + 1:, k:] -= np.outer(u[k + 1:, k] / u[k, k], u[k, k:])
+    np.testing.assert_allclose(lu[plan.diag], np.diag(u), rtol=1e-10)
 
 
 def test_vanishing_pivot_is_reported():
@@ -111,39 +134,60 @@ def test_plan_declines_large_and_singular():
     assert sparse_lu.static_lu_plan(pattern, np.zeros((3, 3)), True) is None
 
 
-def _crank_steps(steps, spoil=False, gain=None, monkeypatch=None):
-    """(stepper, states) of ``steps`` energy-momentum steps of the spatial slider–crank through the Stepper."""
+def _steps(make, dt, steps, spoil=False, gain=None, monkeypatch=None):
+    """(stepper, states) of ``steps`` energy-momentum steps of the scene ``make()`` through the Stepper;
+    ``gain``: STATIC_LU_GAIN for the plan (0: never the static LU, 1e9: always); ``spoil``: swap two of the
+    plan's rows, so that every solution fails its check."""
     if gain is not None:
         monkeypatch.setattr(stepper_module, "STATIC_LU_GAIN", gain)
-    scene = sf.scenes.spatial_slider_crank()
+    scene = make()
     st = Stepper(scene, EnergyMomentum())
     q, v = scene.initial_state()
     state = st.starting_state(State(0.0, q, v))
     st.load(state)
-    st.plan_sparse_lu(0.0, 1e-3)
+    st.plan_sparse_lu(0.0, dt)
     if spoil and st.solver_name == STATIC_LU:
-        prow = st._static_lu.array("prow")             # a wrong row order: every solution fails its check
+        prow = st._static_lu.array("prow")
         prow[[0, 1]] = prow[[1, 0]]
     out = []
     for _ in range(steps):
-        state, _ = st.step(state, 1e-3)
+        state, _ = st.step(state, dt)
         out.append(np.concatenate([state.q, state.v]))
     return st, np.array(out)
 
 
 def test_closed_loop_takes_the_static_lu_and_runs_as_the_band(monkeypatch):
-    st, lu_run = _crank_steps(20)
+    st, lu_run = _steps(sf.scenes.spatial_slider_crank, 1e-3, 20)
     assert st.solver_name == STATIC_LU
-    band, band_run = _crank_steps(20, gain=0.0, monkeypatch=monkeypatch)
+    assert st._static_lu.array("state")[1] == 0               # every solve by the LU itself
+    band, band_run = _steps(sf.scenes.spatial_slider_crank, 1e-3, 20, gain=0.0, monkeypatch=monkeypatch)
     assert band.solver_name == "bordered band"
     assert np.abs(lu_run - band_run).max() <= 1e-10 * np.abs(band_run).max()
 
 
+@pytest.mark.parametrize("n_bodies, fallback", [(2, "dense"), (3, "dense"), (7, "bordered band (CSR)"),
+                                                (20, "bordered band (CSR)")])
+def test_spoiled_pivots_fall_back_to_the_scenes_solver(monkeypatch, n_bodies, fallback):
+    """Each kind of fallback (dense LU; the band on CSR storage; the crank below: the band on dense storage):
+    with the LU forced and its pivots spoiled, every solve fails its check and is solved by the scene's own
+    solver, the run unchanged, and the LU is given up after STATIC_LU_FAILURES failures."""
+    def make():
+        return sf.scenes.rigid_chain(n_bodies)
+    own, own_run = _steps(make, 1e-3, 12, gain=0.0, monkeypatch=monkeypatch)
+    assert own.solver_name == fallback
+    forced, forced_run = _steps(make, 1e-3, 12, gain=1e9, monkeypatch=monkeypatch)
+    assert forced.solver_name == STATIC_LU and forced._static_lu.array("state")[1] == 0
+    assert np.abs(forced_run - own_run).max() <= 1e-10 * np.abs(own_run).max()
+    spoiled, spoiled_run = _steps(make, 1e-3, 12, spoil=True, gain=1e9, monkeypatch=monkeypatch)
+    assert spoiled._static_lu.array("state")[1] == solvers.STATIC_LU_FAILURES
+    assert np.abs(spoiled_run - own_run).max() <= 1e-10 * np.abs(own_run).max()
+
+
 def test_spoiled_pivots_fall_back_to_the_band(monkeypatch):
-    st, spoiled = _crank_steps(20, spoil=True)
+    st, spoiled = _steps(sf.scenes.spatial_slider_crank, 1e-3, 20, spoil=True)
     assert st.solver_name == STATIC_LU
     assert st._static_lu.array("state")[1] == solvers.STATIC_LU_FAILURES    # tried, then given up
-    _, band_run = _crank_steps(20, gain=0.0, monkeypatch=monkeypatch)
+    _, band_run = _steps(sf.scenes.spatial_slider_crank, 1e-3, 20, gain=0.0, monkeypatch=monkeypatch)
     assert np.abs(spoiled - band_run).max() <= 1e-10 * np.abs(band_run).max()
 
 

@@ -25,7 +25,7 @@ import numpy as np
 import scipy.sparse as sps
 
 from ..bodies.base import COMPILED_SIZE_LIMIT, DENSE_LIMIT
-from ..numerics.band_plans import DENSE_BORDERED_GAIN, MAX_BANDWIDTH, MAX_BORDER, MIN_DENSE_BORDERED, dense_bordered_plan, plan_work, reordered_band_plan
+from ..numerics.band_plans import DENSE_BORDERED_GAIN, MAX_BANDWIDTH, MAX_BORDER, MIN_DENSE_BORDERED, dense_bordered_plan, plan_work, reordered_band_plan, solve_work
 from .abi import Fields
 from .families import family_for
 from .points import MapStore
@@ -383,8 +383,7 @@ def _plan(packed, scene, packs):
             # a closed loop of spatial bodies (Bricard: 119 unknowns, 308 entries) has no band in its own order
             # and no small border, but one after reordering: taken when it models under dense LU's work
             reordered = reordered_band_plan(pattern, max_bandwidth=nx // 2)
-            if reordered is not None and DENSE_BORDERED_GAIN * (plan_work(reordered) + 2.0 * nx * nx) \
-                    <= nx ** 3 / 3.0 + nx * nx:
+            if reordered is not None and DENSE_BORDERED_GAIN * solve_work(nx, reordered) <= solve_work(nx):
                 plan = reordered
         if nx > DENSE_STORAGE_LIMIT:
             # a chain of bodies: its multipliers in the border make a Schur complement as large as the
@@ -421,10 +420,10 @@ def time_table(columns, times, hs, scheme_mid):
     table = np.zeros((ns + 1, max(len(columns), 1)))
     cache = {}
     for j, (when, fun, comp) in enumerate(columns):
-        times = np.concatenate([[t0], ends if (when == "end" or not scheme_mid) else starts + 0.5 * hs])
+        at = np.concatenate([[t0], ends if (when == "end" or not scheme_mid) else starts + 0.5 * hs])
         key = (id(fun), when)
         vals = cache.get(key)
         if vals is None:
-            vals = cache[key] = [np.atleast_1d(np.asarray(fun(float(t)), dtype=float)) for t in times]
+            vals = cache[key] = [np.atleast_1d(np.asarray(fun(float(t)), dtype=float)) for t in at]
         table[:, j] = [v[comp] for v in vals]
     return table

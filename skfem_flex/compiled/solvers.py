@@ -25,7 +25,8 @@ import numba
 import numpy as np
 from scipy.linalg import cython_lapack
 
-from ..numerics.band_kernels import bordered_band_solve, bordered_band_solve_csr, pattern_backward_stable
+from ..numerics.band_kernels import (bordered_band_solve, bordered_band_solve_csr, csr_backward_stable,
+                                     dense_backward_stable)
 from ..numerics.sparse_lu import static_lu_solve
 from .abi import call_pointers, context_of, f1, family_of, fmat, fvec, i1, i32vec, ivec
 from .registry import compiled_kernel
@@ -59,8 +60,8 @@ STATIC_LU_FAILURES = 8
 class StaticLUFields(NamedTuple):
     """The static-pivot LU solver's data: the fields of the scene's earlier solver (a :class:`SolverPlan`, the
     fallback) followed by the :class:`~skfem_flex.numerics.sparse_lu.StaticLUPlan`, the work arrays of
-    :func:`~skfem_flex.numerics.sparse_lu.static_lu_solve`, the pattern (for the backward error) and ``state`` =
-    (the earlier solver: 0 dense, 1 bordered band, 2 bordered band on CSR storage; failures so far)."""
+    :func:`~skfem_flex.numerics.sparse_lu.static_lu_solve` and ``state`` = (the earlier solver: 0 dense,
+    1 bordered band, 2 bordered band on CSR storage; failures so far in the run)."""
     interior: np.ndarray
     border: np.ndarray
     bands: np.ndarray
@@ -75,25 +76,22 @@ class StaticLUFields(NamedTuple):
     w: np.ndarray
     mark: np.ndarray
     z: np.ndarray
-    pattern_ptr: np.ndarray
-    pattern_idx: np.ndarray
     state: np.ndarray
 
     @classmethod
-    def of(cls, fallback, plan, pattern, fallback_kind):
-        """The fields for the LU ``plan`` of matrices with the sorted CSR ``pattern``, with the earlier solver's
-        :class:`SolverPlan` ``fallback`` (kind 0, 1 or 2 as ``state`` says)."""
+    def of(cls, fallback, plan, fallback_kind):
+        """The fields for the LU ``plan`` with the earlier solver's :class:`SolverPlan` ``fallback`` (kind 0, 1
+        or 2 as ``state`` says)."""
         n = plan.prow.size
         return cls(*fallback, *plan, np.zeros(plan.idx.size), np.zeros(n), np.full(n, -1, dtype=np.int64),
-                   np.zeros(n), pattern.indptr.astype(np.int64), pattern.indices.astype(np.int64),
-                   np.array([fallback_kind, 0], dtype=np.int64))
+                   np.zeros(n), np.array([fallback_kind, 0], dtype=np.int64))
 
 
 @numba.njit(cache=True, _nrt=False)
 def _static_view(fam):
     return StaticLUFields(i1(fam, 0), i1(fam, 1), i1(fam, 2), i1(fam, 3), i1(fam, 4), i1(fam, 5), i1(fam, 6),
                           i1(fam, 7), i1(fam, 8), i1(fam, 9), f1(fam, 10), f1(fam, 11), i1(fam, 12), f1(fam, 13),
-                          i1(fam, 14), i1(fam, 15), i1(fam, 16))
+                          i1(fam, 14))
 
 
 def lapack_address(name):
@@ -230,10 +228,17 @@ def _static_lu(ctx, f):
             vals = fvec(ctx.mat, nx * nx)
         else:
             vals = fvec(ctx.mat, ivec(ctx.csr_ptr, nx + 1)[nx])
-        if static_lu_solve(vals, res, y, f.prow, f.qcol, f.ptr, f.idx, f.diag, f.src, f.lu, f.w, f.mark, f.z) \
-                and pattern_backward_stable(vals, f.pattern_ptr, f.pattern_idx, res, y, 1e-12, nx if dense else 0):
-            ctx.regular = 1
-            return
+        if static_lu_solve(vals, res, y, f.prow, f.qcol, f.ptr, f.idx, f.diag, f.src, f.lu, f.w, f.mark, f.z):
+            # on dense storage every entry, not only the pattern's: an entry a family wrote outside its
+            # declared pattern shows up here
+            if dense:
+                ok = dense_backward_stable(fmat(ctx.mat, nx, nx), res, y, 1e-12)
+            else:
+                ptr = ivec(ctx.csr_ptr, nx + 1)
+                ok = csr_backward_stable(vals, ptr, ivec(ctx.csr_idx, ptr[nx]), res, y, 1e-12)
+            if ok:
+                ctx.regular = 1
+                return
         f.state[1] += 1
     plan = SolverPlan(f.interior, f.border, f.bands, f.lapack)
     if kind == 0:

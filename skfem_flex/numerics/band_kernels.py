@@ -11,7 +11,7 @@ import numba
 import numpy as np
 from numba import uint64
 
-__all__ = ["bordered_band_solve", "bordered_band_solve_csr", "dense_backward_stable", "pattern_backward_stable"]
+__all__ = ["bordered_band_solve", "bordered_band_solve_csr", "dense_backward_stable", "csr_backward_stable"]
 
 
 @numba.njit(inline="always")
@@ -356,14 +356,13 @@ def bordered_band_solve_csr(vals, ptr, idx, rhs, interior, border, lo, up):
     x = np.empty(n)
     if not _bordered_core(ab, y, gb, sch, interior, border, lo, up, x):
         return x, False
-    return x, pattern_backward_stable(vals, ptr, idx, rhs, x, 1e-12, 0)
+    return x, csr_backward_stable(vals, ptr, idx, rhs, x, 1e-12)
 
 
 @numba.njit(cache=True, _nrt=False)
-def pattern_backward_stable(vals, ptr, idx, rhs, x, tol, row_stride):
-    """True if x is finite and ‖A x − rhs‖∞ ≤ ``tol`` · (‖A‖∞ ‖x‖∞ + ‖rhs‖∞), from A's entries on the CSR
-    pattern (ptr, idx) (O(nnz)): stored as the pattern's values (``row_stride`` 0) or dense, row-major,
-    a_ij = vals[row_stride · i + j]."""
+def csr_backward_stable(vals, ptr, idx, rhs, x, tol):
+    """True if x is finite and ‖A x − rhs‖∞ ≤ ``tol`` · (‖A‖∞ ‖x‖∞ + ‖rhs‖∞) for the CSR-held A (every
+    stored entry; O(nnz))."""
     n = rhs.size
     x_inf = _finite_norm(x)
     if x_inf < 0.0:
@@ -372,9 +371,8 @@ def pattern_backward_stable(vals, ptr, idx, rhs, x, tol, row_stride):
     for i in range(n):
         s, a = -rhs[i], 0.0
         for t in range(ptr[i], ptr[i + 1]):
-            v = vals[t] if row_stride == 0 else vals[row_stride * i + idx[t]]
-            s += v * x[idx[t]]
-            a += abs(v)
+            s += vals[t] * x[idx[t]]
+            a += abs(vals[t])
         if not (abs(s) < np.inf and a < np.inf):
             return False
         r_inf = max(r_inf, abs(s))

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sps
 
-__all__ = ["plan_work", "MAX_BANDWIDTH", "MAX_BORDER", "MIN_DENSE_BORDERED", "DENSE_BORDERED_GAIN", "MAX_THRESHOLDS",
+__all__ = ["plan_work", "solve_work", "MAX_BANDWIDTH", "MAX_BORDER", "MIN_DENSE_BORDERED", "DENSE_BORDERED_GAIN", "MAX_THRESHOLDS",
            "choose_border", "interior_band", "dense_bordered_plan", "reordered_band_plan"]
 
 
@@ -102,6 +102,14 @@ def plan_work(plan):
     return _bordered_band_work(len(interior), len(border), lo, up)
 
 
+def solve_work(n, plan=None, dense_storage=True):
+    """Modeled multiply-adds of one solve of n unknowns: dense LU and its solve (n³/3 + n²) without a
+    ``plan``, else :func:`plan_work` and, on dense storage, the dense backward-error check (2n²)."""
+    if plan is None:
+        return n ** 3 / 3.0 + n * n
+    return plan_work(plan) + (2.0 * n * n if dense_storage else 0.0)
+
+
 #: most thresholds :func:`dense_bordered_plan` tries (each costs a pass over the pattern)
 MAX_THRESHOLDS = 256
 
@@ -186,7 +194,7 @@ def dense_bordered_plan(pattern, far=None, max_border=None):
         work = _bordered_band_work(interior.size, k, lo, up)
         if work < best_work:
             best, best_work = (interior.astype(np.int64), np.flatnonzero(border).astype(np.int64), lo, up), work
-    if best is None or DENSE_BORDERED_GAIN * (best_work + 2.0 * n * n) > n ** 3 / 3.0 + n * n:
+    if best is None or DENSE_BORDERED_GAIN * solve_work(n, best) > solve_work(n):
         return None
     return best
 

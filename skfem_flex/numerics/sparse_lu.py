@@ -98,11 +98,11 @@ def modeled_seconds(plan):
     return SECONDS_PER_UPDATE * updates + SECONDS_PER_ENTRY * plan.idx.size + SECONDS_PER_CALL
 
 
-def static_lu_plan(pattern, sample, dense_storage):
+def static_lu_plan(pattern, sample, dense_storage, budget=np.inf):
     """The plan of :func:`static_lu_solve` for matrices with the structural nonzeros ``pattern``, its pivots
     chosen by SuperLU (partial pivoting) on the values ``sample``; the ordering with the least
-    :func:`modeled_seconds` of :data:`ORDERINGS`. None above :data:`MAX_UNKNOWNS` unknowns or if the sample
-    is singular.
+    :func:`modeled_seconds` of :data:`ORDERINGS`. None above :data:`MAX_UNKNOWNS` unknowns, if SuperLU finds
+    the sample singular in every ordering, or if no plan models below ``budget``.
 
     Parameters
     ----------
@@ -113,6 +113,10 @@ def static_lu_plan(pattern, sample, dense_storage):
     dense_storage : bool
         The matrices are stored dense, row-major (``src`` indexes n·row + column), else as the values of
         ``pattern``'s CSR structure.
+    budget : float
+        Modeled time (s) a plan must stay below; an ordering whose L + U alone (SuperLU's count, before the
+        symbolic factorization that costs as many Python steps as the elimination has updates) would cost
+        more is not planned.
 
     Returns
     -------
@@ -133,40 +137,30 @@ def static_lu_plan(pattern, sample, dense_storage):
     # every structural entry takes part in the ordering (an entry zero in this sample need not be in the next),
     # the tiny ones never chosen as pivots
     a = (values + ones * (1e-30 * scale)).tocsc()
-    best, best_time = None, np.inf
+    # where each entry of A is stored: dense row-major, or its position in the pattern (+ 1: 0 is "none")
+    where = sps.csr_matrix(((np.arange(pat.nnz) + 1).astype(float), pat.indices, pat.indptr), shape=(n, n))
+    best, best_time = None, budget
     for order in ORDERINGS:
         try:
             lu = spla.splu(a, permc_spec=order, diag_pivot_thresh=1.0)
-        except RuntimeError:                      # singular sample
-            return None
+        except RuntimeError:                      # singular in this ordering
+            continue
+        if SECONDS_PER_ENTRY * (lu.L.nnz + lu.U.nnz - n) + SECONDS_PER_CALL >= best_time:
+            continue
         prow = np.argsort(lu.perm_r).astype(np.int64)         # Pr A Pc = L U: B row perm_r[i] is A row i
         qcol = np.argsort(lu.perm_c).astype(np.int64)
         b = pat[prow][:, qcol].tocsr()
         b.sort_indices()
         ptr, idx = _symbolic(b)
         diag = np.array([ptr[i] + np.searchsorted(idx[ptr[i]:ptr[i + 1]], i) for i in range(n)], dtype=np.int64)
-        rows = np.repeat(np.arange(n), np.diff(ptr))
-        ar, ac = prow[rows], qcol[idx]
-        if dense_storage:
-            src = np.where(np.asarray(pat[ar, ac]).ravel(), ar * n + ac, -1).astype(np.int64)
-        else:
-            src = _csr_positions(pat, ar, ac)
-        plan = StaticLUPlan(prow, qcol, ptr, idx, diag, src)
+        ar, ac = prow[np.repeat(np.arange(n), np.diff(ptr))], qcol[idx]
+        pos = np.asarray(where[ar, ac]).ravel().astype(np.int64) - 1
+        src = np.where(pos >= 0, ar * n + ac, -1) if dense_storage else pos
+        plan = StaticLUPlan(prow, qcol, ptr, idx, diag, src.astype(np.int64))
         t = modeled_seconds(plan)
         if t < best_time:
             best, best_time = plan, t
     return best
-
-
-def _csr_positions(pat, rows, cols):
-    """Position of each (rows[t], cols[t]) in the sorted CSR structure ``pat``, −1 where it holds none."""
-    out = np.full(rows.size, -1, dtype=np.int64)
-    for t in range(rows.size):
-        a, b = pat.indptr[rows[t]], pat.indptr[rows[t] + 1]
-        k = a + int(np.searchsorted(pat.indices[a:b], cols[t]))
-        if k < b and pat.indices[k] == cols[t]:
-            out[t] = k
-    return out
 
 
 @numba.njit(cache=True, _nrt=False, fastmath={"contract"})

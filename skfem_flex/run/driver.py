@@ -168,7 +168,8 @@ class Run:
                 self.step += 1
                 self.t = self._time_of(self.step)
                 return
-        recs, n_rec = self._halve(self.t, h, self.control.max_halvings, record, ch.status)
+        recs, n_rec = self._halve(self.t, h, self.control.max_halvings, record, ch.status,
+                                  end=self._time_of(self.step + 1))
         if record:
             self._stamp(np.array([self.step + 1]), recs, n_rec)
         self._take(recs, n_rec)
@@ -190,23 +191,27 @@ class Run:
         m = min(n_rec, steps.size)
         records.t[:m] = self._times(steps[:m])
 
-    def _halve(self, t, h, depth, record, status):
-        """Step (t, h) split in two halves, recursively (depth levels at most); the records of its end."""
+    def _halve(self, t, h, depth, record, status, end=None):
+        """Step (t, h) split in two halves, recursively (depth levels at most); the records of its end. ``end``:
+        the exact time the step ends at (the run's time of the step; t + h by default), where its last
+        half ends."""
         if depth <= 0:
             raise ConvergenceError(f"{self.scheme.name}: {self._why(status)} at t = {t + h:.6g} s — gave up after "
                                    f"halving the step down to {h:.3g} s", iterations=0, residual=float("nan"))
         self.halvings += 1
         recs = None
+        end = t + h if end is None else end
         for half, rec in ((0, False), (1, record)):
             th = t + half * 0.5 * h
+            stop = end if half else th + 0.5 * h
             ch = self.stepper.advance(th, np.array([0.5 * h]), np.array([rec]), self.scheme.newton.max_iterations,
-                                      self.scheme.newton.line_search)
+                                      self.scheme.newton.line_search, times=np.array([stop]))
             self.its += ch.iterations
             if ch.steps == 1:
                 recs = (ch.records, ch.n_records)
             else:
                 self._raise_python_error()
-                recs = self._halve(th, 0.5 * h, depth - 1, rec, ch.status)
+                recs = self._halve(th, 0.5 * h, depth - 1, rec, ch.status, end=stop)
         return recs
 
     def _why(self, status):

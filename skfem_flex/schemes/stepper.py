@@ -25,8 +25,8 @@ from ..compiled.pack import packed_scene, time_table
 from ..compiled.registry import Unit, compiled_function, planning
 from ..compiled.sparse_solver import sparse_solver
 from ..compiled.storage import DENSE
-from ..numerics.band_plans import plan_work
-from ..numerics.sparse_lu import SECONDS_PER_CALL, SECONDS_PER_ENTRY, modeled_seconds, static_lu_plan
+from ..numerics.band_plans import solve_work
+from ..numerics.sparse_lu import SECONDS_PER_CALL, SECONDS_PER_ENTRY, static_lu_plan
 from ..compiled.tasks import (PHASE_EVALUATE, PHASE_PREDICT, STATUS_MISSED, STATUS_OK, STATUS_PYTHON_ERROR,
                               STATUS_REFUSED)
 from ..compiled.workspace import Workspace
@@ -60,14 +60,9 @@ _STATIC_LU_FALLBACK = {"dense": 0, "bordered band": 1, "bordered band (CSR)": 2}
 STATIC_LU_GAIN = 0.8
 
 
-def _solver_seconds(name, nx, plan):
-    """Modeled time of one solve (s) by the solver ``name`` for nx unknowns (band plan ``plan``), as measured
-    on the catalogue's matrices on one core: the written-out LU about 1 ns a multiply-add up to
-    :data:`~skfem_flex.compiled.solvers.SMALL_DENSE` unknowns, LAPACK's 0.3 ns above; the band about
-    0.1 ns per multiply-add of its model (:func:`~skfem_flex.numerics.band_plans.plan_work`); a few µs a call."""
-    if name == "dense":
-        return (1e-9 if nx <= solvers.SMALL_DENSE else 3e-10) * nx ** 3 / 3.0 + 2e-6
-    return 1e-10 * plan_work(plan) + 2e-6
+#: modeled time of a dense or band solve per multiply-add of its work model (band_plans.solve_work), s,
+#: and per call (measured on the catalogue's Newton matrices, one core)
+SECONDS_PER_SOLVE_WORK, SECONDS_PER_SOLVE = 1e-10, 2e-6
 
 
 def units(packed, scheme):
@@ -94,7 +89,7 @@ def units(packed, scheme):
     return [u for u in ordered if u.nrt] + [u for u in ordered if not u.nrt]
 
 
-def _times(t0, hs):
+def _boundaries(t0, hs):
     """t0 and the ends of steps of sizes hs from it: (hs.size + 1,)."""
     return float(t0) + np.concatenate([[0.0], np.cumsum(np.asarray(hs, dtype=float))])
 
@@ -182,31 +177,25 @@ class Stepper:
         kind = _STATIC_LU_FALLBACK.get(self.solver_name)
         if kind is None or pk.nx < solvers.SMALL_DENSE or getattr(self, "_pivoting", None) is not None:
             return False
+        dense = pk.storage == DENSE
         pattern = pk.pattern.tocsr()
         pattern.sort_indices()
-        now = _solver_seconds(self.solver_name, pk.nx, pk.plan)
-        if SECONDS_PER_ENTRY * pattern.nnz + SECONDS_PER_CALL > STATIC_LU_GAIN * now:
+        # the budget: a share of the scene's solver's modeled time, less the LU's backward-error check
+        budget = (STATIC_LU_GAIN * (SECONDS_PER_SOLVE_WORK * solve_work(pk.nx, pk.plan, dense) + SECONDS_PER_SOLVE)
+                  - SECONDS_PER_SOLVE_WORK * (2.0 * pk.nx ** 2 if dense else 2.0 * pattern.nnz))
+        if SECONDS_PER_ENTRY * pattern.nnz + SECONDS_PER_CALL >= budget:
             return False                # not even the entries of A would pay (the band of a beam)
-        c = self.ws.ctx[0]
-        table = time_table(pk.columns, _times(t, [h]), np.array([float(h)]), self.scheme.mid_point_loads)
-        c["h"], c["t"] = float(h), float(t)
-        c["trow"] = table.ctypes.data + 8 * c["ncol"]
-        c["status"], c["bad_family"], c["refusal"] = STATUS_OK, -1, 0
-        _call(evaluate_once, "the single evaluation", self.ws.ctx, self.record, PHASE_PREDICT)
         try:
-            _, sample, _ = self.evaluate(t, h, self.newton.x_try.copy())
+            _, sample, _ = self.evaluate(t, h)
         except (AssertionError, ConvergenceError, ValueError):
             return False
-        if c["status"] != STATUS_OK:
+        if self.ws.ctx[0]["status"] != STATUS_OK:
             return False
-        plan = static_lu_plan(pattern, sample, pk.storage == DENSE)
+        plan = static_lu_plan(pattern, sample, dense, budget)
         if plan is None:
             return False
-        check = 1e-9 * pattern.nnz                     # the backward error of each solution
-        if modeled_seconds(plan) + check > STATIC_LU_GAIN * now:
-            return False
         compile_units(units(replace(pk, solver=STATIC_LU), self.scheme))
-        self._static_lu = Fields(solvers.StaticLUFields.of(_plan_fields(pk.plan, self.lapack), plan, pattern, kind))
+        self._static_lu = Fields(solvers.StaticLUFields.of(_plan_fields(pk.plan, self.lapack), plan, kind))
         self.solver[0] = self._static_lu.record(solvers.static_lu_solver().address, -1, 0)
         self.solver_name = STATIC_LU
         return True
@@ -276,7 +265,12 @@ class Stepper:
         its results do not depend on how it is cut into chunks)."""
         pk = self.packed
         hs = np.ascontiguousarray(hs, dtype=float)
-        times = _times(t0, hs) if times is None else np.concatenate([[float(t0)], np.asarray(times, dtype=float)])
+        if times is None:
+            times = _boundaries(t0, hs)
+        else:
+            times = np.concatenate([[float(t0)], np.asarray(times, dtype=float)])
+            if times.size != hs.size + 1:
+                raise ValueError(f"times must hold the end of each of the {hs.size} steps, got {times.size - 1}")
         table = time_table(pk.columns, times, hs, self.scheme.mid_point_loads)
         records = self._records(int(np.count_nonzero(recorded)))
         status, steps, n_rec, its = _call(run_steps, "the time loop", self.ws.ctx, self.record, self.solver, hs,
@@ -285,17 +279,18 @@ class Stepper:
         self._check_status()
         return Chunk(int(status), int(steps), int(n_rec), int(its), records)
 
-    def evaluate(self, t0, h, x):
-        """The scheme's residual (nx,) and Newton matrix (dense (nx, nx) or CSR) at unknowns ``x`` for a step
-        of size h from the loaded state at time t0, and the scaled error."""
+    def evaluate(self, t0, h, x=None):
+        """The scheme's residual (nx,) and Newton matrix (dense (nx, nx) or CSR) at unknowns ``x`` (default: the
+        scheme's Newton start) for a step of size h from the loaded state at time t0, and the scaled error."""
         pk = self.packed
-        table = time_table(pk.columns, _times(t0, [h]), np.array([float(h)]), self.scheme.mid_point_loads)
+        table = time_table(pk.columns, _boundaries(t0, [h]), np.array([float(h)]), self.scheme.mid_point_loads)
         c = self.ws.ctx[0]
         c["h"], c["t"] = float(h), float(t0)
         c["trow"] = table.ctypes.data + 8 * c["ncol"]
         c["status"], c["bad_family"], c["refusal"] = STATUS_OK, -1, 0
         _call(evaluate_once, "the single evaluation", self.ws.ctx, self.record, PHASE_PREDICT)   # the step's settings
-        self.newton.x_try[:] = x
+        if x is not None:
+            self.newton.x_try[:] = x
         evaluate_once(self.ws.ctx, self.record, PHASE_EVALUATE)
         self._check_status()
         return self.ws.vectors["res"][:pk.nx].copy(), self.matrix(), float(c["err"])
