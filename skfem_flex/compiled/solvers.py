@@ -27,12 +27,12 @@ from scipy.linalg import cython_lapack
 
 from ..numerics.band_kernels import (bordered_band_solve, bordered_band_solve_csr, csr_backward_stable,
                                      dense_backward_stable)
-from ..numerics.sparse_lu import static_lu_solve
+from ..numerics.sparse_lu import StaticLUPlan, static_lu_solve
 from .abi import call_pointers, context_of, f1, family_of, fmat, fvec, i1, i32vec, ivec
 from .registry import compiled_kernel
 
 __all__ = ["SolverPlan", "StaticLUFields", "dense_solver", "bordered_band_solver", "csr_bordered_band_solver",
-           "static_lu_solver", "SMALL_DENSE", "STATIC_LU_FAILURES"]
+           "static_lu_solver", "static_lu_fields", "SMALL_DENSE", "STATIC_LU_FAILURES"]
 
 #: below this many unknowns the written-out LU is faster than LAPACK's
 SMALL_DENSE = 24
@@ -57,34 +57,21 @@ def _view(fam):
 STATIC_LU_FAILURES = 8
 
 
-class StaticLUFields(NamedTuple):
-    """The static-pivot LU solver's data: the fields of the scene's earlier solver (a :class:`SolverPlan`, the
-    fallback) followed by the :class:`~skfem_flex.numerics.sparse_lu.StaticLUPlan`, the work arrays of
-    :func:`~skfem_flex.numerics.sparse_lu.static_lu_solve` and ``state`` = (the earlier solver: 0 dense,
-    1 bordered band, 2 bordered band on CSR storage; failures so far in the run)."""
-    interior: np.ndarray
-    border: np.ndarray
-    bands: np.ndarray
-    lapack: np.ndarray
-    prow: np.ndarray
-    qcol: np.ndarray
-    ptr: np.ndarray
-    idx: np.ndarray
-    diag: np.ndarray
-    src: np.ndarray
-    lu: np.ndarray
-    w: np.ndarray
-    mark: np.ndarray
-    z: np.ndarray
-    state: np.ndarray
+#: the static-pivot LU solver's data: the fields of the scene's earlier solver (a :class:`SolverPlan`, the
+#: fallback), the :class:`~skfem_flex.numerics.sparse_lu.StaticLUPlan`, the work arrays of
+#: :func:`~skfem_flex.numerics.sparse_lu.static_lu_solve` and ``state`` = (the earlier solver: 0 dense,
+#: 1 bordered band, 2 bordered band on CSR storage; failures so far in the run)
+StaticLUFields = NamedTuple("StaticLUFields", [(name, np.ndarray) for name in
+                                               SolverPlan._fields + StaticLUPlan._fields + ("lu", "w", "mark", "z",
+                                                                                            "state")])
 
-    @classmethod
-    def of(cls, fallback, plan, fallback_kind):
-        """The fields for the LU ``plan`` with the earlier solver's :class:`SolverPlan` ``fallback`` (kind 0, 1
-        or 2 as ``state`` says)."""
-        n = plan.prow.size
-        return cls(*fallback, *plan, np.zeros(plan.idx.size), np.zeros(n), np.full(n, -1, dtype=np.int64),
-                   np.zeros(n), np.array([fallback_kind, 0], dtype=np.int64))
+
+def static_lu_fields(fallback, plan, fallback_kind):
+    """The :data:`StaticLUFields` for the LU ``plan`` with the earlier solver's :class:`SolverPlan` ``fallback``
+    (kind 0, 1 or 2 as ``state`` says)."""
+    n = plan.prow.size
+    return StaticLUFields(*fallback, *plan, np.zeros(plan.idx.size), np.zeros(n), np.full(n, -1, dtype=np.int64),
+                          np.zeros(n), np.array([fallback_kind, 0], dtype=np.int64))
 
 
 @numba.njit(cache=True, _nrt=False)

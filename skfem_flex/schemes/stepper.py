@@ -195,7 +195,7 @@ class Stepper:
         if plan is None:
             return False
         compile_units(units(replace(pk, solver=STATIC_LU), self.scheme))
-        self._static_lu = Fields(solvers.StaticLUFields.of(_plan_fields(pk.plan, self.lapack), plan, kind))
+        self._static_lu = Fields(solvers.static_lu_fields(_plan_fields(pk.plan, self.lapack), plan, kind))
         self.solver[0] = self._static_lu.record(solvers.static_lu_solver().address, -1, 0)
         self.solver_name = STATIC_LU
         return True
