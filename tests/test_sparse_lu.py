@@ -147,7 +147,7 @@ def _steps(make, dt, steps, spoil=False, gain=None, monkeypatch=None):
     st.load(state)
     st.plan_sparse_lu(0.0, dt)
     if spoil and st.solver_name == STATIC_LU:
-        prow = st._static_lu.array("prow")
+        prow = st.static_lu.array("prow")
         prow[[0, 1]] = prow[[1, 0]]
     out = []
     for _ in range(steps):
@@ -159,7 +159,7 @@ def _steps(make, dt, steps, spoil=False, gain=None, monkeypatch=None):
 def test_closed_loop_takes_the_static_lu_and_runs_as_the_band(monkeypatch):
     st, lu_run = _steps(sf.scenes.spatial_slider_crank, 1e-3, 20)
     assert st.solver_name == STATIC_LU
-    assert st._static_lu.array("state")[1] == 0               # every solve by the LU itself
+    assert st.static_lu.array("state")[1] == 0               # every solve by the LU itself
     band, band_run = _steps(sf.scenes.spatial_slider_crank, 1e-3, 20, gain=0.0, monkeypatch=monkeypatch)
     assert band.solver_name == "bordered band"
     assert np.abs(lu_run - band_run).max() <= 1e-10 * np.abs(band_run).max()
@@ -176,17 +176,17 @@ def test_spoiled_pivots_fall_back_to_the_scenes_solver(monkeypatch, n_bodies, fa
     own, own_run = _steps(make, 1e-3, 12, gain=0.0, monkeypatch=monkeypatch)
     assert own.solver_name == fallback
     forced, forced_run = _steps(make, 1e-3, 12, gain=1e9, monkeypatch=monkeypatch)
-    assert forced.solver_name == STATIC_LU and forced._static_lu.array("state")[1] == 0
+    assert forced.solver_name == STATIC_LU and forced.static_lu.array("state")[1] == 0
     assert np.abs(forced_run - own_run).max() <= 1e-10 * np.abs(own_run).max()
     spoiled, spoiled_run = _steps(make, 1e-3, 12, spoil=True, gain=1e9, monkeypatch=monkeypatch)
-    assert spoiled._static_lu.array("state")[1] == solvers.STATIC_LU_FAILURES
+    assert spoiled.static_lu.array("state")[1] == solvers.STATIC_LU_FAILURES
     assert np.abs(spoiled_run - own_run).max() <= 1e-10 * np.abs(own_run).max()
 
 
 def test_spoiled_pivots_fall_back_to_the_band(monkeypatch):
     st, spoiled = _steps(sf.scenes.spatial_slider_crank, 1e-3, 20, spoil=True)
     assert st.solver_name == STATIC_LU
-    assert st._static_lu.array("state")[1] == solvers.STATIC_LU_FAILURES    # tried, then given up
+    assert st.static_lu.array("state")[1] == solvers.STATIC_LU_FAILURES    # tried, then given up
     _, band_run = _steps(sf.scenes.spatial_slider_crank, 1e-3, 20, gain=0.0, monkeypatch=monkeypatch)
     assert np.abs(spoiled - band_run).max() <= 1e-10 * np.abs(band_run).max()
 

@@ -168,6 +168,13 @@ class Stepper:
         self.solver_name = "sparse (SuperLU)" if pk.storage != DENSE else "dense"
         return True
 
+    @property
+    def static_lu(self):
+        """The static-pivot LU solver's data (:data:`~skfem_flex.compiled.solvers.StaticLUFields` in a
+        :class:`~skfem_flex.compiled.abi.Fields`: ``array("state")[1]`` counts its failed solves), or None when
+        the run does not use it."""
+        return getattr(self, "_static_lu", None) if self.solver_name == STATIC_LU else None
+
     def plan_sparse_lu(self, t, h):
         """Solve with the static-pivot sparse LU from now on (:mod:`skfem_flex.numerics.sparse_lu`) if it models
         at most :data:`STATIC_LU_GAIN` of the scene's solver's time; its pivots are chosen on the Newton matrix
