@@ -25,12 +25,12 @@ from ..compiled.pack import packed_scene, time_table
 from ..compiled.registry import Unit, compiled_function, planning
 from ..compiled.sparse_solver import sparse_solver
 from ..compiled.storage import DENSE
-from ..numerics.band_plans import solve_work
-from ..numerics.sparse_lu import SECONDS_PER_CALL, SECONDS_PER_ENTRY, static_lu_plan
 from ..compiled.tasks import (PHASE_EVALUATE, PHASE_PREDICT, STATUS_MISSED, STATUS_OK, STATUS_PYTHON_ERROR,
                               STATUS_REFUSED)
 from ..compiled.workspace import Workspace
 from ..errors import ConvergenceError
+from ..numerics.band_plans import solve_work
+from ..numerics.sparse_lu import SECONDS_PER_CALL, SECONDS_PER_ENTRY, static_lu_plan
 
 __all__ = ["Stepper", "Chunk", "units", "STATIC_LU", "STATIC_LU_GAIN"]
 
