@@ -137,3 +137,17 @@ def test_results_do_not_depend_on_the_chunks(monkeypatch, scheme):
     assert a.steps == b.steps == 52
     for name in ("t", "q", "v", "lam", "total_energy", "external_work"):
         np.testing.assert_array_equal(getattr(a, name), getattr(b, name), err_msg=name)
+
+
+def test_advance_checks_its_times():
+    """Stepper.advance takes the end of each step; a wrong count is a clear error, not steps read past an array."""
+    from skfem_flex.schemes.base import State
+    from skfem_flex.schemes.stepper import Stepper
+    scene = sf.scenes.pendulum()
+    st = Stepper(scene, sf.EnergyMomentum())
+    q, v = scene.initial_state()
+    st.load(st.starting_state(State(0.0, q, v)))
+    with pytest.raises(ValueError, match="end of each of the 3 steps, got 2"):
+        st.advance(0.0, np.full(3, 1e-2), np.ones(3, dtype=bool), 25, True, times=np.array([0.01, 0.02]))
+    chunk = st.advance(0.0, np.full(3, 1e-2), np.ones(3, dtype=bool), 25, True, times=np.array([0.01, 0.02, 0.03]))
+    assert chunk.steps == 3
