@@ -21,7 +21,17 @@ from .abi import fvec
 from .storage import add_mq, add_qm
 from .tasks import ROWS_ACCELERATION, ROWS_POSITION, ROWS_VELOCITY, TASK_EVAL, TASK_ROWS
 
-__all__ = ["finish_row", "needs_rate_jacobian"]
+__all__ = ["finish_row", "needs_rate_jacobian", "row_states"]
+
+
+@numba.njit(cache=True, _nrt=False)
+def row_states(ctx):
+    """What a row family reads from the context: (q₁, q_a, q_b, v₁, μ, the time row, the scratch vector, the
+    weight w_mu c_dg dq1 of ∂(Dᵀμ)/∂q_b, and whether the task is TASK_EVAL)."""
+    n = ctx.n
+    return (fvec(ctx.q1, n), fvec(ctx.qa, n), fvec(ctx.qb, n), fvec(ctx.v1, n), fvec(ctx.mu, ctx.m),
+            fvec(ctx.trow, ctx.ncol), fvec(ctx.scratch, ctx.nscratch), ctx.w_mu * ctx.c_dg * ctx.dq1,
+            ctx.task == TASK_EVAL)
 
 
 @numba.njit(cache=True, _nrt=False)

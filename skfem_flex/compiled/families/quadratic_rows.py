@@ -14,9 +14,9 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from ..abi import context_of, f1, family_of, fvec, i1, i2
+from ..abi import context_of, f1, family_of, i1, i2
 from ..registry import compiled_kernel
-from ..rows import finish_row
+from ..rows import finish_row, row_states
 from ..storage import add_qq, storage_of
 from ..tasks import TASK_EVAL, TASK_ROWS
 from . import FamilyPack
@@ -115,16 +115,37 @@ def pack(items, packer):
 
 
 @numba.njit(cache=True, _nrt=False)
+def add_form(ctx, st, d, p0, p1, l0, l1, q1, qa, qb, v1, g, dm, hv, evaluate, e):
+    """One quadratic form f(q) = ½ qᵀH q + bᵀq (its products d.p*[p0:p1], linear terms d.l*[l0:l1]) over a row's
+    columns: g += ∇f(q₁), hv += H v₁ and, when ``evaluate``, dm += ∇f at the mid-point of (q_a, q_b) and the
+    Newton matrix += e H (the constraint force's own derivative); dm takes b always. Returns f(q₁) − c."""
+    val = 0.0
+    for t in range(l0, l1):
+        b, sl = d.lb[t], d.lsl[t]
+        val += b * q1[d.li[t]]
+        g[sl] += b
+        dm[sl] += b
+    for t in range(p0, p1):
+        i, j, h = d.pi[t], d.pj[t], d.ph[t]
+        si, sj = d.psi[t], d.psj[t]
+        val += h * q1[i] * q1[j]
+        g[si] += h * q1[j]
+        g[sj] += h * q1[i]
+        hv[si] += h * v1[j]
+        hv[sj] += h * v1[i]
+        if evaluate:
+            dm[si] += 0.5 * h * (qa[j] + qb[j])
+            dm[sj] += 0.5 * h * (qa[i] + qb[i])
+            add_qq(ctx, st, i, j, e * h)
+            add_qq(ctx, st, j, i, e * h)
+    return val
+
+
+@numba.njit(cache=True, _nrt=False)
 def _evaluate(ctx, d):
-    n = ctx.n
-    q1, qa, qb, v1 = fvec(ctx.q1, n), fvec(ctx.qa, n), fvec(ctx.qb, n), fvec(ctx.v1, n)
-    mu = fvec(ctx.mu, ctx.m)
-    trow = fvec(ctx.trow, ctx.ncol)
+    q1, qa, qb, v1, mu, trow, scratch, w, evaluate = row_states(ctx)
     st = storage_of(ctx)
-    evaluate = ctx.task == TASK_EVAL
-    scratch = fvec(ctx.scratch, ctx.nscratch)
     n_rows = d.rows.shape[0]
-    w = ctx.w_mu * ctx.c_dg * ctx.dq1
     for r in range(n_rows):
         row, p0, p1, l0, l1, c0, col = d.rows[r]
         c1 = d.rows[r + 1, 5] if r + 1 < n_rows else d.cols.size - 1
@@ -134,26 +155,10 @@ def _evaluate(ctx, d):
             cq[t] = 0.0
             dd[t] = 0.0
             cv[t] = 0.0
-        val, phi_t, phi_tt = d.const[r], 0.0, 0.0
-        for t in range(l0, l1):
-            val += d.lb[t] * q1[d.li[t]]
-            cq[d.lsl[t]] += d.lb[t]
-            dd[d.lsl[t]] += d.lb[t]
-        for t in range(p0, p1):
-            i, j, h = d.pi[t], d.pj[t], d.ph[t]
-            si, sj = d.psi[t], d.psj[t]
-            val += h * q1[i] * q1[j]
-            cq[si] += h * q1[j]
-            cq[sj] += h * q1[i]
-            cv[si] += h * v1[j]
-            cv[sj] += h * v1[i]
-            if evaluate:
-                dd[si] += 0.5 * h * (qa[j] + qb[j])
-                dd[sj] += 0.5 * h * (qa[i] + qb[i])
-                # ∂(Dᵀμ)/∂q_b = ½ μ H: the pair's two entries
-                e = 0.5 * w * h * mu[row]
-                add_qq(ctx, st, i, j, e)
-                add_qq(ctx, st, j, i, e)
+        phi_t, phi_tt = 0.0, 0.0
+        # ∂(Dᵀμ)/∂q_b = ½ μ H
+        val = d.const[r] + add_form(ctx, st, d, p0, p1, l0, l1, q1, qa, qb, v1, cq, dd, cv, evaluate,
+                                    0.5 * w * mu[row])
         if col >= 0:
             val -= trow[col]
             phi_t, phi_tt = -trow[col + 1], -trow[col + 2]

@@ -19,13 +19,13 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..abi import context_of, family_of, fvec
+from ..abi import context_of, family_of
 from ..registry import compiled_kernel
-from ..rows import finish_row
-from ..storage import add_qq, storage_of
+from ..rows import finish_row, row_states
+from ..storage import storage_of
 from ..tasks import TASK_EVAL, TASK_ROWS
 from . import FamilyPack
-from .quadratic_rows import TermLists, form_terms, view_of
+from .quadratic_rows import TermLists, add_form, form_terms, view_of
 
 NAME = "rotation drivers"
 FORMS = ("rotation driver",)
@@ -66,15 +66,9 @@ def pack(items, packer):
 
 @numba.njit(cache=True, _nrt=False)
 def _evaluate(ctx, d):
-    n = ctx.n
-    q1, qa, qb, v1 = fvec(ctx.q1, n), fvec(ctx.qa, n), fvec(ctx.qb, n), fvec(ctx.v1, n)
-    mu = fvec(ctx.mu, ctx.m)
-    trow = fvec(ctx.trow, ctx.ncol)
+    q1, qa, qb, v1, mu, trow, scratch, w, evaluate = row_states(ctx)
     st = storage_of(ctx)
-    evaluate = ctx.task == TASK_EVAL
-    scratch = fvec(ctx.scratch, ctx.nscratch)
     n_rows = d.rows.shape[0]
-    w = ctx.w_mu * ctx.c_dg * ctx.dq1
     for r in range(n_rows):
         row, p0, p1, p2, l0, l1, l2, c0, col = d.rows[r]
         c1 = d.rows[r + 1, 7] if r + 1 < n_rows else d.cols.size - 1
@@ -88,36 +82,12 @@ def _evaluate(ctx, d):
             hv[t] = 0.0
         th, om, al = trow[col], trow[col + 1], trow[col + 2]
         c, s = np.cos(th), np.sin(th)
-        vx, vy = d.const[2 * r], d.const[2 * r + 1]
-        for t in range(l0, l2):
-            f = 0 if t < l1 else 1
-            b = d.lb[t]
-            if f == 0:
-                vx += b * q1[d.li[t]]
-            else:
-                vy += b * q1[d.li[t]]
-            g[f * nc + d.lsl[t]] += b
-            dm[f * nc + d.lsl[t]] += b
-        weight = (-s, c)
-        for t in range(p0, p2):
-            f = 0 if t < p1 else 1
-            i, j, h = d.pi[t], d.pj[t], d.ph[t]
-            si, sj = f * nc + d.psi[t], f * nc + d.psj[t]
-            if f == 0:
-                vx += h * q1[i] * q1[j]
-            else:
-                vy += h * q1[i] * q1[j]
-            g[si] += h * q1[j]
-            g[sj] += h * q1[i]
-            hv[si] += h * v1[j]
-            hv[sj] += h * v1[i]
-            if evaluate:
-                dm[si] += 0.5 * h * (qa[j] + qb[j])
-                dm[sj] += 0.5 * h * (qa[i] + qb[i])
-                # ∂(Dᵀμ)/∂q_b = ½ μ (c H_Y − s H_X): the pair's two entries
-                e = 0.5 * w * h * weight[f] * mu[row]
-                add_qq(ctx, st, i, j, e)
-                add_qq(ctx, st, j, i, e)
+        # the forms X and Y, each over its own half of the scratch; ∂(Dᵀμ)/∂q_b = ½ μ (c H_Y − s H_X)
+        e = 0.5 * w * mu[row]
+        vx = d.const[2 * r] + add_form(ctx, st, d, p0, p1, l0, l1, q1, qa, qb, v1, g[:nc], dm[:nc], hv[:nc],
+                                       evaluate, -s * e)
+        vy = d.const[2 * r + 1] + add_form(ctx, st, d, p1, p2, l1, l2, q1, qa, qb, v1, g[nc:], dm[nc:], hv[nc:],
+                                           evaluate, c * e)
         value = c * vy - s * vx
         phi_t = -om * (s * vy + c * vx)
         qt_v = 0.0
