@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sps
 
-from .elements.constraints.quadratic import Rigidity
+from .elements.constraints.quadratic import Rigidity, UnitQuaternion
 from .elements.forces import Gravity
 from .elements.motion import Prescribed
 
@@ -146,10 +146,11 @@ class Scene:
         self.forces = tuple(f.on(self.bodies) if isinstance(f, Gravity) and f.bodies is None else f
                             for f in forces)
         # spatial rigid bodies and the nodes of spatial beams are held rigid by their directors'
-        # constraints, added first
+        # constraints, bodies turned by quaternions at |e| = 1, added first
         self.constraints = tuple(
             Rigidity(b, triad, name=f"{b.name}: rigidity" + (f" of node {k}" if len(b.director_triads) > 1 else ""))
-            for b in self.bodies for k, triad in enumerate(getattr(b, "director_triads", ()))) + tuple(constraints)
+            for b in self.bodies for k, triad in enumerate(getattr(b, "director_triads", ()))) + tuple(
+            UnitQuaternion(b, o) for b in self.bodies for o in getattr(b, "unit_quaternions", ())) + tuple(constraints)
         self._force_idx = [self._indices(f.bodies, f"force {getattr(f, 'name', f)!r}") for f in self.forces]
         layout, row = [], 0
         for c in self.constraints:

@@ -47,6 +47,7 @@ FAMILY_MODULES = (
     "spatial_floating_frame",
     "spatial_springs",
     "spatial_torsion",
+    "quaternion_bodies",
 )
 
 

@@ -25,7 +25,7 @@ from ..motion import MotionLaw
 from ..point_terms import PointLayout
 from .base import Constraint
 
-__all__ = ["Affine", "QuadraticConstraint", "Rigidity", "spatial_reaction", "unit_vector", "perpendiculars", "stack",
+__all__ = ["Affine", "QuadraticConstraint", "Rigidity", "UnitQuaternion", "spatial_reaction", "unit_vector", "perpendiculars", "stack",
            "hinge_directions"]
 
 
@@ -327,3 +327,20 @@ class Rigidity(QuadraticConstraint):
                 c[k] = -0.5
         super().__init__([body], H, np.zeros((6, 9)), c, name=name or f"{body.name}: rigidity",
                          columns=columns)
+
+
+class UnitQuaternion(QuadraticConstraint):
+    """The one equation ½(e·e − 1) = 0 of a body's Euler parameters e at local offset ``offset``.
+
+    The scene adds one for every offset a body names in ``unit_quaternions``
+    (:class:`~skfem_flex.bodies.quaternion.QuaternionRigidBody`). A turn of the body or of space multiplies
+    e by a unit quaternion, an orthogonal map of R⁴ that keeps this equation: its mid-point gradient
+    conserves every angular momentum component the other forces leave free.
+    """
+
+    reaction_labels = ("N",)
+
+    def __init__(self, body, offset, name=None):
+        o = int(offset)
+        super().__init__([body], np.eye(4)[None], np.zeros((1, 4)), [-0.5], name=name or f"{body.name}: unit quaternion",
+                         columns=np.arange(o, o + 4))
