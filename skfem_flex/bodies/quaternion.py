@@ -6,13 +6,14 @@ A material point at body coordinates s sits at r = x + R(e) s (or p + R(e) s), q
 quadratic constraint (:class:`~skfem_flex.elements.constraints.quadratic.UnitQuaternion`).
 
 The kinetic energy is ½ m ẋ·ẋ + ½ ėᵀM(e)ė with M(e) = 4 E(e)ᵀ J₄ E(e) (:mod:`.quaternion_kernel`).
-Under energy–momentum the compiled family steps the rotation in Hamiltonian form (Betsch & Siebert's
-partitioned discrete gradient): with the single constraint |e|² = 1, which a turn about any axis keeps,
-the step conserves energy, the angular momentum components the loads leave free, *and* the body's
-angular momentum about an axis of symmetry of its inertia (the spin of a symmetric top), to round-off.
-That last one is what the director formulation of :class:`~skfem_flex.bodies.spatial.SpatialRigidBody`
-keeps only to O(Δt²). The price: the body's points are quadratic in q, so joints, springs and point loads
-(built on points affine in q) are not offered on it; a top about its pivot, a free body and gravity are.
+Under energy–momentum the compiled family steps the rotation in Hamiltonian form, with a discrete gradient
+built on invariants of the kinetic energy (:mod:`.quaternion_kernel`): with the single constraint |e|² = 1,
+which a turn about any axis keeps, the step conserves energy, the angular momentum components the loads
+leave free, *and*, for a body with an axis of symmetry, its angular momentum about that axis (the spin of
+a symmetric top), to round-off. That last one is what the director formulation of
+:class:`~skfem_flex.bodies.spatial.SpatialRigidBody` keeps only to O(Δt²). The price: the body's points are
+quadratic in q, so joints, springs and point loads (built on points affine in q) are not offered on it; a
+top about its pivot, a free body and gravity are.
 On the Python path (``compiled=False``) the energy–momentum step is the Lagrangian one of bodies whose
 mass matrix depends on q: energy is conserved, the momenta to O(Δt²).
 """
@@ -56,6 +57,9 @@ class QuaternionKernelData(NamedTuple):
     mass: np.ndarray        # (1,) m, kg
     J4: np.ndarray          # (4, 4) diag(j₀, J), kg m²
     J4i: np.ndarray         # (4, 4) its inverse
+    kin: np.ndarray         # (2,) c₀, λ_r of the kinetic energy's invariants (quaternion_kernel)
+    U: np.ndarray           # (3, 4) their directions u_i (zero rows unused)
+    cu: np.ndarray          # (3,) their coefficients c_i
     Qc: np.ndarray          # (3, 4, 4) m Q_i(c): the first moment m R(e) c = m eᵀQ_i e (zero for a free body)
     anchor: np.ndarray      # (3,) the pivot (zero for a free body), m
     g: np.ndarray           # (3,) gravity on the body, m/s²
@@ -130,6 +134,7 @@ class QuaternionRigidBody(Body):
         self.J4[0, 0] = np.trace(self.inertia) / 3.0
         self.J4[1:, 1:] = self.inertia
         self.J4i = np.linalg.inv(self.J4)
+        self._invariants = qk.invariant_terms(self.inertia, self.J4[0, 0])
         self._Qc = self.mass * rotation_quadratics(self.center)
         if size is None:
             jc = self.inertia - self.mass * (self.center @ self.center * np.eye(3) - np.outer(self.center,
@@ -196,7 +201,7 @@ class QuaternionRigidBody(Body):
 
     def kinetic_discrete_gradient(self, q0, q1, v0, v1):
         """The Lagrangian discrete gradient of G = ½ v₀ᵀM(q)v₁ (the Python path's energy–momentum step; the
-        compiled family takes the Hamiltonian step of the module docstring instead)."""
+        compiled family takes the Hamiltonian step of the module docstring instead: it also keeps the momenta)."""
         n, o = self.n_dofs, self.quaternion
         em = 0.5 * (self._split(q0)[1] + self._split(q1)[1])
         a, b = self._split(v0)[1], self._split(v1)[1]
@@ -248,8 +253,9 @@ class QuaternionRigidBody(Body):
     # ---------------------------------------------------------- compiled
     def compiled_kernel_data(self):
         """The body's :class:`QuaternionKernelData` (gravity added by the family)."""
+        kin, U, cu = self._invariants
         return QuaternionKernelData(np.array([self.n_dofs], dtype=np.int64), np.array([self.mass]), self.J4.copy(),
-                                    self.J4i.copy(), self._Qc.copy(),
+                                    self.J4i.copy(), kin.copy(), U.copy(), cu.copy(), self._Qc.copy(),
                                     np.zeros(3) if self.pivot is None else self.pivot.copy(), np.zeros(3))
 
     # ---------------------------------------------------------- body points

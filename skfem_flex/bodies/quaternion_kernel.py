@@ -13,24 +13,40 @@ with J the inertia tensor in body axes; j₀ > 0 only makes M regular along e, w
 On |e| = 1 its inverse is A(e) = ¼ E(e)ᵀ J₄⁻¹ E(e), also of degree two, and the Hamiltonian is
 T(e, π) = ½ πᵀ A(e) π with π = M(e) ė.
 
-**Energy–momentum step** (Betsch & Siebert's partitioned discrete gradient). From (e₀, π₀) to (e₁, π₁):
+**Energy–momentum step** (a discrete gradient built on invariants, as Gonzalez builds his). With
+b = E(e)π (four numbers, unchanged when space turns: e → l∘e, π → l∘π) and |b|² = |e|²|π|²,
 
 .. math::
 
-    \frac{Δe}{Δt} = K\, π_m,\quad K = \tfrac12 (A(e_0) + A(e_1)),\quad π_m = \tfrac12(π_0 + π_1),
+    T = \tfrac18 \Bigl[c_0\, s_0^2 + λ_r\, P\,Q + \sum_i c_i\, s_i^2\Bigr],\quad
+    s_0 = e\cdot π,\; P = e\cdot e,\; Q = π\cdot π,\; s_i = u_i \cdot b,
 
-    π_1 - π_0 + Δt\, \tfrac12 \bigl(∇_e T(e_m, π_0) + ∇_e T(e_m, π_1)\bigr) + Δt\, ∇V(e_m) + μ\, e_m = 0 .
+where λ_i, u_i are the eigenvalues and eigenvectors of J⁻¹ (u_i padded with a leading zero), λ_r one of
+them (a repeated one if J has an axis of symmetry), c₀ = 1/j₀ − λ_r and c_i = λ_i − λ_r (only the nonzero
+ones kept: none for a spherical J, one, along the symmetry axis k, for a symmetric one). Each of s₀, P, Q,
+s_i is quadratic in z = (e, π), so its mid-point gradient is exact, and the discrete gradient
 
-T is quadratic in e for fixed π and in π for fixed e, so the two half-sums are exact discrete gradients
-and the step conserves T + V. A turn of the body about a symmetry axis of J (right multiplication
-e → e∘r) and a turn of space about an axis its loads leave free (left multiplication) are orthogonal
-linear maps of R⁴ that keep |e| and T: every term above is equivariant under them, so the step also
-conserves the body's angular momentum about its symmetry axis and the spatial one about the free axis,
-to round-off. (The director formulation's six rigidity equations are invariant under a turn about the
-body axis only as a set, and its mid-point step keeps the body-axis momentum only to O(Δt²).)
+.. math::
 
-The unknown is Δe: π₁ = 2 K⁻¹ Δe/Δt − π₀, and ė₁ = A(e₁) π₁ is the velocity kept for output and for the
-next step's π₀ = M(e₀) ė₀.
+    D_T = \tfrac18 \Bigl[2 c_0 \bar s_0 ∇s_0(z_m) + λ_r \bigl(\bar Q ∇P(z_m) + \bar P ∇Q(z_m)\bigr)
+          + \sum_i 2 c_i \bar s_i ∇s_i(z_m)\Bigr]
+
+(bars: means of the two end values) has D_T·Δz = ΔT exactly. The step from (e₀, π₀) to (e₁, π₁) is
+
+.. math::
+
+    Δe = Δt\, D_{T,π},\qquad π_1 - π_0 + Δt\, D_{T,e} + Δt\, ∇V(e_m) + μ\, e_m = 0,\qquad ½(e_1\cdot e_1 - 1) = 0 .
+
+Every invariant above is unchanged by a turn of space, and s₀, P, Q and s_k also by a turn of the body
+about its symmetry axis k: their mid-point gradients are orthogonal to those turns' generators at z_m,
+so the step conserves the energy, the angular momentum components the loads leave free, and for a
+symmetric body the spin about its axis, to round-off. (The director formulation's six rigidity equations
+are invariant under a turn about the body axis only as a set, and its mid-point step keeps the body-axis
+momentum only to O(Δt²).)
+
+The unknown is Δe: the first equation is linear in π₁, which is solved for; ė₁ = A(e₁) π₁ is the
+velocity kept for output and for the next step's π₀ = M(e₀) ė₀. The derivatives with respect to Δe are
+taken by complex steps (exact to round-off: every operation is a polynomial or a linear solve).
 """
 from __future__ import annotations
 
@@ -38,7 +54,7 @@ import numba
 import numpy as np
 
 __all__ = ["E_UNITS", "e_matrix", "mass", "inverse_mass", "mass_jacobian", "quadratic_velocity_force",
-           "hamiltonian_gradient", "em_terms", "newmark_terms", "omega_matrix", "space_matrix"]
+           "em_terms", "invariant_terms", "newmark_terms", "omega_matrix", "space_matrix"]
 
 
 def _units():
@@ -174,69 +190,119 @@ def quadratic_velocity_force(J4, e, v):
 
 
 @numba.njit(cache=True)
-def hamiltonian_gradient(J4i, e, p):
-    """∇_e T(e, π) with T = ½ πᵀ A(e) π: component k is ¼ (E_k π)·J₄⁻¹ (E(e) π)."""
-    b = _times(J4i, _times(e_matrix(e), p))
-    out = np.zeros(4)
+def _e_of(e):
+    """E(e) for a real or complex e (the complex steps of :func:`em_terms`)."""
+    out = np.zeros((4, 4), e.dtype)
     for k in range(4):
-        s = 0.0
         for i in range(4):
-            ek = 0.0
             for j in range(4):
-                ek += E_UNITS[k, i, j] * p[j]
-            s += ek * b[i]
-        out[k] = 0.25 * s
+                out[i, j] += e[k] * E_UNITS[k, i, j]
     return out
 
 
 @numba.njit(cache=True)
-def _hamiltonian_hessian(J4i, p):
-    """∂²T/∂e² (constant in e: T is quadratic in e)."""
-    out = np.zeros((4, 4))
-    for k in range(4):
-        u = np.zeros(4)
-        u[k] = 1.0
-        col = hamiltonian_gradient(J4i, u, p)
+def _em_rows(kin, U, cu, e0, p0, e1, h):
+    """(π₁, D_{T,e}) of the step to e₁ (module docstring); e₁ real or complex."""
+    c0, lr = kin[0], kin[1]
+    em = 0.5 * (e0 + e1)
+    E0, E1, Em = _e_of(e0 + 0j), _e_of(e1), _e_of(em)
+    P = 0.5 * (np.sum(e0 * e0) + np.sum(e1 * e1))
+    b0 = np.zeros(4) + 0j
+    for i in range(4):
+        for j in range(4):
+            b0[i] += E0[i, j] * p0[j]
+    # D_{T,π} = Δe/Δt, linear in π₁: K π₁ = Δe/Δt − (the π₀ part)
+    K = np.zeros((4, 4), e1.dtype)
+    rhs = (e1 - e0) / h
+    s00 = np.sum(e0 * p0)
+    for i in range(4):
+        K[i, i] += 0.125 * lr * P
+        rhs[i] -= 0.125 * (c0 * s00 * em[i] + lr * P * p0[i])
+        for j in range(4):
+            K[i, j] += 0.125 * c0 * em[i] * e1[j]
+    for a in range(U.shape[0]):
+        if cu[a] == 0.0:
+            continue
+        w = np.zeros(4, e1.dtype)                  # E(e_m)ᵀ u_a and E(e₁)ᵀ u_a
+        w1 = np.zeros(4, e1.dtype)
+        sa0 = 0.0 + 0j
         for i in range(4):
-            out[i, k] = col[i]
-    return out
+            sa0 += U[a, i] * b0[i]
+            for j in range(4):
+                w[j] += Em[i, j] * U[a, i]
+                w1[j] += E1[i, j] * U[a, i]
+        for i in range(4):
+            rhs[i] -= 0.125 * cu[a] * sa0 * w[i]
+            for j in range(4):
+                K[i, j] += 0.125 * cu[a] * w[i] * w1[j]
+    p1 = np.linalg.solve(K, rhs)
+    pm = 0.5 * (p0 + p1)
+    Q = 0.5 * (np.sum(p0 * p0) + np.sum(p1 * p1))
+    s0 = s00 + np.sum(e1 * p1)
+    De = 0.125 * (c0 * s0 * pm + 2.0 * lr * Q * em)
+    for a in range(U.shape[0]):
+        if cu[a] == 0.0:
+            continue
+        sa = 0.0 + 0j
+        for i in range(4):
+            for j in range(4):
+                sa += U[a, i] * (E0[i, j] * p0[j] + E1[i, j] * p1[j])
+        for k in range(4):                         # (C(π_m)ᵀ u)_k = u · E_k π_m
+            t = 0.0 + 0j
+            for i in range(4):
+                for j in range(4):
+                    t += U[a, i] * E_UNITS[k, i, j] * pm[j]
+            De[k] += 0.125 * cu[a] * sa * t
+    return p1, De
 
 
 @numba.njit(cache=True)
-def em_terms(J4, J4i, e0, e1, v0, h):
+def em_terms(J4, J4i, kin, U, cu, e0, e1, v0, h):
     r"""The rotation's part of one energy–momentum step (module docstring) at the end e₁.
+
+    ``kin`` = (c₀, λ_r), ``U`` (n_u, 4) the rows u_i and ``cu`` (n_u,) the c_i of the invariants.
 
     Returns
     -------
     p1 : ndarray (4,)
-        π₁ = 2 K⁻¹ Δe/Δt − π₀, with π₀ = M(e₀) ė₀.
+        π₁ (π₀ = M(e₀) ė₀).
     gk : ndarray (4,)
-        −½ (∇_e T(e_m, π₀) + ∇_e T(e_m, π₁)) (the residual takes −Δt g_k).
+        −D_{T,e} (the residual takes −Δt g_k).
     dp, dgk : ndarray (4, 4)
         Their derivatives with respect to e₁ (Δe).
     v1 : ndarray (4,)
         ė₁ = A(e₁) π₁.
     """
     p0 = _times(mass(J4, e0), v0)
-    K = 0.5 * (inverse_mass(J4i, e0) + inverse_mass(J4i, e1))
-    vm = (e1 - e0) / h
-    pm = np.linalg.solve(K, vm)
-    p1 = 2.0 * pm - p0
-    # K π_m = Δe/Δt: δπ_m = K⁻¹ (δ/Δt − ½ ∂(A(e₁) π_m)/∂e₁ δ)
-    rhs = np.eye(4) / h - 0.5 * _polarized(J4i, e1, pm, True)
-    dp = 2.0 * np.linalg.solve(K, rhs)
-    em = 0.5 * (e0 + e1)
-    gk = -0.5 * (hamiltonian_gradient(J4i, em, p0) + hamiltonian_gradient(J4i, em, p1))
-    # ∂∇_eT(e, π)/∂π = (∂(A(e)π)/∂e)ᵀ
-    Dm = _polarized(J4i, em, p1, True)
-    DmT_dp = np.zeros((4, 4))
-    for i in range(4):
-        for k in range(4):
-            for j in range(4):
-                DmT_dp[i, j] += Dm[k, i] * dp[k, j]
-    dgk = -(0.25 * (_hamiltonian_hessian(J4i, p0) + _hamiltonian_hessian(J4i, p1)) + 0.5 * DmT_dp)
-    v1 = _times(inverse_mass(J4i, e1), p1)
-    return p1, gk, dp, dgk, v1
+    p1c, Dc = _em_rows(kin, U, cu, e0, p0, e1 + 0j, h)
+    p1, gk = p1c.real.copy(), -Dc.real
+    dp, dgk = np.zeros((4, 4)), np.zeros((4, 4))
+    step = 1e-30 * max(1.0, np.abs(e1).max())
+    for k in range(4):
+        ek = e1 + 0j
+        ek[k] += 1j * step
+        pk, Dk = _em_rows(kin, U, cu, e0, p0, ek, h)
+        for i in range(4):
+            dp[i, k] = pk[i].imag / step
+            dgk[i, k] = -Dk[i].imag / step
+    return p1, gk, dp, dgk, _times(inverse_mass(J4i, e1), p1)
+
+
+def invariant_terms(J, j0):
+    """``(kin, U, cu)`` of :func:`em_terms` for the inertia J (3, 3) and j₀ (module docstring): λ_r a repeated
+    eigenvalue of J⁻¹ when there is one (to 1e-12 relative), else the middle one."""
+    lam, vec = np.linalg.eigh(np.linalg.inv(np.asarray(J, dtype=float)))
+    tol = 1e-12 * float(np.abs(lam).max())
+    lr = float(lam[1])
+    for a, b in ((0, 1), (1, 2), (0, 2)):
+        if abs(lam[a] - lam[b]) <= tol:
+            lr = float(lam[a])
+    U, cu = np.zeros((3, 4)), np.zeros(3)
+    for i in range(3):
+        if abs(lam[i] - lr) > tol:
+            U[i, 1:] = vec[:, i]
+            cu[i] = lam[i] - lr
+    return np.array([1.0 / float(j0) - lr, lr]), U, cu
 
 
 @numba.njit(cache=True)

@@ -4,8 +4,8 @@ their inertia and the gravity acting on them.
 The arithmetic is :mod:`skfem_flex.bodies.quaternion_kernel`; this family adds its results where the task
 wants them (:mod:`skfem_flex.compiled.tasks`):
 
-* TASK_EVAL, energy–momentum: the rotation's rows in Hamiltonian form, p ← π₁ = 2K⁻¹Δe/Δt − π₀ and
-  g_k ← −½(∇_eT(e_m, π₀) + ∇_eT(e_m, π₁)) with their derivatives with respect to Δe; the velocity kept is
+* TASK_EVAL, energy–momentum: the rotation's rows in Hamiltonian form, p ← π₁ (solved from
+  Δe = Δt D_{T,π}) and g_k ← −D_{T,e} with their derivatives with respect to Δe; the velocity kept is
   ė₁ = A(e₁)π₁, written over the scheme's 2Δe/Δt − ė₀ (the body's own rows only: nothing else reads
   them). The centre of mass has the constant mass m (p ← m v₁);
 * TASK_EVAL, Newmark and statics: p ← M(q₁)a₁, g_k ← Q_v(q₁, v₁) with their derivatives;
@@ -75,8 +75,8 @@ def pack(items, packer):
 @numba.njit(cache=True, inline="always")
 def _body(fam, k):
     """Body data from the pools, field by field (QuaternionKernelData's order)."""
-    return QuaternionKernelData(i1(fam, k), f1(fam, k + 1), f2(fam, k + 2), f2(fam, k + 3), f3(fam, k + 4),
-                                f1(fam, k + 5), f1(fam, k + 6))
+    return QuaternionKernelData(i1(fam, k), f1(fam, k + 1), f2(fam, k + 2), f2(fam, k + 3), f1(fam, k + 4),
+                                f2(fam, k + 5), f1(fam, k + 6), f3(fam, k + 7), f1(fam, k + 8), f1(fam, k + 9))
 
 
 @numba.njit(cache=True)
@@ -165,7 +165,7 @@ def _step(ctx, kd, o, r, m, e1, ev1):
         e0, ev0 = np.empty(4), np.empty(4)
         for i in range(4):
             e0[i], ev0[i] = q0[o + r + i], v0[o + r + i]
-        p, gk, dp, dgk, vnew = em_terms(kd.J4, kd.J4i, e0, e1, ev0, ctx.h)
+        p, gk, dp, dgk, vnew = em_terms(kd.J4, kd.J4i, kd.kin, kd.U, kd.cu, e0, e1, ev0, ctx.h)
         v1 = fvec(ctx.v1, n)
         for i in range(4):
             v1[o + r + i] = vnew[i]
