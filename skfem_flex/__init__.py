@@ -16,6 +16,7 @@ from .elements.forces import DistributedLoad, ExactDistributedLoad, NodalLoad
 from .elements.constraints import Constraint, Distance, UserConstraint
 from .bodies.rigid import RigidBody
 from .bodies.spatial import SpatialPointMass, SpatialRigidBody
+from .bodies.quaternion import QuaternionRigidBody
 from .fem.spatial_section import SpatialSection
 from .fem.spatial_beam import TimoshenkoBeam3D
 from .bodies.exact.spatial_body import SpatialExactBeam

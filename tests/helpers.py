@@ -222,8 +222,10 @@ def warm_compile_cache():
 
     schemes = (sf.EnergyMomentum(), sf.Trapezoidal(), sf.GeneralizedAlpha())
     todo = []
-    for name in sorted(sf.scenes.CATALOGUE):
-        packed = packed_scene(sf.scenes.CATALOGUE[name]())
+    scenes = [sf.scenes.CATALOGUE[name]() for name in sorted(sf.scenes.CATALOGUE)]
+    scenes.append(sf.scenes.heavy_top(rotation="quaternion"))      # the catalogue's one other body family
+    for scene in scenes:
+        packed = packed_scene(scene)
         todo += [u for scheme in schemes for u in units(packed, scheme)]
     todo = list(dict.fromkeys(todo))
     todo = [u for u in todo if u.nrt] + [u for u in todo if not u.nrt]      # the largest first

@@ -184,12 +184,15 @@ def test_free_beam(monkeypatch, tmp_path):
 
 
 def test_heavy_top(monkeypatch, tmp_path):
-    """Energy-momentum conserves the top's energy and vertical angular momentum at both steps; the Brüls top
-    converges at second order towards the published Euler parameters under every scheme."""
+    """Energy-momentum conserves the top's energy and vertical angular momentum at both steps, and with the
+    quaternion its spin too; the Brüls top converges at second order towards the published Euler parameters
+    under every scheme."""
     example = run_example("heavy_top", monkeypatch, tmp_path)
     for dt in example["TOP_STEPS"]:
-        energy, l3, _, orth, _ = example["simo_wong"][("energy-momentum", dt)]
-        assert energy < 1e-10 and l3 < 1e-10 and orth < 1e-12
+        for rotation in example["ROTATIONS"]:
+            energy, l3, spin, orth, _ = example["simo_wong"][(rotation, "energy-momentum", dt)]
+            assert energy < 1e-10 and l3 < 1e-10 and orth < 1e-12
+        assert example["simo_wong"][("quaternion", "energy-momentum", dt)][2] < 1e-10
     for name in example["SCHEMES"]:
         assert all(1.8 < o < 2.2 for o in example["orders"](name))
     assert (tmp_path / "heavy_top_convergence.png").exists()
