@@ -45,8 +45,7 @@ are invariant under a turn about the body axis only as a set, and its mid-point 
 momentum only to O(Δt²).)
 
 The unknown is Δe: the first equation is linear in π₁, which is solved for; ė₁ = A(e₁) π₁ is the
-velocity kept for output and for the next step's π₀ = M(e₀) ė₀. The derivatives with respect to Δe are
-taken by complex steps (exact to round-off: every operation is a polynomial or a linear solve).
+velocity kept for output and for the next step's π₀ = M(e₀) ė₀.
 """
 from __future__ import annotations
 
@@ -190,70 +189,40 @@ def quadratic_velocity_force(J4, e, v):
 
 
 @numba.njit(cache=True)
-def _e_of(e):
-    """E(e) for a real or complex e (the complex steps of :func:`em_terms`)."""
-    out = np.zeros((4, 4), e.dtype)
-    for k in range(4):
-        for i in range(4):
-            for j in range(4):
-                out[i, j] += e[k] * E_UNITS[k, i, j]
-    return out
+def _solve4(A, b):
+    """x with A x = b for a 4×4 A by Gaussian elimination with partial pivoting (A, b kept)."""
+    M = A.copy()
+    x = b.copy()
+    for c in range(4):
+        piv = c
+        for r in range(c + 1, 4):
+            if abs(M[r, c]) > abs(M[piv, c]):
+                piv = r
+        if piv != c:
+            for k in range(4):
+                M[c, k], M[piv, k] = M[piv, k], M[c, k]
+            x[c], x[piv] = x[piv], x[c]
+        for r in range(c + 1, 4):
+            f = M[r, c] / M[c, c]
+            for k in range(c, 4):
+                M[r, k] -= f * M[c, k]
+            x[r] -= f * x[c]
+    for c in range(3, -1, -1):
+        t = x[c]
+        for k in range(c + 1, 4):
+            t -= M[c, k] * x[k]
+        x[c] = t / M[c, c]
+    return x
 
 
 @numba.njit(cache=True)
-def _em_rows(kin, U, cu, e0, p0, e1, h):
-    """(π₁, D_{T,e}) of the step to e₁ (module docstring); e₁ real or complex."""
-    c0, lr = kin[0], kin[1]
-    em = 0.5 * (e0 + e1)
-    E0, E1, Em = _e_of(e0 + 0j), _e_of(e1), _e_of(em)
-    P = 0.5 * (np.sum(e0 * e0) + np.sum(e1 * e1))
-    b0 = np.zeros(4) + 0j
+def _eu(u, e_units_k):
+    """E_kᵀ u (4,) for one unit matrix E_k."""
+    out = np.zeros(4)
     for i in range(4):
         for j in range(4):
-            b0[i] += E0[i, j] * p0[j]
-    # D_{T,π} = Δe/Δt, linear in π₁: K π₁ = Δe/Δt − (the π₀ part)
-    K = np.zeros((4, 4), e1.dtype)
-    rhs = (e1 - e0) / h
-    s00 = np.sum(e0 * p0)
-    for i in range(4):
-        K[i, i] += 0.125 * lr * P
-        rhs[i] -= 0.125 * (c0 * s00 * em[i] + lr * P * p0[i])
-        for j in range(4):
-            K[i, j] += 0.125 * c0 * em[i] * e1[j]
-    for a in range(U.shape[0]):
-        if cu[a] == 0.0:
-            continue
-        w = np.zeros(4, e1.dtype)                  # E(e_m)ᵀ u_a and E(e₁)ᵀ u_a
-        w1 = np.zeros(4, e1.dtype)
-        sa0 = 0.0 + 0j
-        for i in range(4):
-            sa0 += U[a, i] * b0[i]
-            for j in range(4):
-                w[j] += Em[i, j] * U[a, i]
-                w1[j] += E1[i, j] * U[a, i]
-        for i in range(4):
-            rhs[i] -= 0.125 * cu[a] * sa0 * w[i]
-            for j in range(4):
-                K[i, j] += 0.125 * cu[a] * w[i] * w1[j]
-    p1 = np.linalg.solve(K, rhs)
-    pm = 0.5 * (p0 + p1)
-    Q = 0.5 * (np.sum(p0 * p0) + np.sum(p1 * p1))
-    s0 = s00 + np.sum(e1 * p1)
-    De = 0.125 * (c0 * s0 * pm + 2.0 * lr * Q * em)
-    for a in range(U.shape[0]):
-        if cu[a] == 0.0:
-            continue
-        sa = 0.0 + 0j
-        for i in range(4):
-            for j in range(4):
-                sa += U[a, i] * (E0[i, j] * p0[j] + E1[i, j] * p1[j])
-        for k in range(4):                         # (C(π_m)ᵀ u)_k = u · E_k π_m
-            t = 0.0 + 0j
-            for i in range(4):
-                for j in range(4):
-                    t += U[a, i] * E_UNITS[k, i, j] * pm[j]
-            De[k] += 0.125 * cu[a] * sa * t
-    return p1, De
+            out[j] += e_units_k[i, j] * u[i]
+    return out
 
 
 @numba.njit(cache=True)
@@ -265,27 +234,109 @@ def em_terms(J4, J4i, kin, U, cu, e0, e1, v0, h):
     Returns
     -------
     p1 : ndarray (4,)
-        π₁ (π₀ = M(e₀) ė₀).
+        π₁ (π₀ = M(e₀) ė₀), from K π₁ = Δe/Δt − (the π₀ part of D_{T,π}).
     gk : ndarray (4,)
         −D_{T,e} (the residual takes −Δt g_k).
     dp, dgk : ndarray (4, 4)
-        Their derivatives with respect to e₁ (Δe).
+        Their derivatives with respect to e₁ (Δe): dπ₁ = K⁻¹(∂rhs − ∂K π₁) and
+        dD_{T,e} = ∂_{e₁}D_{T,e} + ∂_{π₁}D_{T,e} dπ₁.
     v1 : ndarray (4,)
         ė₁ = A(e₁) π₁.
     """
+    c0, lr = kin[0], kin[1]
     p0 = _times(mass(J4, e0), v0)
-    p1c, Dc = _em_rows(kin, U, cu, e0, p0, e1 + 0j, h)
-    p1, gk = p1c.real.copy(), -Dc.real
-    dp, dgk = np.zeros((4, 4)), np.zeros((4, 4))
-    step = 1e-30 * max(1.0, np.abs(e1).max())
-    for k in range(4):
-        ek = e1 + 0j
-        ek[k] += 1j * step
-        pk, Dk = _em_rows(kin, U, cu, e0, p0, ek, h)
+    em = 0.5 * (e0 + e1)
+    E0, E1, Em = e_matrix(e0), e_matrix(e1), e_matrix(em)
+    P = 0.5 * (np.sum(e0 * e0) + np.sum(e1 * e1))
+    s00 = np.sum(e0 * p0)
+    b0 = _times(E0, p0)
+    na = U.shape[0]
+    W, W1 = np.zeros((na, 4)), np.zeros((na, 4))      # E(e_m)ᵀu_a, E(e₁)ᵀu_a
+    sa0 = np.zeros(na)
+    for a in range(na):
         for i in range(4):
-            dp[i, k] = pk[i].imag / step
-            dgk[i, k] = -Dk[i].imag / step
-    return p1, gk, dp, dgk, _times(inverse_mass(J4i, e1), p1)
+            sa0[a] += U[a, i] * b0[i]
+            for j in range(4):
+                W[a, j] += Em[i, j] * U[a, i]
+                W1[a, j] += E1[i, j] * U[a, i]
+    # K π₁ = rhs (D_{T,π} = Δe/Δt, linear in π₁)
+    K = np.zeros((4, 4))
+    rhs = (e1 - e0) / h
+    for i in range(4):
+        K[i, i] += 0.125 * lr * P
+        rhs[i] -= 0.125 * (c0 * s00 * em[i] + lr * P * p0[i])
+        for j in range(4):
+            K[i, j] += 0.125 * c0 * em[i] * e1[j]
+    for a in range(na):
+        for i in range(4):
+            rhs[i] -= 0.125 * cu[a] * sa0[a] * W[a, i]
+            for j in range(4):
+                K[i, j] += 0.125 * cu[a] * W[a, i] * W1[a, j]
+    p1 = _solve4(K, rhs)
+    pm = 0.5 * (p0 + p1)
+    Q = 0.5 * (np.sum(p0 * p0) + np.sum(p1 * p1))
+    s0 = s00 + np.sum(e1 * p1)
+    w1p = np.zeros(na)                                 # E(e₁)ᵀu_a · π₁
+    for a in range(na):
+        for j in range(4):
+            w1p[a] += W1[a, j] * p1[j]
+    sa = sa0 + w1p
+    # E_kᵀu_a per (a, k), and T_a = C(π_m)ᵀu_a, (T_a)_k = (E_kᵀu_a)·π_m; ∂s_a/∂e₁_k = (E_kᵀu_a)·π₁
+    EkU = np.zeros((na, 4, 4))
+    Ta, dsa = np.zeros((na, 4)), np.zeros((na, 4))
+    for a in range(na):
+        for k in range(4):
+            col = _eu(U[a], E_UNITS[k])
+            for j in range(4):
+                EkU[a, k, j] = col[j]
+                Ta[a, k] += col[j] * pm[j]
+                dsa[a, k] += col[j] * p1[j]
+    De = np.zeros(4)
+    for k in range(4):
+        De[k] = 0.125 * (c0 * s0 * pm[k] + 2.0 * lr * Q * em[k])
+        for a in range(na):
+            De[k] += 0.125 * cu[a] * sa[a] * Ta[a, k]
+    # dπ₁/de₁ = K⁻¹ (∂rhs/∂e₁ − (∂K/∂e₁) π₁)
+    R = np.zeros((4, 4))
+    e1p = np.sum(e1 * p1)
+    for i in range(4):
+        R[i, i] += 1.0 / h - 0.125 * 0.5 * c0 * s00
+        for k in range(4):
+            R[i, k] -= 0.125 * lr * p0[i] * e1[k]                      # ∂P/∂e₁ = e₁
+            R[i, k] -= 0.125 * lr * e1[k] * p1[i]                      # (∂K/∂e₁_k) π₁: λ_r e₁_k π₁
+            R[i, k] -= 0.125 * c0 * em[i] * p1[k]                      # c₀ e_m (u_k·π₁)
+        R[i, i] -= 0.125 * c0 * 0.5 * e1p                              # c₀ ½u_k (e₁·π₁)
+    for a in range(na):
+        for i in range(4):
+            for k in range(4):
+                R[i, k] -= 0.125 * cu[a] * 0.5 * EkU[a, k, i] * (sa0[a] + w1p[a])
+                R[i, k] -= 0.125 * cu[a] * W[a, i] * dsa[a, k]
+    dp = np.zeros((4, 4))
+    for k in range(4):
+        col = _solve4(K, R[:, k].copy())
+        for i in range(4):
+            dp[i, k] = col[i]
+    # D_{T,e}: its partial derivatives in e₁ (π₁ fixed) and in π₁
+    De_e, De_p = np.zeros((4, 4)), np.zeros((4, 4))
+    for i in range(4):
+        De_e[i, i] += 0.125 * lr * Q
+        De_p[i, i] += 0.125 * 0.5 * c0 * s0
+        for k in range(4):
+            De_e[i, k] += 0.125 * c0 * pm[i] * p1[k]
+            De_p[i, k] += 0.125 * (c0 * pm[i] * e1[k] + 2.0 * lr * em[i] * p1[k])
+    for a in range(na):
+        for i in range(4):
+            for k in range(4):
+                De_e[i, k] += 0.125 * cu[a] * Ta[a, i] * dsa[a, k]
+                De_p[i, k] += 0.125 * cu[a] * (Ta[a, i] * W1[a, k] + 0.5 * sa[a] * EkU[a, i, k])
+    dgk = np.zeros((4, 4))
+    for i in range(4):
+        for k in range(4):
+            t = De_e[i, k]
+            for j in range(4):
+                t += De_p[i, j] * dp[j, k]
+            dgk[i, k] = -t
+    return p1, -De, dp, dgk, _times(inverse_mass(J4i, e1), p1)
 
 
 def invariant_terms(J, j0):
