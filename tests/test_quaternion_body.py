@@ -175,3 +175,17 @@ def test_bad_input_and_joints_get_clear_errors():
     body = QuaternionRigidBody(1.0, [1.0, 1.0, 1.0], orientation=rotation_vector_matrix([0.1, 0.2, 0.3]))
     with pytest.raises(ValueError, match="cannot take joints"):
         sf.Spherical(body.point([1.0, 0.0, 0.0]), None)
+
+
+def test_hanging_top_statics_and_modes():
+    """Started 3 rad off, the top rests with its centre of mass under the pivot; about that rest its two
+    swinging modes are the compound pendulum's √(m g l / J) = √(20·1·1/5) = 2 rad/s, and the spin about the
+    axis is a zero mode (the unit-norm constraint taken out in the null space)."""
+    from skfem_flex.bodies.probes import PointProbe
+    top = QuaternionRigidBody(20.0, [5.0, 5.0, 1.0], orientation=rotation_vector_matrix([3.0, 0.2, 0.0]),
+                              pivot=[0.0, 0.0, 0.0], center_of_mass=[0.0, 0.0, 1.0])
+    scene = sf.Scene([top], forces=[sf.Gravity((0.0, 0.0, -1.0))], probes={"com": PointProbe(top.point(top.center))})
+    rest = sf.static_equilibrium(scene)
+    assert np.allclose(top.point(top.center).position(rest.q), [0.0, 0.0, -1.0], atol=1e-10)
+    m = sf.modes(scene, about="static", n_modes=3)
+    assert np.allclose(np.sort(m.omega), [0.0, 2.0, 2.0], atol=1e-8)
