@@ -66,8 +66,8 @@ CONTEXT_FIELDS = (
     ("phi", "i"), ("mu", "i"), ("rscale", "i"), ("rmax", "i"), ("ddphi", "i"), ("phit", "i"),
     # the Newton matrix (.storage)
     ("mat", "i"), ("fpos", "i"), ("storage", "i"), ("csr_ptr", "i"), ("csr_idx", "i"), ("missed", "i"),
-    # the scene's constant masses (CSR over all coordinates)
-    ("mass_ptr", "i"), ("mass_idx", "i"), ("mass_dat", "i"),
+    # the scene's constant masses (CSR over all coordinates) and each entry's place in the Newton matrix
+    ("mass_ptr", "i"), ("mass_idx", "i"), ("mass_dat", "i"), ("mass_pos", "i"),
     # free and prescribed coordinates (index arrays of nf and npres entries)
     ("free", "i"), ("pres", "i"),
     # the Newton iteration: where to evaluate (x, nx), residual and update (nx), J regular, scaled error,

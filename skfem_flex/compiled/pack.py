@@ -29,7 +29,7 @@ from ..numerics.band_plans import DENSE_BORDERED_GAIN, MAX_BANDWIDTH, MAX_BORDER
 from .abi import Fields
 from .families import family_for
 from .points import MapStore
-from .storage import CSR, DENSE
+from .storage import CSR, DENSE, positions
 
 __all__ = ["Packer", "PackedScene", "packed_scene", "DENSE_STORAGE_LIMIT", "time_table"]
 
@@ -91,7 +91,8 @@ class PackedScene:
     families: list                      # (module, Fields, count) per family, in calling order
     maps: Fields
     columns: list
-    mass: tuple                         # (ptr, idx, dat) CSR of the constant masses over all coordinates
+    mass: tuple                         # (ptr, idx, dat, pos) CSR of the constant masses over all coordinates and
+    #                                     each entry's place in the Newton matrix's values (−1: prescribed)
     free: np.ndarray
     pres: np.ndarray
     fpos: np.ndarray
@@ -346,7 +347,7 @@ def _newton_pattern(scene, packed, packs):
     coordinates it touches; scipy CSR with sorted indices."""
     n, m = scene.n, scene.n_constraints
     rows, cols = [np.arange(n)], [np.arange(n)]
-    ptr, idx, _ = packed.mass
+    ptr, idx = packed.mass[:2]
     rows.append(np.repeat(np.arange(n), np.diff(ptr)))
     cols.append(idx)
     for _, pk in packs:
@@ -405,6 +406,9 @@ def _plan(packed, scene, packs):
     packed.pattern = pattern
     packed.plan = plan
     layout = (packed.storage, pattern, packed.fpos, nx)
+    ptr, idx = packed.mass[:2]
+    mass_rows = np.repeat(np.arange(ptr.size - 1, dtype=np.int64), np.diff(ptr))
+    packed.mass = packed.mass[:3] + (positions(layout, packed.fpos[mass_rows], packed.fpos[idx]),)
     for mod, pk in packs:
         data = pk.finish(layout) if pk.finish is not None else pk.data
         packed.families.append((mod, Fields(data), pk.count))

@@ -18,10 +18,10 @@ from __future__ import annotations
 import numba
 
 from .abi import fvec
-from .storage import add_mq, add_qm
+from .storage import add_mq, add_pos, add_qm
 from .tasks import ROWS_ACCELERATION, ROWS_POSITION, ROWS_VELOCITY, TASK_EVAL, TASK_ROWS
 
-__all__ = ["finish_row", "needs_rate_jacobian", "row_states"]
+__all__ = ["finish_row", "write_row", "needs_rate_jacobian", "row_states"]
 
 
 @numba.njit(cache=True, _nrt=False)
@@ -44,6 +44,25 @@ def needs_rate_jacobian(ctx):
 def finish_row(ctx, st, row, value, phi_t, phi_tt, cols, cq, d, cv, k):
     """Write constraint row ``row`` (module docstring); ``cols[:k]`` the coordinates it touches, ``cq``,
     ``d``, ``cv`` its Φ_q, D and ∂(Φ_q v₁)/∂q there (``cv`` read only when :func:`needs_rate_jacobian`)."""
+    write_row(ctx, st, row, value, phi_t, phi_tt, cols, cq, d, cv, k, cols[:0])
+
+
+@numba.njit(cache=True, _nrt=False)
+def _border(ctx, st, pos, t, j, row, val, column):
+    """Add ``val`` to the border column (∂r_j/∂μ_row, ``column``) or row (∂c_row/∂Δq_j): at the place
+    ``pos[2t]`` or ``pos[2t + 1]`` when the family found them (:func:`~.storage.positions`), else by search."""
+    if pos.size:
+        add_pos(st, pos[2 * t + (0 if column else 1)], val)
+    elif column:
+        add_qm(ctx, st, j, row, val)
+    else:
+        add_mq(ctx, st, row, j, val)
+
+
+@numba.njit(cache=True, _nrt=False)
+def write_row(ctx, st, row, value, phi_t, phi_tt, cols, cq, d, cv, k, pos):
+    """:func:`finish_row` with the places of the row's border entries: ``pos[2t]`` of (cols[t], row) and
+    ``pos[2t + 1]`` of (row, cols[t]) in the Newton matrix's values, or ``pos`` empty (found by search)."""
     n, m = ctx.n, ctx.m
     v1 = fvec(ctx.v1, n)
     phi, phit = fvec(ctx.phi, m), fvec(ctx.phit, m)
@@ -65,7 +84,7 @@ def finish_row(ctx, st, row, value, phi_t, phi_tt, cols, cq, d, cv, k):
     for t in range(k):
         j = cols[t]
         dtmu[j] += w_mu * d[t] * mu
-        add_qm(ctx, st, j, row, w_mu * d[t])
+        _border(ctx, st, pos, t, j, row, w_mu * d[t], True)
         dd += d[t] * (qb[j] - qa[j])
         a = abs(cq[t])
         rs += a * abs(q1[j])
@@ -76,7 +95,7 @@ def finish_row(ctx, st, row, value, phi_t, phi_tt, cols, cq, d, cv, k):
     if level == ROWS_POSITION:
         phi[row] = value
         for t in range(k):
-            add_mq(ctx, st, row, cols[t], cq[t] * ctx.dq1)
+            _border(ctx, st, pos, t, cols[t], row, cq[t] * ctx.dq1, False)
     elif level == ROWS_VELOCITY:
         c_v = ctx.c_v
         s, sv = phi_t, 0.0
@@ -84,7 +103,7 @@ def finish_row(ctx, st, row, value, phi_t, phi_tt, cols, cq, d, cv, k):
             j = cols[t]
             s += cq[t] * v1[j]
             sv += abs(cq[t]) * abs(v1[j])
-            add_mq(ctx, st, row, j, (cv[t] * ctx.dq1 + cq[t] * dv1[j]) / c_v)
+            _border(ctx, st, pos, t, j, row, (cv[t] * ctx.dq1 + cq[t] * dv1[j]) / c_v, False)
         phi[row] = s / c_v
         rs = max(rs, sv / c_v, abs(phi_t) / c_v)
     elif level == ROWS_ACCELERATION:
@@ -93,7 +112,7 @@ def finish_row(ctx, st, row, value, phi_t, phi_tt, cols, cq, d, cv, k):
         for t in range(k):
             j = cols[t]
             s += cq[t] * a1[j] + cv[t] * v1[j]
-            add_mq(ctx, st, row, j, cq[t] * ctx.da1)
+            _border(ctx, st, pos, t, j, row, cq[t] * ctx.da1, False)
         phi[row] = s
     fvec(ctx.rscale, m)[row] = rs
     fvec(ctx.rmax, m)[row] = rmax

@@ -11,15 +11,19 @@ have no column and are skipped) and by constraint *row* (0 … m − 1):
 * :func:`add_qq` — ∂(coordinate row i)/∂(coordinate j),
 * :func:`add_qm` — ∂(coordinate row i)/∂μ_row (the border column, Dᵀ),
 * :func:`add_mq` — ∂(constraint row)/∂(coordinate j) (the border row).
+
+A family that writes many entries on a large CSR matrix finds their places once, when the scene is packed
+(:func:`positions`, from a family's ``finish``), and adds by place (:func:`add_pos`) instead of searching.
 """
 from __future__ import annotations
 
 import numba
+import numpy as np
 
 from .abi import fvec, ivec
 
-__all__ = ["DENSE", "CSR", "storage_of", "add_qq", "add_qm", "add_mq", "add_at", "slot", "scale_row",
-           "clear"]
+__all__ = ["DENSE", "CSR", "storage_of", "add_qq", "add_qm", "add_mq", "add_at", "add_pos", "positions", "slot",
+           "scale_row", "clear"]
 
 DENSE, CSR = 0, 1
 
@@ -67,6 +71,47 @@ def add_at(ctx, s, i, j, val):
         s[0][k] += val
     elif val != 0.0:
         ctx.missed += 1
+
+
+@numba.njit(cache=True, _nrt=False)
+def add_pos(s, k, val):
+    """Add ``val`` at place ``k`` of the values (from :func:`positions`; −1: a prescribed row or column,
+    skipped)."""
+    if k >= 0:
+        s[0][k] += val
+
+
+def positions(layout, i, j):
+    """The places in the Newton matrix's values of the entries at bordered indices (i[t], j[t]) (free
+    positions, then nf + constraint row): i·nx + j (dense) or the entry's slot in the pattern (CSR); −1 where
+    i or j is negative (a prescribed coordinate).
+
+    Parameters
+    ----------
+    layout : tuple
+        (storage kind, scipy CSR pattern of the bordered Newton matrix, fpos, nx) (:mod:`.pack`).
+    i, j : array_like of int
+
+    Raises
+    ------
+    AssertionError
+        If an entry lies outside the pattern (the family declared a coupling it does not write).
+    """
+    kind, pattern, _, nx = layout
+    i, j = np.asarray(i, dtype=np.int64), np.asarray(j, dtype=np.int64)
+    ok = (i >= 0) & (j >= 0)
+    pos = -np.ones(i.size, dtype=np.int64)
+    want = i[ok] * np.int64(nx) + j[ok]
+    if kind == DENSE:
+        pos[ok] = want
+        return pos
+    # the pattern's entries as sorted keys row·nx + column (rows in order, sorted columns in each)
+    keys = np.repeat(np.arange(nx, dtype=np.int64), np.diff(pattern.indptr)) * np.int64(nx) + pattern.indices
+    where = np.searchsorted(keys, want)
+    if want.size and (where.max() >= keys.size or np.any(keys[where] != want)):
+        raise AssertionError("an entry a family writes lies outside the scene's Newton pattern")
+    pos[ok] = where
+    return pos
 
 
 @numba.njit(cache=True, _nrt=False)

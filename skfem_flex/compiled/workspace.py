@@ -74,7 +74,7 @@ class Workspace:
                 arr = np.zeros(1, dtype=np.int64)
             self.keep.append(arr)
             c[name] = arr.ctypes.data
-        for name, arr in zip(("mass_ptr", "mass_idx", "mass_dat"), pk.mass):
+        for name, arr in zip(("mass_ptr", "mass_idx", "mass_dat", "mass_pos"), pk.mass):
             arr = np.ascontiguousarray(arr)
             if arr.size == 0:
                 arr = np.zeros(1, dtype=arr.dtype)

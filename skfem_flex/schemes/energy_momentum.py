@@ -32,7 +32,7 @@ from .base import Scheme, State
 from ..compiled.acceptance import momentum, refused_state
 from ..compiled.abi import Fields, call_families, context_of, f1, family_of, fvec, i1, ivec
 from ..compiled.registry import compiled_kernel
-from ..compiled.storage import add_qq, clear, scale_row, storage_of
+from ..compiled.storage import add_pos, add_qq, clear, scale_row, storage_of
 from ..compiled.tasks import (PHASE_ACCEPT, PHASE_EVALUATE, PHASE_PREDICT, ROWS_POSITION, SCHEME_EM, STATUS_MISSED,
                               STATUS_OK, STATUS_REFUSED, REFUSAL_TURN, TASK_EVAL, TASK_EVAL_LOADS)
 from ..numerics.newton import all_finite, max_abs, predicted_increment, roundoff_floor
@@ -175,13 +175,13 @@ def _evaluate(ctx, s):
     # the constant masses: p1 += M v1, Newton matrix += M ∂v1/∂x
     ptr = ivec(ctx.mass_ptr, n + 1)
     nnz = ptr[n]
-    idx, dat = ivec(ctx.mass_idx, nnz), fvec(ctx.mass_dat, nnz)
+    idx, dat, pos = ivec(ctx.mass_idx, nnz), fvec(ctx.mass_dat, nnz), ivec(ctx.mass_pos, nnz)
     for i in range(n):
         acc = 0.0
         for t in range(ptr[i], ptr[i + 1]):
             j = idx[t]
             acc += dat[t] * v1[j]
-            add_qq(ctx, st, i, j, dat[t] * dv1[j])
+            add_pos(st, pos[t], dat[t] * dv1[j])
         p[i] += acc
     call_families(ctx, TASK_EVAL_LOADS)
     if ctx.status != STATUS_OK:

@@ -32,7 +32,7 @@ from .base import NewmarkState, Scheme
 from ..compiled.acceptance import energies, energy_jump, refused_state
 from ..compiled.abi import Fields, call_families, context_of, f1, family_of, fvec, i1, ivec
 from ..compiled.registry import compiled_kernel
-from ..compiled.storage import add_qq, clear, storage_of
+from ..compiled.storage import add_pos, clear, storage_of
 from ..compiled.tasks import (PHASE_ACCEPT, PHASE_EVALUATE, PHASE_PREDICT, PHASE_START, ROWS_ACCELERATION,
                               ROWS_POSITION, ROWS_VELOCITY, SCHEME_NEWMARK, STATUS_MISSED, STATUS_OK,
                               TASK_EVAL, TASK_EVAL_LOADS, TASK_LOADS, TASK_ROWS)
@@ -172,14 +172,14 @@ def _assemble(ctx, s, q1, v1, acc1):
     # the constant masses: M q̈₁, |M| terms, Δt c_a M
     ptr = ivec(ctx.mass_ptr, n + 1)
     nnz = ptr[n]
-    idx, dat = ivec(ctx.mass_idx, nnz), fvec(ctx.mass_dat, nnz)
+    idx, dat, pos = ivec(ctx.mass_idx, nnz), fvec(ctx.mass_dat, nnz), ivec(ctx.mass_pos, nnz)
     for i in range(n):
         acc, sa = 0.0, 0.0
         for t in range(ptr[i], ptr[i + 1]):
             j = idx[t]
             acc += dat[t] * acc1[j]
             sa += abs(dat[t]) * terms[j]
-            add_qq(ctx, st, i, j, ctx.w_p * ctx.da1 * dat[t])
+            add_pos(st, pos[t], ctx.w_p * ctx.da1 * dat[t])
         p[i] += acc
         mterms[i] += sa
 

@@ -44,7 +44,7 @@ from ...bodies.floating.kernel import FloatingKernelData, energy_momentum_terms,
     potential_energy
 from ..abi import context_of, f1, f2, f3, family_of, fvec, i1, i2
 from ..registry import compiled_kernel
-from ..storage import DENSE, storage_of
+from ..storage import positions, storage_of
 from ..tasks import SCHEME_EM, TASK_ENERGY, TASK_EVAL, TASK_MOMENTUM
 from . import FamilyPack
 
@@ -86,21 +86,8 @@ def pattern_positions(rows, cols, layout):
     -------
     ndarray of int64
     """
-    kind, pattern, fpos, nx = layout
-    i, j = fpos[np.asarray(rows, dtype=np.int64)], fpos[np.asarray(cols, dtype=np.int64)]
-    ok = (i >= 0) & (j >= 0)
-    pos = -np.ones(i.size, dtype=np.int64)
-    want = i[ok] * np.int64(nx) + j[ok]
-    if kind == DENSE:
-        pos[ok] = want
-        return pos
-    # the pattern's entries as sorted keys row·nx + column (rows in order, sorted columns in each)
-    keys = np.repeat(np.arange(nx, dtype=np.int64), np.diff(pattern.indptr)) * np.int64(nx) + pattern.indices
-    slot = np.searchsorted(keys, want)
-    if want.size and (slot.max() >= keys.size or np.any(keys[slot] != want)):
-        raise AssertionError("a body's tangent entry lies outside the scene's Newton pattern")
-    pos[ok] = slot
-    return pos
+    fpos = layout[2]
+    return positions(layout, fpos[np.asarray(rows, dtype=np.int64)], fpos[np.asarray(cols, dtype=np.int64)])
 
 
 def pack(items, packer):

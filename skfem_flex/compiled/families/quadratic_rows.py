@@ -16,8 +16,8 @@ import numpy as np
 
 from ..abi import context_of, f1, family_of, i1, i2
 from ..registry import compiled_kernel
-from ..rows import finish_row, row_states
-from ..storage import add_qq, storage_of
+from ..rows import row_states, write_row
+from ..storage import add_pos, positions, storage_of
 from ..tasks import TASK_EVAL, TASK_ROWS
 from . import FamilyPack
 
@@ -48,13 +48,15 @@ class Data(NamedTuple):
     lsl: np.ndarray
     lb: np.ndarray
     cols: np.ndarray        # the coordinates each row touches, row after row (end: the next row's first)
+    ppos: np.ndarray        # per pair term the places of (i, j) and (j, i) in the Newton matrix's values
+    cpos: np.ndarray        # per entry of cols the places of (column, row) and (row, column) there
 
 
 @numba.njit(cache=True, _nrt=False)
 def view_of(fam):
     """The family record's arrays as :class:`Data`."""
     return Data(i2(fam, 0), f1(fam, 1), i1(fam, 2), i1(fam, 3), i1(fam, 4), i1(fam, 5), f1(fam, 6), i1(fam, 7),
-                i1(fam, 8), f1(fam, 9), i1(fam, 10))
+                i1(fam, 8), f1(fam, 9), i1(fam, 10), i1(fam, 11), i1(fam, 12))
 
 
 class TermLists:
@@ -83,7 +85,24 @@ class TermLists:
         i64 = lambda a: np.asarray(a, dtype=np.int64)        # noqa: E731
         return Data(i64(rows).reshape(len(rows), width), np.asarray(const, dtype=float).ravel(), i64(self.pi),
                     i64(self.pj), i64(self.psi), i64(self.psj), np.asarray(self.ph, dtype=float), i64(self.li),
-                    i64(self.lsl), np.asarray(self.lb, dtype=float), i64(self.cols + [0]))
+                    i64(self.lsl), np.asarray(self.lb, dtype=float), i64(self.cols + [0]),
+                    -np.ones(2 * len(self.pi), dtype=np.int64), -np.ones(2 * len(self.cols), dtype=np.int64))
+
+
+def with_positions(data, first_column, layout):
+    """``data`` with the places of its Newton-matrix entries (``ppos``, ``cpos``) in the storage of ``layout``
+    (a family's ``finish``); ``first_column``: the column of the row table that holds a row's first entry of
+    ``cols``."""
+    fpos = layout[2]
+    nf = int(np.count_nonzero(fpos >= 0))
+    a, b = fpos[data.pi], fpos[data.pj]
+    ppos = np.stack([positions(layout, a, b), positions(layout, b, a)], axis=1).ravel()
+    starts = data.rows[:, first_column]
+    ends = np.append(starts[1:], data.cols.size - 1)
+    brow = nf + np.repeat(data.rows[:, 0], ends - starts)
+    c = fpos[data.cols[:-1]]
+    cpos = np.stack([positions(layout, c, brow), positions(layout, brow, c)], axis=1).ravel()
+    return data._replace(ppos=ppos, cpos=cpos)
 
 
 def pack(items, packer):
@@ -111,7 +130,9 @@ def pack(items, packer):
             row_support.append((first + k, idx[touched]))
             if hi.size:
                 couplings.append(np.unique(idx[np.concatenate([hi, hj])]))
-    return FamilyPack(data=terms.data(rows, 7, const), count=len(rows), couplings=couplings, rows=row_support)
+    data = terms.data(rows, 7, const)
+    return FamilyPack(data=data, count=len(rows), couplings=couplings, rows=row_support,
+                      finish=lambda layout: with_positions(data, 5, layout))
 
 
 @numba.njit(cache=True, _nrt=False)
@@ -136,8 +157,8 @@ def add_form(ctx, st, d, p0, p1, l0, l1, q1, qa, qb, v1, g, dm, hv, evaluate, e)
         if evaluate:
             dm[si] += 0.5 * h * (qa[j] + qb[j])
             dm[sj] += 0.5 * h * (qa[i] + qb[i])
-            add_qq(ctx, st, i, j, e * h)
-            add_qq(ctx, st, j, i, e * h)
+            add_pos(st, d.ppos[2 * t], e * h)
+            add_pos(st, d.ppos[2 * t + 1], e * h)
     return val
 
 
@@ -162,7 +183,7 @@ def _evaluate(ctx, d):
         if col >= 0:
             val -= trow[col]
             phi_t, phi_tt = -trow[col + 1], -trow[col + 2]
-        finish_row(ctx, st, row, val, phi_t, phi_tt, d.cols[c0:c1], cq, dd, cv, nc)
+        write_row(ctx, st, row, val, phi_t, phi_tt, d.cols[c0:c1], cq, dd, cv, nc, d.cpos[2 * c0:2 * c1])
 
 
 def _kernel(ctx_p, fam_p):

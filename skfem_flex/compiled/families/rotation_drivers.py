@@ -21,11 +21,11 @@ import numpy as np
 
 from ..abi import context_of, family_of
 from ..registry import compiled_kernel
-from ..rows import finish_row, row_states
+from ..rows import row_states, write_row
 from ..storage import storage_of
 from ..tasks import TASK_EVAL, TASK_ROWS
 from . import FamilyPack
-from .quadratic_rows import TermLists, add_form, form_terms, view_of
+from .quadratic_rows import TermLists, add_form, form_terms, view_of, with_positions
 
 NAME = "rotation drivers"
 FORMS = ("rotation driver",)
@@ -61,7 +61,9 @@ def pack(items, packer):
         const.append((float(cx), float(cy)))
         row_support.append((first, idx[touched]))
         couplings.append(idx[touched])
-    return FamilyPack(data=terms.data(rows, 9, const), count=len(rows), couplings=couplings, rows=row_support)
+    data = terms.data(rows, 9, const)
+    return FamilyPack(data=data, count=len(rows), couplings=couplings, rows=row_support,
+                      finish=lambda layout: with_positions(data, 7, layout))
 
 
 @numba.njit(cache=True, _nrt=False)
@@ -98,7 +100,7 @@ def _evaluate(ctx, d):
             cv[t] = c * hv[nc + t] - s * hv[t] + qt
             qt_v += qt * v1[d.cols[c0 + t]]
         phi_tt = qt_v - al * (s * vy + c * vx) - om * om * (c * vy - s * vx)
-        finish_row(ctx, st, row, value, phi_t, phi_tt, d.cols[c0:c1], cq, dd, cv, nc)
+        write_row(ctx, st, row, value, phi_t, phi_tt, d.cols[c0:c1], cq, dd, cv, nc, d.cpos[2 * c0:2 * c1])
 
 
 def _kernel(ctx_p, fam_p):
