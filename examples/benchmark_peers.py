@@ -170,9 +170,11 @@ def spatial_peer_problems(out, suffix):
                      peer_spatial.heavy_top("simo-wong", 1e-3, top_t, scheme="trapezoidal"),
                      "trapezoidal, index 2, Δt = 1e-3", top))
     # quick mode exercises the code on the short chain only (the long one's reference alone takes seconds)
-    # (the long chain and the slider–crank also at exudyn's relative Newton tolerance, 1e-8)
+    # (the long chain and the slider–crank also at exudyn's relative Newton tolerance, 1e-8; the long chain at
+    # equal error too: energy-momentum at the step where its error matches, and generalized-α, exudyn's scheme)
     for n, runs in ((10, ((1e-3, "energy-momentum"), (4e-3, "energy-momentum"))),) + (() if QUICK else (
-            (400, ((1e-3, "energy-momentum"), (1e-3, ("energy-momentum", 1e-8)))),)):
+            (400, ((1e-3, "energy-momentum"), (1e-3, ("energy-momentum", 1e-8)), (8e-4, ("energy-momentum", 1e-8)),
+                   (1e-3, ("generalized-alpha", 1e-8)))),)):
         chain = converged(f"rigid_chain_{n}", lambda n=n: sf.scenes.rigid_chain(n), 1e-3, chain_t, "tip")
         for dt, scheme in runs:
             rows.append((f"rigid chain, {n} bodies", lambda n=n: sf.scenes.rigid_chain(n), scheme, dt,

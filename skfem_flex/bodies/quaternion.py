@@ -24,8 +24,8 @@ from typing import NamedTuple
 import numpy as np
 
 from . import quaternion_kernel as qk
-from .base import Body, BodyGeometry, BodyPoint, check_finite_number, check_finite_vector
-from .spatial import check_inertia_tensor, orientation_matrix
+from .base import Body, BodyGeometry, BodyPoint, check_finite_vector
+from .spatial import rigid_start
 from ..numerics.quaternions import matrix_quaternion, quaternion_matrix
 
 __all__ = ["QuaternionRigidBody", "QuaternionPoint", "QuaternionKernelData", "rotation_quadratics"]
@@ -96,36 +96,15 @@ class QuaternionRigidBody(Body):
 
     def __init__(self, mass, inertia, position=None, orientation=None, velocity=None, angular_velocity=None,
                  body_angular_velocity=None, pivot=None, center_of_mass=None, size=None, name="rigid body"):
-        self.mass = check_finite_number("mass", mass)
-        if self.mass <= 0.0:
-            raise ValueError(f"mass must be positive, got {mass!r}")
-        self.inertia = check_inertia_tensor(inertia)
-        R = np.eye(3) if orientation is None else orientation_matrix(orientation)
-        e = matrix_quaternion(R)
-        if angular_velocity is not None and body_angular_velocity is not None:
-            raise ValueError("give angular_velocity (space axes) or body_angular_velocity, not both")
-        if body_angular_velocity is not None:
-            Om = check_finite_vector("body_angular_velocity", body_angular_velocity, 3)
-        else:
-            om = np.zeros(3) if angular_velocity is None else check_finite_vector("angular_velocity",
-                                                                                  angular_velocity, 3)
-            Om = R.T @ om
-        edot = 0.5 * qk.omega_matrix(e).T @ Om           # ė = ½ G(e)ᵀ Ω on |e| = 1
-        if pivot is not None:
-            if position is not None or velocity is not None:
-                raise ValueError("a body about a pivot has no position or velocity of its own (give the pivot "
-                                 "and center_of_mass)")
-            self.pivot = check_finite_vector("pivot", pivot, 3)
-            self.center = (np.zeros(3) if center_of_mass is None
-                           else check_finite_vector("center_of_mass", center_of_mass, 3))
+        st = rigid_start(mass, inertia, position, orientation, velocity, angular_velocity, body_angular_velocity,
+                         pivot, center_of_mass, size)
+        self.mass, self.inertia, self.pivot, self.center, self.size = st.mass, st.inertia, st.pivot, st.center, st.size
+        e = matrix_quaternion(st.R)
+        edot = 0.5 * qk.omega_matrix(e).T @ (st.R.T @ st.omega)     # ė = ½ G(e)ᵀ Ω on |e| = 1
+        if self.pivot is not None:
             self.q0, self.v0, self.quaternion = e, edot, 0
         else:
-            if center_of_mass is not None:
-                raise ValueError("center_of_mass is measured from a pivot: give it only with pivot=...")
-            self.pivot, self.center = None, np.zeros(3)
-            x = check_finite_vector("position", (0.0, 0.0, 0.0) if position is None else position, 3)
-            xd = check_finite_vector("velocity", (0.0, 0.0, 0.0) if velocity is None else velocity, 3)
-            self.q0, self.v0, self.quaternion = np.concatenate([x, e]), np.concatenate([xd, edot]), 3
+            self.q0, self.v0, self.quaternion = np.concatenate([st.position, e]), np.concatenate([st.velocity, edot]), 3
         self.n_dofs = self.q0.size
         self.name = name
         # j₀ only fills M along e, where the unit-norm constraint holds the motion: the mean principal value
@@ -136,12 +115,6 @@ class QuaternionRigidBody(Body):
         self.J4i = np.linalg.inv(self.J4)
         self._invariants = qk.invariant_terms(self.inertia, self.J4[0, 0])
         self._Qc = self.mass * rotation_quadratics(self.center)
-        if size is None:
-            jc = self.inertia - self.mass * (self.center @ self.center * np.eye(3) - np.outer(self.center,
-                                                                                                self.center))
-            ev = np.clip(0.5 * np.trace(jc) - np.diag(jc), 0.0, None)
-            size = np.sqrt(12.0 * ev / self.mass)
-        self.size = check_finite_vector("size", size, 3)
 
     # ----------------------------------------------------------------- state
     @property

@@ -216,16 +216,6 @@ def _solve4(A, b):
 
 
 @numba.njit(cache=True)
-def _eu(u, e_units_k):
-    """E_kᵀ u (4,) for one unit matrix E_k."""
-    out = np.zeros(4)
-    for i in range(4):
-        for j in range(4):
-            out[j] += e_units_k[i, j] * u[i]
-    return out
-
-
-@numba.njit(cache=True)
 def em_terms(J4, J4i, kin, U, cu, e0, e1, v0, h):
     r"""The rotation's part of one energy–momentum step (module docstring) at the end e₁.
 
@@ -286,7 +276,7 @@ def em_terms(J4, J4i, kin, U, cu, e0, e1, v0, h):
     Ta, dsa = np.zeros((na, 4)), np.zeros((na, 4))
     for a in range(na):
         for k in range(4):
-            col = _eu(U[a], E_UNITS[k])
+            col = _times(E_UNITS[k].T, U[a])
             for j in range(4):
                 EkU[a, k, j] = col[j]
                 Ta[a, k] += col[j] * pm[j]

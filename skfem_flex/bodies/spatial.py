@@ -29,12 +29,14 @@ pivot p × Γ v + E_ij d_i × ḋ_j).
 """
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 
 from .base import Body, BodyGeometry, BodyPoint, check_finite_number, check_finite_vector
 from ..numerics.quaternions import check_quaternion, check_rotation_matrix, matrix_quaternion, quaternion_matrix
 
-__all__ = ["DirectorFrame", "SpatialRigidBody", "SpatialPointMass", "SpatialPoint", "SpatialAxis", "SpatialDirection",
+__all__ = ["DirectorFrame", "RigidStart", "rigid_start", "SpatialRigidBody", "SpatialPointMass", "SpatialPoint", "SpatialAxis", "SpatialDirection",
            "check_inertia_tensor"]
 
 _CELLS_BOX = np.array([[0, 1], [1, 3], [3, 2], [2, 0], [4, 5], [5, 7], [7, 6], [6, 4], [0, 4], [1, 5], [2, 6],
@@ -72,6 +74,57 @@ def orientation_matrix(orientation):
     if arr.shape == (3, 3):
         return check_rotation_matrix("orientation", arr)
     return quaternion_matrix(check_quaternion("orientation", arr))
+
+
+class RigidStart(NamedTuple):
+    """A spatial rigid body's checked data and initial state, whatever carries its rotation."""
+
+    mass: float               # kg
+    inertia: np.ndarray       # (3, 3) kg m², about the centre of mass or the pivot
+    R: np.ndarray             # (3, 3) initial rotation, body to space axes
+    omega: np.ndarray         # (3,) initial angular velocity in space axes, rad/s
+    pivot: np.ndarray         # (3,) m, or None (a free body)
+    center: np.ndarray        # (3,) centre of mass from the pivot in body coordinates (zero for a free body), m
+    position: np.ndarray      # (3,) initial centre of mass (free body), m
+    velocity: np.ndarray      # (3,) its velocity, m/s
+    size: np.ndarray          # (3,) edge lengths of the box drawn for output, m
+
+
+def rigid_start(mass, inertia, position, orientation, velocity, angular_velocity, body_angular_velocity, pivot,
+                center_of_mass, size):
+    """The :class:`RigidStart` of a spatial rigid body's arguments (those of :class:`SpatialRigidBody`), or a
+    ``ValueError`` naming the argument that is wrong."""
+    m = check_finite_number("mass", mass)
+    if m <= 0.0:
+        raise ValueError(f"mass must be positive, got {mass!r}")
+    J = check_inertia_tensor(inertia)
+    R = np.eye(3) if orientation is None else orientation_matrix(orientation)
+    if angular_velocity is not None and body_angular_velocity is not None:
+        raise ValueError("give angular_velocity (space axes) or body_angular_velocity, not both")
+    if body_angular_velocity is not None:
+        omega = R @ check_finite_vector("body_angular_velocity", body_angular_velocity, 3)
+    else:
+        omega = np.zeros(3) if angular_velocity is None else check_finite_vector("angular_velocity",
+                                                                                 angular_velocity, 3)
+    x = xd = None
+    if pivot is not None:
+        if position is not None or velocity is not None:
+            raise ValueError("a body about a pivot has no position or velocity of its own (give the pivot "
+                             "and center_of_mass)")
+        pivot = check_finite_vector("pivot", pivot, 3)
+        center = np.zeros(3) if center_of_mass is None else check_finite_vector("center_of_mass", center_of_mass, 3)
+    else:
+        if center_of_mass is not None:
+            raise ValueError("center_of_mass is measured from a pivot: give it only with pivot=...")
+        center = np.zeros(3)
+        x = check_finite_vector("position", (0.0, 0.0, 0.0) if position is None else position, 3)
+        xd = check_finite_vector("velocity", (0.0, 0.0, 0.0) if velocity is None else velocity, 3)
+    if size is None:
+        # the uniform box with this inertia about its centre: J_1 = m (b² + c²)/12, …
+        jc = J - m * (center @ center * np.eye(3) - np.outer(center, center))
+        e = np.clip(0.5 * np.trace(jc) - np.diag(jc), 0.0, None)
+        size = np.sqrt(12.0 * e / m)
+    return RigidStart(m, J, R, omega, pivot, center, x, xd, check_finite_vector("size", size, 3))
 
 
 class DirectorFrame:
@@ -185,38 +238,19 @@ class SpatialRigidBody(DirectorFrame, Body):
 
     def __init__(self, mass, inertia, position=None, orientation=None, velocity=None, angular_velocity=None,
                  body_angular_velocity=None, pivot=None, center_of_mass=None, size=None, name="rigid body"):
-        self.mass = check_finite_number("mass", mass)
-        if self.mass <= 0.0:
-            raise ValueError(f"mass must be positive, got {mass!r}")
-        self.inertia = check_inertia_tensor(inertia)
+        st = rigid_start(mass, inertia, position, orientation, velocity, angular_velocity, body_angular_velocity,
+                         pivot, center_of_mass, size)
+        self.mass, self.inertia, self.pivot, self.center, self.size = st.mass, st.inertia, st.pivot, st.center, st.size
         self.euler_tensor = 0.5 * np.trace(self.inertia) * np.eye(3) - self.inertia
-        R = np.eye(3) if orientation is None else orientation_matrix(orientation)
-        if angular_velocity is not None and body_angular_velocity is not None:
-            raise ValueError("give angular_velocity (space axes) or body_angular_velocity, not both")
-        if body_angular_velocity is not None:
-            omega = R @ check_finite_vector("body_angular_velocity", body_angular_velocity, 3)
-        else:
-            omega = np.zeros(3) if angular_velocity is None else check_finite_vector("angular_velocity",
-                                                                                     angular_velocity, 3)
-        rates = [np.cross(omega, R[:, i]) for i in range(3)]
-        if pivot is not None:
-            if position is not None or velocity is not None:
-                raise ValueError("a body about a pivot has no position or velocity of its own (give the pivot "
-                                 "and center_of_mass)")
-            self.pivot = check_finite_vector("pivot", pivot, 3)
-            self.center = (np.zeros(3) if center_of_mass is None
-                           else check_finite_vector("center_of_mass", center_of_mass, 3))
+        R = st.R
+        rates = [np.cross(st.omega, R[:, i]) for i in range(3)]
+        if self.pivot is not None:
             self.q0 = np.concatenate([R[:, 0], R[:, 1], R[:, 2]])
             self.v0 = np.concatenate(rates)
             self.directors = (0, 3, 6)
         else:
-            if center_of_mass is not None:
-                raise ValueError("center_of_mass is measured from a pivot: give it only with pivot=...")
-            self.pivot, self.center = None, np.zeros(3)
-            x = check_finite_vector("position", (0.0, 0.0, 0.0) if position is None else position, 3)
-            xd = check_finite_vector("velocity", (0.0, 0.0, 0.0) if velocity is None else velocity, 3)
-            self.q0 = np.concatenate([x, R[:, 0], R[:, 1], R[:, 2]])
-            self.v0 = np.concatenate([xd] + rates)
+            self.q0 = np.concatenate([st.position, R[:, 0], R[:, 1], R[:, 2]])
+            self.v0 = np.concatenate([st.velocity] + rates)
             self.directors = (3, 6, 9)
         self.n_dofs = self.q0.size
         self.name = name
@@ -227,13 +261,6 @@ class SpatialRigidBody(DirectorFrame, Body):
         self._mass = M
         self._moment = self.point_affine(self.center)
         self._moment = (self.mass * self._moment[0], self.mass * self._moment[1])
-        if size is None:
-            # the uniform box with this inertia about its centre: J_1 = m (b² + c²)/12, …
-            jc = self.inertia - self.mass * (self.center @ self.center * np.eye(3) - np.outer(self.center,
-                                                                                                self.center))
-            e = np.clip(0.5 * np.trace(jc) - np.diag(jc), 0.0, None)
-            size = np.sqrt(12.0 * e / self.mass)
-        self.size = check_finite_vector("size", size, 3)
 
     # ----------------------------------------------------------------- state
     @property

@@ -22,7 +22,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from importlib import import_module
 
-__all__ = ["FamilyPack", "FAMILY_MODULES", "family_for", "families", "first_refusal"]
+import numpy as np
+
+__all__ = ["FamilyPack", "FAMILY_MODULES", "family_for", "families", "first_refusal", "bodies_and_gravity"]
 
 #: every family of the package, by module (imported when first needed: a scene loads only its own)
 FAMILY_MODULES = (
@@ -122,3 +124,16 @@ def first_refusal(elements, forms, check):
             except ValueError as exc:
                 return exc
     return None
+
+
+def bodies_and_gravity(items, data_type):
+    """A body family's items split into ``[(data, body, offset)]`` (the items whose first entry is a
+    ``data_type``) and ``{id(body): g}``, the gravity fields (items ``(("gravity", g), body, offset)``) summed
+    per body, m/s²: for the families whose gravity is quadratic in q and which evaluate it themselves."""
+    bodies, gravity = [], {}
+    for item, body, off in items:
+        if isinstance(item, data_type):
+            bodies.append((item, body, off))
+        else:
+            gravity[id(body)] = gravity.get(id(body), 0.0) + np.asarray(item[1], dtype=float)
+    return bodies, gravity

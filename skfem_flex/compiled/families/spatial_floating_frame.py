@@ -35,7 +35,7 @@ from ..abi import context_of, f1, f2, f3, family_of, fvec, i1
 from ..registry import compiled_kernel
 from ..storage import add_qq, storage_of
 from ..tasks import SCHEME_EM, TASK_ENERGY, TASK_EVAL, TASK_MOMENTUM
-from . import FamilyPack
+from . import FamilyPack, bodies_and_gravity
 
 __all__ = ["NAME", "FORMS", "pack", "kernel"]
 
@@ -64,12 +64,7 @@ def pack(items, packer):
     FamilyPack
         One dense coupling block per body.
     """
-    bodies, gravity = [], {}
-    for item, body, off in items:
-        if isinstance(item, SpatialBodyData):
-            bodies.append((item, body, off))
-        else:
-            gravity[id(body)] = gravity.get(id(body), 0.0) + np.asarray(item[1], dtype=float)
+    bodies, gravity = bodies_and_gravity(items, SpatialBodyData)
     names, arrays, offs, couplings = ["offs"], [None], [], []
     for b, (data, body, off) in enumerate(bodies):
         kd = data.frame
