@@ -143,12 +143,18 @@ def _polarized(J, e, a, inverse):
     E = e_matrix(e)
     b = _times(J, _times(E, a))
     out = np.zeros((4, 4))
+    Eka, JEka = np.zeros(4), np.zeros(4)
     for k in range(4):
-        Eka = np.zeros(4)
         for i in range(4):
+            t = 0.0
             for j in range(4):
-                Eka[i] += E_UNITS[k, i, j] * a[j]
-        JEka = _times(J, Eka)
+                t += E_UNITS[k, i, j] * a[j]
+            Eka[i] = t
+        for i in range(4):
+            t = 0.0
+            for j in range(4):
+                t += J[i, j] * Eka[j]
+            JEka[i] = t
         for i in range(4):
             s = 0.0
             for j in range(4):
@@ -164,27 +170,35 @@ def mass_jacobian(J4, e, a):
 
 
 @numba.njit(cache=True)
-def _qv(J4, e, v):
-    """Q_v = ∂T/∂e − Ṁ v with T = ½ vᵀM(e)v: ½ B(e, v)ᵀ v − B(e, v) v."""
-    B = mass_jacobian(J4, e, v)
-    return 0.5 * _times(B.T.copy(), v) - _times(B, v)
+def _qv_of(B, v):
+    """Q_v = ∂T/∂e − Ṁ v with T = ½ vᵀM(e)v, from B = B(e, v): ½ Bᵀ v − B v."""
+    out = np.zeros(4)
+    for i in range(4):
+        for j in range(4):
+            out[i] += 0.5 * B[j, i] * v[j] - B[i, j] * v[j]
+    return out
 
 
 @numba.njit(cache=True)
 def quadratic_velocity_force(J4, e, v):
-    """(Q_v, ∂Q_v/∂e, ∂Q_v/∂v) of the rotation (N m per unit of e). Q_v is linear in e and quadratic in v,
-    so both derivatives are exact differences."""
-    f = _qv(J4, e, v)
+    """(Q_v, ∂Q_v/∂e, ∂Q_v/∂v) of the rotation (N m per unit of e). B(e, a) is linear in e and in a, so Q_v
+    is linear in e (column k of ∂Q_v/∂e is Q_v(u_k, v)) and, with B_k = B(e, u_k),
+    ∂Q_v/∂v_k = ½ (B_kᵀ v + B(e, v)ᵀ u_k) − (B_k v + B(e, v) u_k)."""
+    B = mass_jacobian(J4, e, v)
+    f = _qv_of(B, v)
     fe, fv = np.zeros((4, 4)), np.zeros((4, 4))
-    z = np.zeros(4)
+    u = np.zeros(4)
     for k in range(4):
-        u = np.zeros(4)
+        u[:] = 0.0
         u[k] = 1.0
-        col = _qv(J4, u, v) - _qv(J4, z, v)          # Q_v(e, v) = L(v) e: column k of L(v)
-        d = _qv(J4, e, v + u) - _qv(J4, e, v - u)
+        col = _qv_of(mass_jacobian(J4, u, v), v)
+        Bk = mass_jacobian(J4, e, u)
         for i in range(4):
             fe[i, k] = col[i]
-            fv[i, k] = 0.5 * d[i]
+            s = 0.5 * B[k, i] - B[i, k]
+            for j in range(4):
+                s += 0.5 * Bk[j, i] * v[j] - Bk[i, j] * v[j]
+            fv[i, k] = s
     return f, fe, fv
 
 
