@@ -2,12 +2,12 @@ r"""A spatial rigid body turned by a unit quaternion (Euler parameters), free or
 
 Coordinates q = (x, e) (seven: the centre of mass x and the Euler parameters e), or q = e about a pivot p.
 A material point at body coordinates s sits at r = x + R(e) s (or p + R(e) s), quadratic in e
-(``numerics.quaternions``: R(e) = (e₀² − ε·ε) I + 2 ε εᵀ + 2 e₀ ε̂). The scene holds |e| = 1 with one
+(``numerics.quaternions``: R(e) = (e₀² − ε·ε) I + 2 ε εᵀ + 2 e₀ ε̂). The scene holds e·e = 1 with one
 quadratic constraint (:class:`~skfem_flex.elements.constraints.quadratic.UnitQuaternion`).
 
 The kinetic energy is ½ m ẋ·ẋ + ½ ėᵀM(e)ė with M(e) = 4 E(e)ᵀ J₄ E(e) (:mod:`.quaternion_kernel`).
 Under energy–momentum the compiled family steps the rotation in Hamiltonian form, with a discrete gradient
-built on invariants of the kinetic energy (:mod:`.quaternion_kernel`): with the single constraint |e|² = 1,
+built on invariants of the kinetic energy (:mod:`.quaternion_kernel`): with the single constraint e·e = 1,
 which a turn about any axis keeps, the step conserves energy, the angular momentum components the loads
 leave free, *and*, for a body with an axis of symmetry, its angular momentum about that axis (the spin of
 a symmetric top), to round-off. That last one is what the director formulation of
@@ -100,7 +100,7 @@ class QuaternionRigidBody(Body):
                          pivot, center_of_mass, size)
         self.mass, self.inertia, self.pivot, self.center, self.size = st.mass, st.inertia, st.pivot, st.center, st.size
         e = matrix_quaternion(st.R)
-        edot = 0.5 * qk.omega_matrix(e).T @ (st.R.T @ st.omega)     # ė = ½ G(e)ᵀ Ω on |e| = 1
+        edot = 0.5 * qk.omega_matrix(e).T @ (st.R.T @ st.omega)     # ė = ½ G(e)ᵀ Ω on e·e = 1
         if self.pivot is not None:
             self.q0, self.v0, self.quaternion = e, edot, 0
         else:
@@ -124,7 +124,7 @@ class QuaternionRigidBody(Body):
 
     @property
     def unit_quaternions(self):
-        """The local offset of e, which the scene holds at |e| = 1."""
+        """The local offset of e, which the scene holds at e·e = 1."""
         return (self.quaternion,)
 
     def _split(self, q):

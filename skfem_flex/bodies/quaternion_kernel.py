@@ -3,18 +3,18 @@ step and its Newmark terms (the one implementation: the compiled family and the 
 call these functions).
 
 With the Euler parameters e = (e₀, e₁, e₂, e₃) and the 4×4 matrix E(e) = [eᵀ; G(e)] whose last three rows
-give the body angular velocity Ω = 2 G(e) ė (E(e) E(e)ᵀ = |e|² I), the kinetic energy of the rotation is
+give the body angular velocity Ω = 2 G(e) ė (E(e) E(e)ᵀ = (e·e) I), the kinetic energy of the rotation is
 
 .. math::  T = 2\, (E(e)\dot e)^T J_4\, (E(e)\dot e) = \tfrac12 \dot e^T M(e) \dot e,\qquad
            M(e) = 4 E(e)^T J_4 E(e),\quad J_4 = \operatorname{diag}(j_0, J),
 
 with J the inertia tensor in body axes; j₀ > 0 only makes M regular along e, where the constraint
 ½(e·e − 1) = 0 holds the motion (it does no work there). M is a polynomial of degree two in e.
-On |e| = 1 its inverse is A(e) = ¼ E(e)ᵀ J₄⁻¹ E(e), also of degree two, and the Hamiltonian is
+On e·e = 1 its inverse is A(e) = ¼ E(e)ᵀ J₄⁻¹ E(e), also of degree two, and the Hamiltonian is
 T(e, π) = ½ πᵀ A(e) π with π = M(e) ė.
 
 **Energy–momentum step** (a discrete gradient built on invariants, as Gonzalez builds his). With
-b = E(e)π (four numbers, unchanged when space turns: e → l∘e, π → l∘π) and |b|² = |e|²|π|²,
+b = E(e)π (four numbers, unchanged when space turns: e → l∘e, π → l∘π) and b·b = (e·e)(π·π),
 
 .. math::
 
@@ -132,7 +132,7 @@ def mass(J4, e):
 
 @numba.njit(cache=True)
 def inverse_mass(J4i, e):
-    """A(e) = ¼ E(e)ᵀ J₄⁻¹ E(e), the inverse of M(e) on |e| = 1 (1/(kg m²))."""
+    """A(e) = ¼ E(e)ᵀ J₄⁻¹ E(e), the inverse of M(e) on e·e = 1 (1/(kg m²))."""
     return _sandwich(J4i, e, 0.25)
 
 
