@@ -70,26 +70,52 @@ NZ = 10
 _SERIES_BELOW = 0.1
 
 
+def _series(coefficients):
+    """The coefficients of a power series Σ c_n xⁿ and of its first and second derivatives, as a (3, N) table."""
+    c = np.asarray(coefficients, dtype=float)
+    n = np.arange(c.size, dtype=float)
+    out = np.zeros((3, c.size))
+    out[0] = c
+    out[1, :-1] = (n * c)[1:]
+    out[2, :-2] = (n * (n - 1) * c)[2:]
+    return out
+
+
+_FACTORIAL = np.cumprod(np.concatenate([[1.0], np.arange(1.0, 31.0)]))
+#: arctan(√y)/√y = Σ (−y)ⁿ/(2n + 1); sin t/t and (1 − cos t)/t² in τ = t²: Σ (−τ)ⁿ/(2n + 1)!, Σ (−τ)ⁿ/(2n + 2)!
+_ATAN_SERIES = _series([(-1.0) ** n / (2 * n + 1) for n in range(27)])
+_SIN_SERIES = _series([(-1.0) ** n / _FACTORIAL[2 * n + 1] for n in range(15)])
+_COS_SERIES = _series([(-1.0) ** n / _FACTORIAL[2 * n + 2] for n in range(15)])
+
+
+@numba.njit(cache=True)
+def _terms(x, most):
+    """How many terms of a series in x (0 ≤ x < 1, coefficients at most 1) reach round-off: the first n with
+    xⁿ below 1e-17, at most ``most``."""
+    n, p = 1, x
+    while p > 1e-17 and n < most:
+        p *= x
+        n += 1
+    return n
+
+
+@numba.njit(cache=True)
+def _horner(table, row, x, n):
+    """Σ_{k<n} table[row, k] x^k, by Horner's rule."""
+    s = 0.0
+    for k in range(n - 1, -1, -1):
+        s = s * x + table[row, k]
+    return s
+
+
 @numba.njit(cache=True)
 def _atan_ratio(y):
     """A(y) = arctan(√y)/√y and its first two derivatives in y (y ≥ 0)."""
     if y < _SERIES_BELOW:
-        a, da, dda, p = 0.0, 0.0, 0.0, 1.0
-        for n in range(26):
-            sgn = 1.0 if n % 2 == 0 else -1.0
-            a += sgn * p / (2 * n + 1)
-            p *= y
-        p = 1.0
-        for n in range(1, 26):
-            sgn = 1.0 if n % 2 == 0 else -1.0
-            da += sgn * n * p / (2 * n + 1)
-            p *= y
-        p = 1.0
-        for n in range(2, 27):
-            sgn = 1.0 if n % 2 == 0 else -1.0
-            dda += sgn * n * (n - 1) * p / (2 * n + 1)
-            p *= y
-        return a, da, dda
+        # the terms past n fall below round-off; the derivatives' series, two terms shorter, need two more
+        n = min(_terms(y, 25) + 2, 25)
+        return (_horner(_ATAN_SERIES, 0, y, n), _horner(_ATAN_SERIES, 1, y, n),
+                _horner(_ATAN_SERIES, 2, y, n))
     r = np.sqrt(y)
     a = np.arctan(r) / r
     da = (1.0 / (1.0 + y) - a) / (2.0 * y)
@@ -101,33 +127,11 @@ def _atan_ratio(y):
 def _rodrigues(tau):
     """exp(ŵ) = γ I + α ŵ + β w wᵀ with τ = w·w: (γ, α, β) and their first and second derivatives in τ."""
     if tau < _SERIES_BELOW:
-        al, be, dal, dbe, ddal, ddbe = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-        fa, fb = 1.0, 2.0                       # (2n+1)!, (2n+2)!
-        p = 1.0
-        for n in range(14):
-            sgn = 1.0 if n % 2 == 0 else -1.0
-            al += sgn * p / fa
-            be += sgn * p / fb
-            fa *= (2 * n + 2) * (2 * n + 3)
-            fb *= (2 * n + 3) * (2 * n + 4)
-            p *= tau
-        # derivatives termwise, without dividing by τ
-        fa, fb, p = 6.0, 24.0, 1.0             # n = 1: 3!, 4!
-        for n in range(1, 14):
-            sgn = 1.0 if n % 2 == 0 else -1.0
-            dal += sgn * n * p / fa
-            dbe += sgn * n * p / fb
-            fa *= (2 * n + 2) * (2 * n + 3)
-            fb *= (2 * n + 3) * (2 * n + 4)
-            p *= tau
-        fa, fb, p = 120.0, 720.0, 1.0          # n = 2: 5!, 6!
-        for n in range(2, 15):
-            sgn = 1.0 if n % 2 == 0 else -1.0
-            ddal += sgn * n * (n - 1) * p / fa
-            ddbe += sgn * n * (n - 1) * p / fb
-            fa *= (2 * n + 2) * (2 * n + 3)
-            fb *= (2 * n + 3) * (2 * n + 4)
-            p *= tau
+        n = min(_terms(tau, 13) + 2, 13)
+        al, dal, ddal = (_horner(_SIN_SERIES, 0, tau, n), _horner(_SIN_SERIES, 1, tau, n),
+                         _horner(_SIN_SERIES, 2, tau, n))
+        be, dbe, ddbe = (_horner(_COS_SERIES, 0, tau, n), _horner(_COS_SERIES, 1, tau, n),
+                         _horner(_COS_SERIES, 2, tau, n))
         ga = 1.0 - be * tau
         return ga, al, be, -0.5 * al, dal, dbe, -0.5 * dal, ddal, ddbe
     t = np.sqrt(tau)
