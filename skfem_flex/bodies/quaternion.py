@@ -63,6 +63,7 @@ class QuaternionKernelData(NamedTuple):
     Qc: np.ndarray          # (3, 4, 4) m Q_i(c): the first moment m R(e) c = m eᵀQ_i e (zero for a free body)
     anchor: np.ndarray      # (3,) the pivot (zero for a free body), m
     g: np.ndarray           # (3,) gravity on the body, m/s²
+    W: np.ndarray           # (4, 4) gravity's quadratic in e, V = eᵀWe − m g·x (set with g by the family)
 
 
 class QuaternionRigidBody(Body):
@@ -192,28 +193,25 @@ class QuaternionRigidBody(Body):
         if self.pivot is None:
             return self.mass * x_dot
         e, edot = self._split(q)[1], self._split(v)[1]
-        return 2.0 * np.einsum("iab,a,b->i", self._Qc, edot, e)
+        return qk.moment_rate(self._Qc, e, edot)
 
     def angular_momentum(self, q, v):
         """About the origin: ½ Ḡ(e) π (the rotation's, π = M(e) ė) plus r × (linear momentum), r = x or the pivot."""
         e, edot = self._split(q)[1], self._split(v)[1]
-        L = 0.5 * qk.space_matrix(e) @ (qk.mass(self.J4, e) @ edot)
+        L = qk.rotation_momentum(self.J4, e, edot)
         return L + np.cross(self.reference_point(q), self.linear_momentum(q, v))
 
     # --------------------------------------------------------------- gravity
     def mass_moment(self):
         raise NotImplementedError(f"body {self.name!r}: positions are quadratic in its Euler parameters")
 
-    def _gravity_quadratic(self, g):
-        return -np.einsum("i,iab->ab", np.asarray(g, dtype=float), self._Qc)
-
     def gravity_potential(self, q, g):
         g = check_finite_vector("g", g, 3)
         x, e = self._split(q)
-        W = self._gravity_quadratic(g)
+        W = qk.gravity_quadratic(self._Qc, g)
         n, o = self.n_dofs, self.quaternion
         grad, hess = np.zeros(n), np.zeros((n, n))
-        grad[:o] = -self.mass * g[:o] if o else grad[:o]
+        grad[:o] = -self.mass * g[:o]
         grad[o:] = 2.0 * W @ e
         hess[o:, o:] = 2.0 * W
         V = float(e @ W @ e) - self.mass * float(g @ self.reference_point(q))
@@ -229,7 +227,8 @@ class QuaternionRigidBody(Body):
         kin, U, cu = self._invariants
         return QuaternionKernelData(np.array([self.n_dofs], dtype=np.int64), np.array([self.mass]), self.J4.copy(),
                                     self.J4i.copy(), kin.copy(), U.copy(), cu.copy(), self._Qc.copy(),
-                                    np.zeros(3) if self.pivot is None else self.pivot.copy(), np.zeros(3))
+                                    np.zeros(3) if self.pivot is None else self.pivot.copy(), np.zeros(3),
+                                    np.zeros((4, 4)))
 
     # ---------------------------------------------------------- body points
     def point(self, locator=None):

@@ -53,7 +53,8 @@ import numba
 import numpy as np
 
 __all__ = ["E_UNITS", "e_matrix", "mass", "inverse_mass", "mass_jacobian", "quadratic_velocity_force",
-           "em_terms", "invariant_terms", "newmark_terms", "omega_matrix", "space_matrix"]
+           "em_terms", "invariant_terms", "newmark_terms", "omega_matrix", "space_matrix", "rotation_momentum",
+           "gravity_quadratic", "moment_rate"]
 
 
 def _units():
@@ -87,11 +88,15 @@ def omega_matrix(e):
     return e_matrix(np.asarray(e, dtype=float))[1:]
 
 
+@numba.njit(cache=True)
 def space_matrix(e):
     """Ḡ(e) (3, 4): the space angular velocity ω = 2 Ḡ(e) ė, and the angular momentum of the rotation
     about the body's reference point ½ Ḡ(e) π (kg m²/s)."""
-    e0, e1, e2, e3 = (float(a) for a in e)
-    return np.array([[-e1, e0, -e3, e2], [-e2, e3, e0, -e1], [-e3, -e2, e1, e0]])
+    out = np.empty((3, 4))
+    out[0, 0], out[0, 1], out[0, 2], out[0, 3] = -e[1], e[0], -e[3], e[2]
+    out[1, 0], out[1, 1], out[1, 2], out[1, 3] = -e[2], e[3], e[0], -e[1]
+    out[2, 0], out[2, 1], out[2, 2], out[2, 3] = -e[3], -e[2], e[1], e[0]
+    return out
 
 
 @numba.njit(cache=True)
@@ -121,6 +126,41 @@ def _times(A, x):
     for i in range(4):
         for j in range(4):
             out[i] += A[i, j] * x[j]
+    return out
+
+
+@numba.njit(cache=True)
+def rotation_momentum(J4, e, edot):
+    """The rotation's angular momentum about the body's reference point, ½ Ḡ(e) M(e) ė (kg m²/s; R J Ω
+    on e·e = 1)."""
+    p = _times(mass(J4, e), edot)
+    G = space_matrix(e)
+    out = np.zeros(3)
+    for i in range(3):
+        for j in range(4):
+            out[i] += 0.5 * G[i, j] * p[j]
+    return out
+
+
+@numba.njit(cache=True)
+def gravity_quadratic(Qc, g):
+    """W (4, 4) with −g·(m R(e) c) = eᵀ W e, from the first moment's quadratics Qc (m Q_i(c)) and g (m/s²)."""
+    W = np.zeros((4, 4))
+    for i in range(3):
+        for a in range(4):
+            for b in range(4):
+                W[a, b] -= g[i] * Qc[i, a, b]
+    return W
+
+
+@numba.njit(cache=True)
+def moment_rate(Qc, e, edot):
+    """d/dt (m R(e) c) = 2 Σ Qc_i e · ė (3,), kg m/s: a pivoted body's linear momentum."""
+    out = np.zeros(3)
+    for i in range(3):
+        for a in range(4):
+            for b in range(4):
+                out[i] += 2.0 * Qc[i, a, b] * edot[a] * e[b]
     return out
 
 

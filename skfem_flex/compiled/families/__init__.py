@@ -19,12 +19,14 @@ not change.
 """
 from __future__ import annotations
 
+from collections import namedtuple
 from dataclasses import dataclass, field
 from importlib import import_module
 
 import numpy as np
 
-__all__ = ["FamilyPack", "FAMILY_MODULES", "family_for", "families", "first_refusal", "bodies_and_gravity"]
+__all__ = ["FamilyPack", "FAMILY_MODULES", "family_for", "families", "first_refusal", "bodies_and_gravity",
+           "body_family_pack"]
 
 #: every family of the package, by module (imported when first needed: a scene loads only its own)
 FAMILY_MODULES = (
@@ -137,3 +139,26 @@ def bodies_and_gravity(items, data_type):
         else:
             gravity[id(body)] = gravity.get(id(body), 0.0) + np.asarray(item[1], dtype=float)
     return bodies, gravity
+
+
+def body_family_pack(type_name, bodies):
+    """The :class:`FamilyPack` of a family of bodies with dense blocks: its data the bodies' offsets (field
+    ``offs``), then each body's records field by field (``b<k>_<name>``), one coupling block per body.
+
+    Parameters
+    ----------
+    type_name : str
+        Name of the data's NamedTuple type.
+    bodies : list of (records, offset, size)
+        Per body its NamedTuples of arrays (in the order the kernel reads them), the offset of its coordinates
+        and their number.
+    """
+    names, arrays, offs, couplings = ["offs"], [None], [], []
+    for b, (records, off, size) in enumerate(bodies):
+        for rec in records:
+            names += [f"b{b}_{name}" for name in rec._fields]
+            arrays += list(rec)
+        offs.append(off)
+        couplings.append(np.arange(off, off + size, dtype=np.int64))
+    arrays[0] = np.asarray(offs, dtype=np.int64)
+    return FamilyPack(data=namedtuple(type_name, names)(*arrays), count=len(bodies), couplings=couplings)

@@ -136,7 +136,7 @@ def pack(items, packer):
 
 
 @numba.njit(cache=True, _nrt=False)
-def add_form(ctx, st, d, p0, p1, l0, l1, q1, qa, qb, v1, g, dm, hv, evaluate, e):
+def add_form(st, d, p0, p1, l0, l1, q1, qa, qb, v1, g, dm, hv, evaluate, e):
     """One quadratic form f(q) = ½ qᵀH q + bᵀq (its products d.p*[p0:p1], linear terms d.l*[l0:l1]) over a row's
     columns: g += ∇f(q₁), hv += H v₁ and, when ``evaluate``, dm += ∇f at the mid-point of (q_a, q_b) and the
     Newton matrix += e H (the constraint force's own derivative); dm takes b always. Returns f(q₁) − c."""
@@ -178,7 +178,7 @@ def _evaluate(ctx, d):
             cv[t] = 0.0
         phi_t, phi_tt = 0.0, 0.0
         # ∂(Dᵀμ)/∂q_b = ½ μ H
-        val = d.const[r] + add_form(ctx, st, d, p0, p1, l0, l1, q1, qa, qb, v1, cq, dd, cv, evaluate,
+        val = d.const[r] + add_form(st, d, p0, p1, l0, l1, q1, qa, qb, v1, cq, dd, cv, evaluate,
                                     0.5 * w * mu[row])
         if col >= 0:
             val -= trow[col]

@@ -16,18 +16,16 @@ wants them (:mod:`skfem_flex.compiled.tasks`):
 """
 from __future__ import annotations
 
-from collections import namedtuple
-
 import numba
 import numpy as np
 
 from ...bodies.quaternion import QuaternionKernelData
-from ...bodies.quaternion_kernel import em_terms, mass, newmark_terms
+from ...bodies.quaternion_kernel import em_terms, gravity_quadratic, mass, moment_rate, newmark_terms, rotation_momentum
 from ..abi import context_of, f1, f2, f3, family_of, fvec, i1
 from ..registry import compiled_kernel
 from ..storage import add_qq, storage_of
 from ..tasks import SCHEME_EM, TASK_ENERGY, TASK_EVAL, TASK_MOMENTUM
-from . import FamilyPack, bodies_and_gravity
+from . import bodies_and_gravity, body_family_pack
 
 __all__ = ["NAME", "FORMS", "pack", "kernel"]
 
@@ -54,35 +52,21 @@ def pack(items, packer):
         One dense coupling block per body.
     """
     bodies, gravity = bodies_and_gravity(items, QuaternionKernelData)
-    names, arrays, offs, couplings = ["offs"], [None], [], []
-    for b, (kd, body, off) in enumerate(bodies):
+    packed = []
+    for kd, body, off in bodies:
         if id(body) in gravity:
-            kd = kd._replace(g=kd.g + gravity[id(body)])
-        names += [f"b{b}_{name}" for name in kd._fields]
-        arrays += list(kd)
-        offs.append(off)
-        couplings.append(np.arange(off, off + int(kd.n[0]), dtype=np.int64))
-    arrays[0] = np.asarray(offs, dtype=np.int64)
-    data = namedtuple("QuaternionBodiesData", names)(*arrays)
-    return FamilyPack(data=data, count=len(bodies), couplings=couplings)
+            g = kd.g + gravity[id(body)]
+            kd = kd._replace(g=g, W=gravity_quadratic(kd.Qc, g))
+        packed.append(((kd,), off, int(kd.n[0])))
+    return body_family_pack("QuaternionBodiesData", packed)
 
 
 @numba.njit(cache=True, inline="always")
 def _body(fam, k):
     """Body data from the pools, field by field (QuaternionKernelData's order)."""
     return QuaternionKernelData(i1(fam, k), f1(fam, k + 1), f2(fam, k + 2), f2(fam, k + 3), f1(fam, k + 4),
-                                f2(fam, k + 5), f1(fam, k + 6), f3(fam, k + 7), f1(fam, k + 8), f1(fam, k + 9))
-
-
-@numba.njit(cache=True)
-def _gravity(kd, e):
-    """(W, e) with V_e = eᵀWe: W = −Σ g_i m Q_i(c)."""
-    W = np.zeros((4, 4))
-    for i in range(3):
-        for a in range(4):
-            for b in range(4):
-                W[a, b] -= kd.g[i] * kd.Qc[i, a, b]
-    return W
+                                f2(fam, k + 5), f1(fam, k + 6), f3(fam, k + 7), f1(fam, k + 8), f1(fam, k + 9),
+                                f2(fam, k + 10))
 
 
 @numba.njit(cache=True)
@@ -100,42 +84,30 @@ def _bodies(ctx, fam):
         e1, ev1 = np.empty(4), np.empty(4)
         for i in range(4):
             e1[i], ev1[i] = q1all[o + r + i], v1all[o + r + i]
-        W = _gravity(kd, e1)
         if task == TASK_ENERGY:
             V = 0.0
             for a in range(4):
                 for c in range(4):
-                    V += e1[a] * W[a, c] * e1[c]
+                    V += e1[a] * kd.W[a, c] * e1[c]
             for i in range(3):
                 V -= m * kd.g[i] * (q1all[o + i] if r else kd.anchor[i])
             out[0] += V
             continue
         if task == TASK_MOMENTUM:
             M = mass(kd.J4, e1)
-            p = np.zeros(4)
+            rp = fvec(ctx.p, n)
             for i in range(4):
                 for j in range(4):
-                    p[i] += M[i, j] * ev1[j]
-            rp = fvec(ctx.p, n)
-            lin, ref = np.zeros(3), np.zeros(3)
-            for i in range(4):
-                rp[o + r + i] += p[i]
+                    rp[o + r + i] += M[i, j] * ev1[j]
             if r:
+                lin, ref = np.zeros(3), np.zeros(3)
                 for i in range(3):
                     rp[o + i] += m * v1all[o + i]
                     lin[i] = m * v1all[o + i]
                     ref[i] = q1all[o + i]
             else:
-                for i in range(3):
-                    ref[i] = kd.anchor[i]
-                    for a in range(4):
-                        for c in range(4):
-                            lin[i] += 2.0 * kd.Qc[i, a, c] * ev1[a] * e1[c]
-            e0_, e1_, e2_, e3_ = e1[0], e1[1], e1[2], e1[3]
-            L = np.zeros(3)              # ½ Ḡ(e) π
-            L[0] = 0.5 * (-e1_ * p[0] + e0_ * p[1] - e3_ * p[2] + e2_ * p[3])
-            L[1] = 0.5 * (-e2_ * p[0] + e3_ * p[1] + e0_ * p[2] - e1_ * p[3])
-            L[2] = 0.5 * (-e3_ * p[0] - e2_ * p[1] + e1_ * p[2] + e0_ * p[3])
+                lin, ref = moment_rate(kd.Qc, e1, ev1), kd.anchor
+            L = rotation_momentum(kd.J4, e1, ev1)
             L[0] += ref[1] * lin[2] - ref[2] * lin[1]
             L[1] += ref[2] * lin[0] - ref[0] * lin[2]
             L[2] += ref[0] * lin[1] - ref[1] * lin[0]
@@ -197,7 +169,7 @@ def _step(ctx, kd, o, r, m, e1, ev1):
             mterms[o + i] += m * terms[o + i]
     # gravity: V = eᵀWe − m g·x, its gradient at the mid-point of q_a and q_b and half its Hessian
     qa, qb = fvec(ctx.qa, n), fvec(ctx.qb, n)
-    W = _gravity(kd, e1)
+    W = kd.W
     th = ctx.w_gp * ctx.c_dg * dq1
     for i in range(r):
         rgp[o + i] -= m * kd.g[i]

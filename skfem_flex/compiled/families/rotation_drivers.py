@@ -86,9 +86,9 @@ def _evaluate(ctx, d):
         c, s = np.cos(th), np.sin(th)
         # the forms X and Y, each over its own half of the scratch; ∂(Dᵀμ)/∂q_b = ½ μ (c H_Y − s H_X)
         e = 0.5 * w * mu[row]
-        vx = d.const[2 * r] + add_form(ctx, st, d, p0, p1, l0, l1, q1, qa, qb, v1, g[:nc], dm[:nc], hv[:nc],
+        vx = d.const[2 * r] + add_form(st, d, p0, p1, l0, l1, q1, qa, qb, v1, g[:nc], dm[:nc], hv[:nc],
                                        evaluate, -s * e)
-        vy = d.const[2 * r + 1] + add_form(ctx, st, d, p1, p2, l1, l2, q1, qa, qb, v1, g[nc:], dm[nc:], hv[nc:],
+        vy = d.const[2 * r + 1] + add_form(st, d, p1, p2, l1, l2, q1, qa, qb, v1, g[nc:], dm[nc:], hv[nc:],
                                            evaluate, c * e)
         value = c * vy - s * vx
         phi_t = -om * (s * vy + c * vx)

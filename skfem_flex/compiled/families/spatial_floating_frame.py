@@ -24,10 +24,7 @@ body's ``compiled_kernel_data()``); this family adds its results where the task 
 """
 from __future__ import annotations
 
-from collections import namedtuple
-
 import numba
-import numpy as np
 
 from ...bodies.floating_spatial.kernel import (EM, NEWMARK, STATE, QuarticTerms, SpatialBodyData,
                                                SpatialFrameKernelData, body_terms)
@@ -35,7 +32,7 @@ from ..abi import context_of, f1, f2, f3, family_of, fvec, i1
 from ..registry import compiled_kernel
 from ..storage import add_qq, storage_of
 from ..tasks import SCHEME_EM, TASK_ENERGY, TASK_EVAL, TASK_MOMENTUM
-from . import FamilyPack, bodies_and_gravity
+from . import bodies_and_gravity, body_family_pack
 
 __all__ = ["NAME", "FORMS", "pack", "kernel"]
 
@@ -65,18 +62,13 @@ def pack(items, packer):
         One dense coupling block per body.
     """
     bodies, gravity = bodies_and_gravity(items, SpatialBodyData)
-    names, arrays, offs, couplings = ["offs"], [None], [], []
-    for b, (data, body, off) in enumerate(bodies):
+    packed = []
+    for data, body, off in bodies:
         kd = data.frame
         if id(body) in gravity:
             kd = kd._replace(g=kd.g + gravity[id(body)])
-        names += [f"b{b}_{name}" for name in kd._fields + data.quartic._fields]
-        arrays += list(kd) + list(data.quartic)
-        offs.append(off)
-        couplings.append(np.arange(off, off + 12 + kd.Sbar.shape[1], dtype=np.int64))
-    arrays[0] = np.asarray(offs, dtype=np.int64)
-    data = namedtuple("SpatialFloatingFrameData", names)(*arrays)
-    return FamilyPack(data=data, count=len(bodies), couplings=couplings)
+        packed.append(((kd, data.quartic), off, 12 + kd.Sbar.shape[1]))
+    return body_family_pack("SpatialFloatingFrameData", packed)
 
 
 @numba.njit(cache=True, inline="always")
