@@ -228,6 +228,15 @@ class ElasticPoint(BodyPoint):
                 H[c, 12:, 3 + 3 * i + c] = self.S[i]
         return H, A, np.zeros(3)
 
+    def factored(self):
+        """r = x + Σ_i ρ_i(y) d_i, ρ = X₀ + S y, as (A₀, a₀, ((β_i, γ_i, W_i))): A₀ q = x, t_i = β_i·q + γ_i = ρ_i and
+        W_i q = d_i (:func:`~skfem_flex.elements.constraints.product_rows.product_dot`: joints whose rows are
+        products of invariants)."""
+        n = self.body.n_dofs
+        A0 = np.zeros((3, n))
+        A0[:, :3] = np.eye(3)
+        return A0, np.zeros(3), tuple((_on_elastic(n, self.S[i]), float(self.X0[i]), _director(n, i)) for i in range(3))
+
     def position_discrete_gradient(self, q0, q1):
         return self.position_jacobian(0.5 * (np.asarray(q0, dtype=float) + np.asarray(q1, dtype=float)))
 
@@ -247,8 +256,31 @@ class _TurnedDirection:
     def __init__(self, point, e0):
         self.point, self.e0 = point, e0
 
+    def factored(self):
+        """u = Σ_i g_i(y) d_i with g = e₀ − ê₀ Θ y, as (A₀ = 0, a₀ = 0, ((β_i, γ_i, W_i))) (:meth:`ElasticPoint.factored`)."""
+        n = self.point.body.n_dofs
+        e = self.e0
+        ehat = np.array([[0.0, -e[2], e[1]], [e[2], 0.0, -e[0]], [-e[1], e[0], 0.0]])
+        G = -ehat @ self.point.Theta
+        return np.zeros((3, n)), np.zeros(3), tuple((_on_elastic(n, G[i]), float(e[i]), _director(n, i))
+                                                    for i in range(3))
+
     def quadratic(self):
         n = self.point.body.n_dofs
         A = self.point.turned(np.zeros(n), self.e0)[1]
         H = np.stack([self.point.turned(e, self.e0)[1] - A for e in np.eye(n)], axis=2)
         return H, A, np.zeros(3)
+
+
+def _on_elastic(n, row):
+    """A row over the body's n coordinates that reads the elastic y (offset 12) with ``row``."""
+    out = np.zeros(n)
+    out[12:] = row
+    return out
+
+
+def _director(n, i):
+    """W (3, n) with W q = d_i, the frame's i-th director (offset 3 + 3i)."""
+    W = np.zeros((3, n))
+    W[:, 3 + 3 * i:6 + 3 * i] = np.eye(3)
+    return W

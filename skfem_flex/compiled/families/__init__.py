@@ -45,6 +45,7 @@ FAMILY_MODULES = (
     "rotation_beam",
     "rotated_rows",
     "quadratic_rows",
+    "product_rows",
     "rotation_drivers",
     "linear_potentials",
     "spatial_loads",

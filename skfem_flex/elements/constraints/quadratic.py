@@ -24,6 +24,7 @@ from ...bodies.base import DENSE_LIMIT, check_finite_vector
 from ..motion import MotionLaw
 from ..point_terms import PointLayout
 from .base import Constraint
+from .product_rows import PolynomialRows, ProductRows, product_dot
 
 __all__ = ["Affine", "QuadraticConstraint", "Rigidity", "UnitQuaternion", "spatial_reaction", "unit_vector", "perpendiculars", "stack",
            "hinge_directions"]
@@ -74,10 +75,17 @@ class Affine:
     """u(q) = A q + a, a 3-vector affine in the local coordinates (A (3, n), a (3,)); with ``H`` (3, n, n) the
     quadratic u_c(q) = ½ qᵀ H_c q + A_c·q + a_c (a point of a floating-frame body, x + D(X₀ + S y))."""
 
-    def __init__(self, A, a, H=None):
+    def __init__(self, A, a, H=None, factors=None):
         self.A = np.asarray(A, dtype=float)
         self.a = np.asarray(a, dtype=float).reshape(3)
         self.H = None if H is None else np.asarray(H, dtype=float)
+        #: the factored form (A₀, a₀, ((β_j, γ_j, W_j), ...)) of a quadratic vector, u = A₀q + a₀ + Σ (β_j·q + γ_j) W_j q
+        #: (:func:`~.product_rows.product_dot`), or None
+        self.factors = factors
+
+    def _factored(self):
+        """(A₀, a₀, terms): an affine vector is its own (A, a, ()); a quadratic one without factors gives None."""
+        return (self.A, self.a, ()) if self.H is None else self.factors
 
     @classmethod
     def constant(cls, vec, n):
@@ -100,7 +108,19 @@ class Affine:
             return cls(A, a_b)
         H = np.zeros((3, n, n))
         H[:, where, where] = H_b
-        return cls(A, a_b, H)
+        factored = getattr(body_affine, "factored", None)
+        factors = None
+        if factored is not None:
+            A0_b, a0_b, terms_b = factored()
+            A0 = np.zeros((3, n))
+            A0[:, where] = A0_b
+            terms = []
+            for beta_b, gamma, W_b in terms_b:
+                beta, W = np.zeros(n), np.zeros((3, n))
+                beta[where], W[:, where] = beta_b, W_b
+                terms.append((beta, float(gamma), W))
+            factors = (A0, np.asarray(a0_b, dtype=float), tuple(terms))
+        return cls(A, a_b, H, factors)
 
     def _second(self, n):
         return np.zeros((3, n, n)) if self.H is None else self.H
@@ -108,7 +128,11 @@ class Affine:
     def __sub__(self, other):
         H = None if self.H is None and other.H is None else self._second(self.A.shape[1]) - other._second(
             other.A.shape[1])
-        return Affine(self.A - other.A, self.a - other.a, H)
+        fu, fw = self._factored(), other._factored()
+        factors = None
+        if H is not None and fu is not None and fw is not None:
+            factors = (fu[0] - fw[0], fu[1] - fw[1], fu[2] + tuple((beta, gamma, -W) for beta, gamma, W in fw[2]))
+        return Affine(self.A - other.A, self.a - other.a, H, factors)
 
     def value(self, q):
         out = self.A @ q + self.a
@@ -123,26 +147,34 @@ class Affine:
         return self.H is None and not self.A.any()
 
     def dot(self, other, value=0.0):
-        """One equation u·w − value = 0 as (H, b, c) with one row: both u and w affine (the product is quadratic),
-        or one quadratic and the other constant (a direction of a floating-frame body's material point against
-        a direction fixed in space)."""
+        """One equation u·w − value = 0 as :class:`~.product_rows.PolynomialRows` (H, b, c, products) with one
+        row: quadratic when both u and w are affine, or one is quadratic and the other constant (a direction of
+        a floating-frame body's material point against a direction fixed in space); a sum of products of two
+        quadratic invariants when a quadratic vector meets a moving one (:mod:`.product_rows`)."""
         if self.H is not None or other.H is not None:
             quad, fixed = (self, other) if other._constant() else (other, self) if self._constant() else (None, None)
             if quad is None:
-                raise ValueError("a dot product of a quadratic vector with a moving one would be cubic or quartic: "
-                                 "joints with axes at a floating-frame body's material points hold them against the "
-                                 "ground only (rigid bodies, beam nodes and a floating frame's own points take any)")
+                fu, fw = self._factored(), other._factored()
+                if fu is None or fw is None:
+                    raise ValueError("a dot product of a quadratic vector with a moving one needs the vectors' "
+                                     "factored form (a floating-frame body's ElasticPoint gives it): this one has none")
+                return product_dot(fu, fw, value)
             H = np.einsum("c,cij->ij", fixed.a, quad.H)
-            return H[None], (fixed.a @ quad.A)[None], np.array([quad.a @ fixed.a - float(value)])
+            return PolynomialRows(H[None], (fixed.a @ quad.A)[None], np.array([quad.a @ fixed.a - float(value)]))
         H = self.A.T @ other.A + other.A.T @ self.A
         b = self.a @ other.A + other.a @ self.A
-        return H[None], b[None], np.array([self.a @ other.a - float(value)])
+        return PolynomialRows(H[None], b[None], np.array([self.a @ other.a - float(value)]))
 
 
 def stack(parts):
-    """Concatenate (H, b, c) parts into one set of equations."""
-    return (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
-            np.concatenate([p[2] for p in parts]))
+    """Concatenate (H, b, c) or :class:`~.product_rows.PolynomialRows` parts into one
+    :class:`~.product_rows.PolynomialRows` (the product terms' rows renumbered)."""
+    products, row = [], 0
+    for p in parts:
+        products += [t._replace(row=t.row + row) for t in (p.products if isinstance(p, PolynomialRows) else ())]
+        row += len(p[2])
+    return PolynomialRows(np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]),
+                          np.concatenate([p[2] for p in parts]), tuple(products))
 
 
 def _law(law, name):
@@ -168,11 +200,17 @@ class QuadraticConstraint(Constraint):
     columns : array_like of int, optional
         The local coordinates the equations touch (default: all of them); H is then (m, k, k) and b (m, k)
         over these k columns only, which keeps the equations of one node of a long beam small.
+    products : sequence of ProductTerm, optional
+        Terms a_m(q) s_m(q) added to their rows, over all n local coordinates (:mod:`.product_rows`: axes at
+        floating-frame material points against moving bodies). The equations are then not quadratic: their
+        discrete gradient is the product rule's, and they run through their own methods in compiled loops.
     """
 
     quadratic = True
+    #: the product terms (:class:`~.product_rows.ProductRows` over the columns), or None
+    products = None
 
-    def __init__(self, bodies, H, b, c, laws=None, name="quadratic constraint", columns=None):
+    def __init__(self, bodies, H, b, c, laws=None, name="quadratic constraint", columns=None, products=()):
         self.layout = PointLayout.of_bodies(bodies)
         self.bodies = self.layout.bodies
         H = np.asarray(H, dtype=float)
@@ -181,11 +219,22 @@ class QuadraticConstraint(Constraint):
         self.c = np.asarray(c, dtype=float).ravel()
         m, k = self.b.shape
         n = self.layout.n
+        self.products = None
+        if products:
+            if columns is not None or self.H.shape != (m, n, n):
+                raise ValueError(f"quadratic constraint {name!r}: product terms need H over all {n} coordinates")
+            self.products = ProductRows(products, m, n)
+            self.quadratic = False
         if columns is None and self.H.shape == (m, n, n):
             # only the coordinates the equations touch (a joint at one node of a long beam touches 12 of them)
-            touched = np.flatnonzero(np.any(self.H != 0.0, axis=(0, 1)) | np.any(self.b != 0.0, axis=0))
+            touched = np.any(self.H != 0.0, axis=(0, 1)) | np.any(self.b != 0.0, axis=0)
+            if self.products is not None:
+                touched |= self.products.columns()
+            touched = np.flatnonzero(touched)
             if touched.size < n:
                 self.H, self.b = self.H[:, touched][:, :, touched], self.b[:, touched]
+                if self.products is not None:
+                    self.products = self.products.restricted(touched)
                 columns, k = touched, touched.size
         self.columns = np.arange(n) if columns is None else np.asarray(columns, dtype=np.int64).ravel()
         if (self.H.shape != (m, k, k) or self.c.shape != (m,) or self.columns.size != k
@@ -215,14 +264,24 @@ class QuadraticConstraint(Constraint):
 
     def value(self, q, t):
         q = np.asarray(q, dtype=float)[self.columns]
-        return 0.5 * np.einsum("kij,i,j->k", self.H, q, q) + self.b @ q + self.c - (
+        out = 0.5 * np.einsum("kij,i,j->k", self.H, q, q) + self.b @ q + self.c - (
             self._law_values(t, 0) if self.rheonomic else 0.0)
+        return out if self.products is None else out + self.products.value(q)
 
     def jacobian(self, q, t):
-        return self._wide(self.H @ np.asarray(q, dtype=float)[self.columns] + self.b)
+        q = np.asarray(q, dtype=float)[self.columns]
+        rows = self.H @ q + self.b
+        return self._wide(rows if self.products is None else rows + self.products.jacobian(q))
 
     def hessian_product(self, q, mu, t):
-        local = np.tensordot(np.asarray(mu, dtype=float), self.H, axes=1)
+        mu = np.asarray(mu, dtype=float)
+        local = np.tensordot(mu, self.H, axes=1)
+        if self.products is not None:
+            local = local + self.products.hessian_product(np.asarray(q, dtype=float)[self.columns], mu)
+        return self._square(local)
+
+    def _square(self, local):
+        """A (k, k) matrix over the columns placed into (n, n) (dense, or sparse for a long beam)."""
         if self._full:
             return local
         n = self.layout.n
@@ -235,7 +294,11 @@ class QuadraticConstraint(Constraint):
         return sps.csr_matrix((local.ravel(), (rows, np.tile(self.columns, k))), shape=(n, n))
 
     def velocity_jacobian(self, q, v, t):
-        return self._wide(self.H @ np.asarray(v, dtype=float)[self.columns])
+        v = np.asarray(v, dtype=float)[self.columns]
+        rows = self.H @ v
+        if self.products is not None:
+            rows = rows + self.products.velocity_jacobian(np.asarray(q, dtype=float)[self.columns], v)
+        return self._wide(rows)
 
     def time_derivative(self, q, t):
         return -self._law_values(t, 1) if self.rheonomic else np.zeros(self.n_equations)
@@ -244,10 +307,17 @@ class QuadraticConstraint(Constraint):
         return -self._law_values(t, 2) if self.rheonomic else np.zeros(self.n_equations)
 
     def discrete_gradient(self, q0, q1, t):
-        return self.jacobian(0.5 * (np.asarray(q0, dtype=float) + np.asarray(q1, dtype=float)), t)
+        q0, q1 = np.asarray(q0, dtype=float)[self.columns], np.asarray(q1, dtype=float)[self.columns]
+        rows = self.H @ (0.5 * (q0 + q1)) + self.b
+        return self._wide(rows if self.products is None else rows + self.products.discrete_gradient(q0, q1))
 
     def discrete_gradient_jacobian(self, q0, q1, mu, t):
-        return 0.5 * self.hessian_product(None, mu, t)
+        mu = np.asarray(mu, dtype=float)
+        local = 0.5 * np.tensordot(mu, self.H, axes=1)
+        if self.products is not None:
+            local = local + self.products.discrete_gradient_jacobian(np.asarray(q0, dtype=float)[self.columns],
+                                                                     np.asarray(q1, dtype=float)[self.columns], mu)
+        return self._square(local)
 
     def without_equations(self, rows):
         """A copy without the equations ``rows`` (indices), e.g. redundant ones
@@ -258,14 +328,19 @@ class QuadraticConstraint(Constraint):
         new = copy.copy(self)
         new.H, new.b, new.c = self.H[keep], self.b[keep], self.c[keep]
         new.laws = [self.laws[k] for k in keep]
+        if self.products is not None:
+            new.products = self.products.without_rows(keep)
         new.rheonomic = any(law is not None for law in new.laws)
         new.n_equations = int(keep.size)
         return new
 
     def compiled_form(self):
-        """``("quadratic", H, b, c, laws, columns)``: the quadratic-rows family packs it."""
+        """``("quadratic", H, b, c, laws, columns)``: the quadratic-rows family packs it; with product terms
+        ``("product", H, b, c, laws, columns, products)`` for the product-rows family."""
         if type(self).value is not QuadraticConstraint.value:
             return None
+        if self.products is not None:
+            return "product", self.H, self.b, self.c, tuple(self.laws), self.columns, self.products
         return "quadratic", self.H, self.b, self.c, tuple(self.laws), self.columns
 
 
@@ -287,7 +362,10 @@ def spatial_reaction(constraint, body, where, point, q, lam):
     q, lam = np.asarray(q, dtype=float), np.asarray(lam, dtype=float)
     one = q.ndim == 1
     q, lam = np.atleast_2d(q), np.atleast_2d(lam)
-    jac = constraint._wide(np.einsum("kij,Nj->Nki", constraint.H, q[:, constraint.columns]) + constraint.b)
+    if getattr(constraint, "products", None) is None:
+        jac = constraint._wide(np.einsum("kij,Nj->Nki", constraint.H, q[:, constraint.columns]) + constraint.b)
+    else:
+        jac = np.array([constraint.jacobian(row, 0.0) for row in q])
     f = -np.einsum("Nk,Nki->Ni", lam, jac)[:, where]
     qb = q[:, where]
     positions, directors = body.vector_layout()

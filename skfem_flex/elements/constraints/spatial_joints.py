@@ -85,8 +85,9 @@ class _Joint(QuadraticConstraint):
         return Affine.of(point.direction(e_space), sl, n)
 
     def _finish(self, parts, name, laws=None):
-        H, b, c = stack(parts)
-        QuadraticConstraint.__init__(self, self._layout.bodies, H, b, c, laws=laws, name=name)
+        rows = stack(parts)
+        QuadraticConstraint.__init__(self, self._layout.bodies, rows.H, rows.b, rows.c, laws=laws, name=name,
+                                     products=rows.products)
 
     def _check_initial(self):
         q0 = self._layout.initial()
@@ -227,8 +228,7 @@ class Distance3D(_Joint):
             raise ValueError(f"distance {name!r}: the length must be finite and positive (the points must not "
                              f"coincide), got {length!r} m")
         self.length = length
-        H, b, c = d.dot(d, length ** 2)
-        self._finish([(0.5 * H, 0.5 * b, 0.5 * c)], name)
+        self._finish([d.dot(d, length ** 2).scaled(0.5)], name)
 
     def reaction(self, q, lam):
         """The tension N (positive pulls the points together)."""
@@ -258,9 +258,8 @@ class TranslationDriver(_Joint):
         e = unit_vector("axis", axis)
         d = self.ra - self.rb
         row = d.dot(self._direction("a", e))
-        s0 = float(row[2][0] + row[1][0] @ self._layout.initial()
-                   + 0.5 * self._layout.initial() @ row[0][0] @ self._layout.initial())
-        self._finish([(row[0], row[1], row[2] - s0)], name, laws=[law])
+        s0 = float(row.value(self._layout.initial())[0])
+        self._finish([row._replace(c=row.c - s0)], name, laws=[law])
 
 
 class RotationDriver(Constraint):
