@@ -35,8 +35,8 @@ More tables:
   sometimes a spring) built one after another in a fresh process with an empty numba cache: what
   each compiles (a scene compiles only the element families it holds, none twice);
 * with exudyn installed (``pip install ".[bench]"``), the side-by-side tables of
-  ``examples/benchmark_peers.py`` (planar and spatial problems and the reduced rotor, both codes in this
-  process; its docstring says what each row holds; ``--only TEXT`` keeps the problems whose label holds TEXT).
+  ``examples/benchmark_peers.py`` (planar and spatial problems, the reduced rotor and the reduced rotating
+  beam, both codes in this process; its docstring says what each row holds; ``--only TEXT`` keeps the problems whose label holds TEXT).
 
 Run ``python examples/benchmark.py [--repeat 3] [--window 1.0] [--record-every 10] [--catalogue-steps N]
 [--no-loop] [--no-catalogue] [--no-peer] [--flexible] [--limits] [--out DIR]``;

@@ -17,14 +17,19 @@ error matches exudyn's. The reduced rotor (its own table): ``rotor_3d``'s whole 
 mesh, M, K and Craig–Bampton basis on exudyn's ``ObjectFFRFreducedOrder`` (:mod:`skfem_flex.apps.peer_reduced`),
 CPU µs per step on both sides at 1e-3, 5e-4 and 1e-4 s (the step of exudyn's own performance test of a reduced
 rotor), exudyn's generalized-α and trapezoidal rule, errors of the disk centre and of the spin against our run
-at 5e-5 s. The converged references are computed once and kept in ``OUT/peer_references.npz``.
+at 5e-5 s. The rotating beam (its own table): a reduced spatial floating-frame beam with the linear strain
+and no rotary inertia on a hub turning at 2 rad/s, 10 s, against exudyn's ``ObjectFFRFreducedOrder`` given the
+same nodes, translational mass, reduced stiffness and basis (:mod:`skfem_flex.apps.peer_ffrf_beam`: one reduced
+model), CPU µs per step at 1e-2 and 1e-3 s, our trapezoidal rule and energy-momentum against exudyn's trapezoidal
+rule and generalized-α, errors of the tip against our trapezoidal run at 2.5e-4 s. The converged references are
+computed once and kept in ``OUT/peer_references.npz``.
 
 Run ``python examples/benchmark_peers.py [--repeat 3] [--only TEXT] [--out DIR]`` (``--only``: the problems
-whose label holds TEXT; "reduced rotor" for the rotor's table); writes ``OUT/side_by_side.md`` (default
+whose label holds TEXT; "reduced rotor" for the rotor's table, "rotating beam" for the beam's); writes ``OUT/side_by_side.md`` (default
 ``examples/output``). ``examples/benchmark.py`` runs the same tables after its own.
 
 Quick mode (``SKFEM_FLEX_EXAMPLE_QUICK=1``, used by the tests): every problem for 0.01–0.05 s (of the spatial
-chains the 10-body one only; the rotor at its first step only) against references of that length (kept under
+chains the 10-body one only; the rotor at its first step only; the rotating beam for 0.05 s, its first row) against references of that length (kept under
 their own names in ``peer_references.npz``; exudyn's flexible-pendulum reference on 32 elements instead of 64).
 Without exudyn the script says so in one line.
 """
@@ -302,6 +307,97 @@ def reduced_rotor_table(rows, repeat):
     return "\n".join(lines) + "\n"
 
 
+#: the reduced rotating beam's group (:mod:`skfem_flex.apps.peer_ffrf_beam`): its label (``--only`` matches a part of
+#: it), simulated seconds, reference step (s)
+FFRF_BEAM = ("rotating beam (reduced floating frame: linear strain, ρI = 0, 8 clamped modes + stretch = 9 elastic "
+             "coordinates; tip in the hub frame)")
+FFRF_BEAM_T = 0.05 if QUICK else 10.0
+FFRF_BEAM_REF_DT = 2.5e-4
+#: its rows: (our Δt, our scheme, exudyn's Δt, exudyn's scheme, ρ∞), ours at exudyn's relative Newton tolerance,
+#: 1e-8: the same trapezoidal rule at the same step (the same numbers), energy-momentum against generalized-α
+#: at the same step and at the step where our error is exudyn's, and both rules at a step 10× smaller
+#: (quick mode: the first row only)
+FFRF_BEAM_ROWS = ((1e-2, "trapezoidal", 1e-2, "trapezoidal", 1.0),
+                  (1e-2, "energy-momentum", 1e-2, "generalized-alpha", 0.9),
+                  (1 / 110, "energy-momentum", 1e-2, "generalized-alpha", 0.9),
+                  (1e-3, "trapezoidal", 1e-3, "trapezoidal", 1.0),
+                  (1e-3, "energy-momentum", 1e-3, "generalized-alpha", 0.9))[:1 if QUICK else None]
+
+
+def ffrf_beam_rows(out, repeat=3):
+    """The rotating beam side by side (:mod:`skfem_flex.apps.peer_ffrf_beam`: our reduced spatial floating-frame
+    beam and exudyn's ``ObjectFFRFreducedOrder`` with the same nodes, translational mass, reduced stiffness and
+    basis: one reduced model), every step recorded on both sides, alternating, median of ``repeat``.
+
+    Rows (our Δt, our scheme, our µs/step, with the Python probe, our Newton it/step, exudyn's Δt, scheme, µs/step,
+    Newton it/step, ratio per step, ratio per run, our error (m), exudyn's error (m)). Time = CPU time
+    (:func:`time.process_time`): exudyn's around its solve; ours, that of the run and of the probe taken from
+    the recorded coordinates (one matrix product, :func:`~skfem_flex.apps.peer_ffrf_beam.tip_map`) less that of a
+    3-step run of the same (the set-up both share); "with the Python probe": the same with the scene's probe
+    called at every recorded step instead. Error: the largest distance over the run of the tip's displacement
+    in the hub frame from our trapezoidal run at Δt = 2.5e-4 s (the two codes' trapezoidal runs agree to
+    round-off at equal steps, so the reference is either's)."""
+    from skfem_flex.apps import peer_ffrf_beam
+
+    suffix = "_quick" if QUICK else ""
+    t_end, data = FFRF_BEAM_T, peer_ffrf_beam.beam_data()
+    G = peer_ffrf_beam.tip_map(data)
+    tight = sf.NewtonSettings(rtol=1e-8, ctol=1e-8, etol=1e-10)
+
+    def compute():
+        r = sf.simulate(peer_ffrf_beam.scene(data, probe=False), t_end=t_end, dt=FFRF_BEAM_REF_DT,
+                        scheme="trapezoidal", record_every=1)
+        return r.t, r.q[:, 12:] @ G.T
+    ref = _reference(out, "ffrf_rotating_beam" + suffix, compute)
+
+    def ours(dt, scheme, t, probe):
+        r = sf.simulate(peer_ffrf_beam.scene(data, probe=probe), t_end=t, dt=dt, scheme=scheme, newton=tight,
+                        record_every=1)
+        return r, (r.probes["tip"] if probe else r.q[:, 12:] @ G.T)
+
+    def cpu(make):
+        start = time.process_time()
+        result = make()
+        return time.process_time() - start, result
+    ours(1e-2, "trapezoidal", 3e-2, False)                        # compile or load our kernels
+    rows = []
+    for dt, scheme, peer_dt, peer_scheme, rho in FFRF_BEAM_ROWS:
+        n, peer_n = int(round(t_end / dt)), int(round(t_end / peer_dt))
+        peer_run = peer_ffrf_beam.rotating_beam(dt=peer_dt, t_end=t_end, scheme=peer_scheme, rho_inf=rho, data=data)
+        mine, mine_probe, theirs = [], [], []
+        for _ in range(repeat):             # alternate, so that both see the same machine load
+            for probe, into in ((False, mine), (True, mine_probe)):
+                start_up, _ = cpu(lambda: ours(dt, scheme, 3 * dt, probe))
+                whole, (res, tip) = cpu(lambda: ours(dt, scheme, t_end, probe))
+                into.append((whole - start_up) / (n - 3))
+            t, p, _ = peer_run()
+            theirs.append(peer_run.stats["cpu_seconds"] / peer_run.stats["steps"])
+        mine, mine_probe, peer_s = statistics.median(mine), statistics.median(mine_probe), statistics.median(theirs)
+        rows.append((dt, f"{scheme}, Newton rtol 1e-8", 1e6 * mine, 1e6 * mine_probe,
+                     float(np.mean(res.newton_iterations[1:])), peer_dt,
+                     f"{peer_scheme} {rho:g}" if peer_scheme == "generalized-alpha" else "trapezoidal, index 2",
+                     1e6 * peer_s, peer_run.stats["newton"] / peer_run.stats["steps"], mine / peer_s,
+                     mine * n / (peer_s * peer_n), _max_distance(res.t, tip, ref), _max_distance(t, p, ref)))
+    return rows
+
+
+def ffrf_beam_table(rows, repeat):
+    from skfem_flex.apps import peer
+    lines = [f"{FFRF_BEAM}, {FFRF_BEAM_T:g} s at Ω = 2 rad/s: ours (compiled) against exudyn {peer.version()}'s "
+             f"ObjectFFRFreducedOrder (C++ path) with the same nodes, translational mass, reduced stiffness and "
+             f"basis (one reduced model); CPU time per step, alternating, median of {repeat}, every step recorded "
+             f"on both sides (ours: the probe from the recorded coordinates; the next column with the scene's "
+             f"Python probe called at every step); error = largest distance over the run of the tip's "
+             f"displacement from our trapezoidal run at Δt = {FFRF_BEAM_REF_DT:g} s, m.", "",
+             "| our Δt (s) | our scheme | ours (µs/step) | ours with the Python probe (µs/step) | our Newton it/step "
+             "| exudyn Δt (s) | exudyn scheme | exudyn (µs/step) | exudyn Newton it/step | ratio ours/exudyn per step "
+             "| per run | our error (m) | exudyn error (m) |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+    lines += [f"| {dt:.4g} | {s} | {w:.0f} | {wp:.0f} | {it:.2f} | {pdt:g} | {ps} | {pw:.0f} | {pit:.2f} | {r:.2f} "
+              f"| {rr:.2f} | {e:.2e} | {pe:.2e} |" for dt, s, w, wp, it, pdt, ps, pw, pit, r, rr, e, pe in rows]
+    return "\n".join(lines) + "\n"
+
+
 def peer_rows(out, repeat=3, only=None):
     """Rows (problem, dt, our scheme, our compile and start-up s, ours s, peer scheme, peer s, ratio, our error,
     peer error).
@@ -358,6 +454,8 @@ def tables(out, repeat=3, only=None):
         parts.append(peer_table(rows, repeat))
     if only is None or only in REDUCED_ROTOR:
         parts.append(reduced_rotor_table(reduced_rotor_rows(out, repeat), repeat))
+    if only is None or only in FFRF_BEAM:
+        parts.append(ffrf_beam_table(ffrf_beam_rows(out, repeat), repeat))
     return "\n".join(parts)
 
 

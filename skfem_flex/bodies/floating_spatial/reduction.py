@@ -41,8 +41,23 @@ def _count(name, value, low, high):
 
 
 def _modes(K, M, keep, n):
-    """The n lowest modes of (K, M) on the index set ``keep`` (others held at zero), as full columns."""
-    vals, vecs = scipy.linalg.eigh(K[np.ix_(keep, keep)], M[np.ix_(keep, keep)], subset_by_index=(0, n - 1))
+    """The n lowest modes of (K, M) on the index set ``keep`` (others held at zero), as full columns.
+
+    Coordinates without mass (a beam's section rotations with ρI = 0) are condensed out statically, exact when
+    they carry no inertia: the modes of K_aa − K_ab K_bb⁻¹ K_ba with M_aa, each completed by −K_bb⁻¹ K_ba φ_a."""
+    Kk, Mk = K[np.ix_(keep, keep)], M[np.ix_(keep, keep)]
+    massless = ~np.any(Mk != 0.0, axis=1)
+    if not massless.any():
+        vecs = scipy.linalg.eigh(Kk, Mk, subset_by_index=(0, n - 1))[1]
+    else:
+        a, b = np.flatnonzero(~massless), np.flatnonzero(massless)
+        if n > a.size:
+            raise ValueError(f"{n} modes asked of a body with {a.size} coordinates that carry mass")
+        recover = -scipy.linalg.solve(Kk[np.ix_(b, b)], Kk[np.ix_(b, a)], assume_a="sym")
+        condensed = Kk[np.ix_(a, a)] + Kk[np.ix_(a, b)] @ recover
+        va = scipy.linalg.eigh(0.5 * (condensed + condensed.T), Mk[np.ix_(a, a)], subset_by_index=(0, n - 1))[1]
+        vecs = np.zeros((keep.size if hasattr(keep, "size") else len(keep), n))
+        vecs[a], vecs[b] = va, recover @ va
     out = np.zeros((K.shape[0], n))
     out[keep] = vecs
     return out
