@@ -145,3 +145,25 @@ def test_wheel_on_a_hinge_at_the_tip_of_a_bending_cantilever_keeps_its_spin():
         assert np.ptp(E) <= 1e-11 * np.abs(E).max() and tip.min() < -0.1
         drift.append(np.abs(spin - 30.0).max() / 30.0)
     assert drift[1] <= 5e-5 and 3.0 <= drift[0] / drift[1] <= 5.0
+
+
+@pytest.mark.parametrize("joint, closed_form", [("weld", 1.0 / 192.0), ("hinge", 7.0 / 768.0)])
+def test_statics_through_a_joint_to_another_body(joint, closed_form):
+    """The beam's frame welded at the root, its tip joined to a rigid block (welded to the ground) by a weld
+    (clamped–clamped) or by a hinge about the normal of the bending plane (propped: the hinge passes no moment
+    about its axis): the mid-span deflection under P is P L³/(192 EI) or 7 P L³/(768 EI) (1e-4); the rows
+    between the beam's tip and the block are product rows."""
+    sec = SpatialSection(EA=1e9, GA1=1e9, GA2=1e9, GJ=1e3, EI1=1e3, EI2=1e3, rhoA=1.0, rhoI1=1e-4, rhoI2=1e-4)
+    beam = TimoshenkoBeam3D(skfem.MeshLine(np.linspace(0.0, 2.0, 9)), sec, order=2)
+    body = FloatingBeam3D(beam, strain="linear")
+    block = sf.SpatialRigidBody(1.0, (0.1, 0.1, 0.1), position=(0.0, 0.0, 2.5), name="block")
+    P, L, EI = 1e-3, 2.0, 1e3
+    end = block.point((0.0, 0.0, -0.5))
+    held = (sf.Weld3D(body.point(L), end) if joint == "weld" else
+            sf.Revolute3D(body.point(L), end, axis=(0.0, 1.0, 0.0)))
+    assert held.products is not None
+    scene = sf.Scene([body, block], constraints=[sf.Weld3D(body.point(0.0)), sf.Weld3D(end), held],
+                     forces=[sf.SpatialPointForce(body.point(1.0), (P, 0.0, 0.0))])
+    q = scene.coordinates(body, sf.static_equilibrium(scene).q)
+    mid = body.point(1.0)
+    assert (mid.position(q) - mid.position(body.q0))[0] == pytest.approx(closed_form * P * L ** 3 / EI, rel=1e-4)

@@ -51,20 +51,22 @@ class Data(NamedTuple):
     cols: np.ndarray
     ppos: np.ndarray
     cpos: np.ndarray
-    prods: np.ndarray       # (P, 8): the factor a's pair terms [p0, p1), linear terms [l0, l1); then s's
+    prods: np.ndarray       # (P, 12): the factor a's pair terms [p0, p1), linear terms [l0, l1); then s's;
+    #                         then the slots a touches [sup0, sup1) in ``sup``, and those s touches
     pconst: np.ndarray      # (2P,) c of a and of s, term after term
     bpos: np.ndarray        # per row its nc × nc block of places in the Newton matrix's values
+    sup: np.ndarray         # the slots of each factor's coordinates (its support), factor after factor
 
 
 @numba.njit(cache=True, _nrt=False)
 def view_of(fam):
     return Data(i2(fam, 0), f1(fam, 1), i1(fam, 2), i1(fam, 3), i1(fam, 4), i1(fam, 5), f1(fam, 6), i1(fam, 7),
                 i1(fam, 8), f1(fam, 9), i1(fam, 10), i1(fam, 11), i1(fam, 12), i2(fam, 13), f1(fam, 14),
-                i1(fam, 15))
+                i1(fam, 15), i1(fam, 16))
 
 
 def pack(items, packer):
-    rows, const, prods, pconst = [], [], [], []
+    rows, const, prods, pconst, sup = [], [], [], [], []
     terms = TermLists()
     row_support, couplings = [], []
     nblock = 0
@@ -92,6 +94,9 @@ def pack(items, packer):
                 terms.add(idx, slot, fa, ba)
                 entry += [len(terms.pi), len(terms.pi) + fs[0].size, len(terms.li), len(terms.li) + fs[3].size]
                 terms.add(idx, slot, fs, bs)
+                for f in (fa, fs):
+                    entry += [len(sup), len(sup) + np.unique(np.concatenate([f[0], f[1], f[3]])).size]
+                    sup += [slot[int(t)] for t in np.unique(np.concatenate([f[0], f[1], f[3]]))]
                 prods.append(entry)
                 pconst += [float(ca), float(cs)]
             rows.append((first + k, p0, p0 + base[0].size, l0, l0 + base[3].size, t0, len(prods), len(terms.cols),
@@ -102,8 +107,8 @@ def pack(items, packer):
             row_support.append((first + k, idx[touched]))
             couplings.append(idx[touched])
     base_data = terms.data(rows, 10, const)
-    data = Data(*base_data, np.asarray(prods, dtype=np.int64).reshape(-1, 8), np.asarray(pconst, dtype=float),
-                -np.ones(nblock, dtype=np.int64))
+    data = Data(*base_data, np.asarray(prods, dtype=np.int64).reshape(-1, 12), np.asarray(pconst, dtype=float),
+                -np.ones(nblock, dtype=np.int64), np.asarray(sup, dtype=np.int64))
     return FamilyPack(data=data, count=len(rows), couplings=couplings, rows=row_support,
                       finish=lambda layout: _with_blocks(data, layout))
 
@@ -150,7 +155,7 @@ def _evaluate(ctx, d):
         for t in range(t0, t1):
             for u in range(3 * nc, 9 * nc):
                 scratch[u] = 0.0
-            ap0, ap1, al0, al1, sp0, sp1, sl0, sl1 = d.prods[t]
+            ap0, ap1, al0, al1, sp0, sp1, sl0, sl1, as0, as1, ss0, ss1 = d.prods[t]
             a1 = d.pconst[2 * t] + add_form(st, d, ap0, ap1, al0, al1, q1, qa, qb, v1, ga, dma, hva, evaluate, 0.0)
             s1 = d.pconst[2 * t + 1] + add_form(st, d, sp0, sp1, sl0, sl1, q1, qa, qb, v1, gs, dms, hvs, evaluate,
                                                 0.0)
@@ -171,9 +176,17 @@ def _evaluate(ctx, d):
             if evaluate and e != 0.0:
                 _add_pairs(st, d, sp0, sp1, e * abar)
                 _add_pairs(st, d, ap0, ap1, e * sbar)
-                for u in range(nc):
-                    for x in range(nc):
-                        add_pos(st, d.bpos[b0 + u * nc + x], e * (dms[u] * ga[x] + dma[u] * gs[x]))
+                # the outer products over the factors' supports only: ∇s(q_m) ∇a(q_b)ᵀ + ∇a(q_m) ∇s(q_b)ᵀ
+                for i in range(ss0, ss1):
+                    u = d.sup[i]
+                    for k in range(as0, as1):
+                        x = d.sup[k]
+                        add_pos(st, d.bpos[b0 + u * nc + x], e * dms[u] * ga[x])
+                for i in range(as0, as1):
+                    u = d.sup[i]
+                    for k in range(ss0, ss1):
+                        x = d.sup[k]
+                        add_pos(st, d.bpos[b0 + u * nc + x], e * dma[u] * gs[x])
         phi_t, phi_tt = 0.0, 0.0
         if col >= 0:
             val -= trow[col]

@@ -163,6 +163,16 @@ class ProductRows:
             out[p.row] += p.a.value(q) * p.s.gradient(q) + p.s.value(q) * p.a.gradient(q)
         return out
 
+    def jacobians(self, Q):
+        """:meth:`jacobian` at many states Q (N, n) at once: (N, m, n)."""
+        out = np.zeros((Q.shape[0], self.m, self.n))
+        for p in self.terms:
+            ga, gs = Q @ p.a.H + p.a.b, Q @ p.s.H + p.s.b                      # H symmetric
+            va = 0.5 * np.einsum("Ni,Ni->N", Q, ga + p.a.b) + p.a.c
+            vs = 0.5 * np.einsum("Ni,Ni->N", Q, gs + p.s.b) + p.s.c
+            out[:, p.row] += va[:, None] * gs + vs[:, None] * ga
+        return out
+
     def hessian_product(self, q, mu):
         """Σ_k μ_k ∇²Φ_k: ∇²(a s) = a H_s + s H_a + ∇a ∇sᵀ + ∇s ∇aᵀ."""
         out = np.zeros((self.n, self.n))

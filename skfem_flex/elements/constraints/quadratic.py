@@ -362,10 +362,11 @@ def spatial_reaction(constraint, body, where, point, q, lam):
     q, lam = np.asarray(q, dtype=float), np.asarray(lam, dtype=float)
     one = q.ndim == 1
     q, lam = np.atleast_2d(q), np.atleast_2d(lam)
-    if getattr(constraint, "products", None) is None:
-        jac = constraint._wide(np.einsum("kij,Nj->Nki", constraint.H, q[:, constraint.columns]) + constraint.b)
-    else:
-        jac = np.array([constraint.jacobian(row, 0.0) for row in q])
+    qc = q[:, constraint.columns]
+    local = np.einsum("kij,Nj->Nki", constraint.H, qc) + constraint.b
+    if getattr(constraint, "products", None) is not None:
+        local = local + constraint.products.jacobians(qc)
+    jac = constraint._wide(local)
     f = -np.einsum("Nk,Nki->Ni", lam, jac)[:, where]
     qb = q[:, where]
     positions, directors = body.vector_layout()
