@@ -84,3 +84,30 @@ def em_reference(body, q0, q1, v0, v1, h, gravity=None):
         gp = gp + body.gravity_discrete_gradient(q0, q1, gravity)[0]
     scale = max(np.abs(p1).max(), np.abs(p0).max(), h * np.abs(gk).max(), h * np.abs(gp).max())
     return p1 - p0 + h * gp - h * gk, scale
+
+
+def assert_constraint_contract(scene, scheme, seed=3, h=0.02):
+    """At a random state, unknowns and multipliers: the Newton matrix is the central difference of the residual
+    (:func:`fd_mismatch` < 1e-9); the constraint force r(μ) − r(0) is the constraints' D(q₀, q₁)ᵀμ (energy-momentum)
+    or Φ_q(q₁)ᵀμ (Newmark), and the rows (but the trapezoidal rule's velocity rows) are Φ(q₁)."""
+    from helpers import random_scene_state
+
+    rng = np.random.default_rng(seed)
+    q0, v0 = random_scene_state(scene, rng)
+    m, nf = scene.n_constraints, scene.n
+    st = loaded_stepper(scene, scheme, q0, v0, acc=rng.normal(size=q0.size))
+    dq = h * v0 + 1e-2 * rng.normal(size=nf)
+    mu = rng.normal(size=m)
+    mismatch, r, _ = fd_mismatch(st, 0.0, h, np.concatenate([dq, mu]))
+    assert mismatch < 1e-9
+    r0 = st.evaluate(0.0, h, np.concatenate([dq, np.zeros(m)]))[0]
+    q1 = q0 + dq
+    if scheme == "energy-momentum":
+        dmat = dense(scene.constraint_discrete_gradient(q0, q1, h))
+    else:
+        dmat = dense(scene.constraint_jacobian(q1, h))
+    force = dmat.T @ mu
+    assert np.abs((r - r0)[:nf] - force).max() <= 1e-10 * np.abs(force).max()
+    if scheme != "trapezoidal":
+        rows = scene.constraint_value(q1, h)
+        assert np.abs(r[nf:] - rows).max() <= 1e-10 * max(np.abs(dmat).max() * np.abs(q1).max(), 1.0)
