@@ -40,7 +40,13 @@ def joints():
             ("weld", sf.Weld3D(tip, root_b), [3, 4, 5]),
             ("distance", sf.Distance3D(tip, r.point((0.0, 0.0, 0.5))), [0]),
             ("translation driver", sf.TranslationDriver(tip, end_r, axis=(0, 0, 1),
-                                                        law=sf.MotionLaw.constant_rate(0.1)), [0])]
+                                                        law=sf.MotionLaw.constant_rate(0.1)), [0]),
+            # against the ground: a difference of the material point and a fixed one, dotted (no symmetry left)
+            ("cylindrical to the ground", sf.Cylindrical(tip, None, axis=(0, 0, 1)), []),
+            ("prismatic to the ground", sf.Prismatic3D(tip, None, axis=(0, 0, 1)), []),
+            ("distance to the ground", sf.Distance3D(tip, None, anchor=(0.0, 1.0, 2.0)), []),
+            ("translation driver to the ground", sf.TranslationDriver(tip, None, axis=(1, 0, 0),
+                                                                      law=sf.MotionLaw.constant_rate(0.1)), [])]
 
 
 def _dense(m):
@@ -62,7 +68,7 @@ def _turn(c, q, w, shift):
     return out
 
 
-@pytest.mark.parametrize("case", range(9))
+@pytest.mark.parametrize("case", range(13))
 def test_product_rows_exact_discrete_gradient_derivatives_and_invariance(case):
     name, c, invariant = joints()[case]
     assert c.products is not None and c.compiled_form()[0] == "product" and not c.quadratic, name
@@ -79,9 +85,30 @@ def test_product_rows_exact_discrete_gradient_derivatives_and_invariance(case):
     assert relerr(_dense(c.discrete_gradient_jacobian(q0, q1, mu, t)),
                   central_jacobian(lambda z: c.discrete_gradient(q0, z, t).T @ mu, q1)) <= 1e-7
     qm = 0.5 * (q0 + q1)
-    for e in np.eye(3):
+    for e in np.eye(3) if invariant else ():
         for rate in (_turn(c, qm, e, np.zeros(3)), _turn(c, qm, np.zeros(3), e)):
             assert np.abs(D[invariant] @ rate).max() <= 1e-14 * np.abs(D).max() * np.abs(qm).max(), name
+    # a row dropped (a redundant joint's): the others' values and discrete gradient unchanged
+    if c.n_equations > 1:
+        fewer = c.without_equations([0])
+        assert np.abs(fewer.value(q1, t) - c.value(q1, t)[1:]).max() <= 1e-15 * max(1.0, np.abs(jump).max())
+        assert np.abs(fewer.discrete_gradient(q0, q1, t) - D[1:]).max() <= 1e-15 * np.abs(D).max()
+
+
+def test_factored_form_is_the_quadratic_form():
+    """A material point's and a section direction's factored form (product rows) and quadratic form (quadratic
+    rows) are one vector, at a turned and bent state; the position is the point's own ``position``."""
+    a, _, _ = bodies()
+    rng = np.random.default_rng(11)
+    q = a.q0 + 0.05 * rng.normal(size=a.n_dofs)
+    point = a.point(1.3)
+    for vector in (point, point.direction((0.6, 0.0, 0.8))):
+        H, A, c = vector.quadratic()
+        A0, a0, terms = vector.factored()
+        factored = A0 @ q + a0 + sum((beta @ q + gamma) * (W @ q) for beta, gamma, W in terms)
+        assert np.abs(factored - (0.5 * np.einsum("cij,i,j->c", H, q, q) + A @ q + c)).max() <= 1e-14
+    A0, a0, terms = point.factored()
+    assert np.abs(A0 @ q + a0 + sum((b @ q + g) * (W @ q) for b, g, W in terms) - point.position(q)).max() <= 1e-14
 
 
 def test_hinge_rows_are_the_turned_section_directions():
@@ -164,9 +191,14 @@ def test_statics_through_a_joint_to_another_body(joint, closed_form):
     assert held.products is not None
     scene = sf.Scene([body, block], constraints=[sf.Weld3D(body.point(0.0)), sf.Weld3D(end), held],
                      forces=[sf.SpatialPointForce(body.point(1.0), (P, 0.0, 0.0))])
-    q = scene.coordinates(body, sf.static_equilibrium(scene).q)
+    state = sf.static_equilibrium(scene)
+    q = scene.coordinates(body, state.q)
     mid = body.point(1.0)
     assert (mid.position(q) - mid.position(body.q0))[0] == pytest.approx(closed_form * P * L ** 3 / EI, rel=1e-4)
+    if joint == "hinge":                        # the propped end's reaction on the beam, −5P/16
+        rows = scene.constraint_layout[scene.constraints.index(held)][1]
+        assert held.reaction(state.q[np.r_[scene.slice(body), scene.slice(block)]], state.lam[rows])[0] == \
+            pytest.approx(-5 * P / 16, rel=1e-3)
 
 
 def test_hinge_at_a_rigid_interface_of_a_meshed_solid():

@@ -311,8 +311,8 @@ def test_joints_with_an_axis_at_a_point_of_the_axis_hold_it_against_the_ground(j
     assert np.abs(u - body.point(L).turned(qr, kinetics.split(body.q0)[1].T @ e)[0]).max() <= 1e-14
     r = sf.simulate(scene, 0.05, 0.01)
     assert not r.run_path["python_elements"]
-    # between two material points the hinge's rows are cubic and quartic: products of invariants
-    # (tests/test_ffrf_axis_joints.py), through their Python methods
+    # between two material points the hinge's rows are cubic and quartic: products of invariants, in their own
+    # compiled family (tests/test_ffrf_axis_joints.py)
     other = FloatingBeam3D(beam, strain="linear", position=(0.0, 0.0, 2.0), name="other")
     assert sf.Revolute3D(body.point(L), other.point(0.0), axis=(0, 1, 0)).compiled_form()[0] == "product"
 

@@ -56,7 +56,7 @@ def _modes(K, M, keep, n):
         recover = -scipy.linalg.solve(Kk[np.ix_(b, b)], Kk[np.ix_(b, a)], assume_a="sym")
         condensed = Kk[np.ix_(a, a)] + Kk[np.ix_(a, b)] @ recover
         va = scipy.linalg.eigh(0.5 * (condensed + condensed.T), Mk[np.ix_(a, a)], subset_by_index=(0, n - 1))[1]
-        vecs = np.zeros((keep.size if hasattr(keep, "size") else len(keep), n))
+        vecs = np.zeros((len(keep), n))
         vecs[a], vecs[b] = va, recover @ va
     out = np.zeros((K.shape[0], n))
     out[keep] = vecs

@@ -33,6 +33,7 @@ FORMS = ("product",)
 
 
 def row_count(term):
+    """The equations of one constraint's form."""
     return int(np.shape(term[2])[0])
 
 
@@ -60,12 +61,16 @@ class Data(NamedTuple):
 
 @numba.njit(cache=True, _nrt=False)
 def view_of(fam):
+    """The family record's arrays as :class:`Data`."""
     return Data(i2(fam, 0), f1(fam, 1), i1(fam, 2), i1(fam, 3), i1(fam, 4), i1(fam, 5), f1(fam, 6), i1(fam, 7),
                 i1(fam, 8), f1(fam, 9), i1(fam, 10), i1(fam, 11), i1(fam, 12), i2(fam, 13), f1(fam, 14),
                 i1(fam, 15), i1(fam, 16))
 
 
 def pack(items, packer):
+    """The rows of every item (``("product", H, b, c, laws, columns, products)``) in one :class:`Data`: per row its
+    base form and its product terms' two forms as pair and linear terms over the row's touched coordinates
+    (``cols``), each factor's support, and a law's columns."""
     rows, const, prods, pconst, sup = [], [], [], [], []
     terms = TermLists()
     row_support, couplings = [], []
@@ -137,6 +142,7 @@ def _add_pairs(st, d, p0, p1, e):
 
 @numba.njit(cache=True, _nrt=False)
 def _evaluate(ctx, d):
+    """Every row at the context's states (module docstring), written by :func:`..rows.write_row`."""
     q1, qa, qb, v1, mu, trow, scratch, w, evaluate = row_states(ctx)
     st = storage_of(ctx)
     n_rows = d.rows.shape[0]
@@ -159,14 +165,15 @@ def _evaluate(ctx, d):
             a1 = d.pconst[2 * t] + add_form(st, d, ap0, ap1, al0, al1, q1, qa, qb, v1, ga, dma, hva, evaluate, 0.0)
             s1 = d.pconst[2 * t + 1] + add_form(st, d, sp0, sp1, sl0, sl1, q1, qa, qb, v1, gs, dms, hvs, evaluate,
                                                 0.0)
+            # a(q_b) − a(q_a) = ∇a(q_m)·(q_b − q_a) exactly; a(q_b) = a(q₁) as q_b = q₁ in every scheme (..tasks)
             da, ds, gav, gsv = 0.0, 0.0, 0.0, 0.0
             for u in range(nc):
                 j = cols[u]
                 gav += ga[u] * v1[j]
                 gsv += gs[u] * v1[j]
-                if evaluate:                        # q_a is set for TASK_EVAL only
-                    da += dma[u] * (q1[j] - qa[j])
-                    ds += dms[u] * (q1[j] - qa[j])
+                if evaluate:                        # q_a, q_b are set for TASK_EVAL only
+                    da += dma[u] * (qb[j] - qa[j])
+                    ds += dms[u] * (qb[j] - qa[j])
             abar, sbar = a1 - 0.5 * da, s1 - 0.5 * ds
             val += a1 * s1
             for u in range(nc):
@@ -201,4 +208,5 @@ def _kernel(ctx_p, fam_p):
 
 
 def kernel():
+    """The compiled kernel (from the cache, or compiled now)."""
     return compiled_kernel(_kernel, "the product-constraint family")

@@ -23,7 +23,8 @@ satisfies D (q₁ − q₀) = Φ(q₁) − Φ(q₀): the joint does no work in t
 invariant of a common rotation and translation of all bodies (t_i depends on y only; s_m is a dot product of
 directors or of differences of points, grouped by the t-monomial they multiply), and the gradient of an
 invariant at q_m is orthogonal to the symmetry's action at q_m; D is a combination of such gradients, so
-the joint's forces conserve linear and angular momentum as well. (The product rule applied to the vectors,
+the forces of these rows conserve linear and angular momentum as well (a joint's point-coincidence rows
+r_a − r_b = 0 are quadratic but no invariants: angular momentum to O(Δt²)). (The product rule applied to the vectors,
 ū·∇w + w̄·∇u, is exact for the energy too, but the means ū of vectors are not the vectors at q_m, and
 angular momentum drifts.)
 """
@@ -44,9 +45,11 @@ class QuadraticScalar(NamedTuple):
     c: float
 
     def value(self, q):
+        """φ(q)."""
         return 0.5 * q @ self.H @ q + self.b @ q + self.c
 
     def gradient(self, q):
+        """∇φ(q) = H q + b."""
         return self.H @ q + self.b
 
     def columns(self):
@@ -54,9 +57,11 @@ class QuadraticScalar(NamedTuple):
         return np.any(self.H != 0.0, axis=0) | (self.b != 0.0)
 
     def restricted(self, cols):
+        """φ over the coordinates ``cols`` only (the others must not be touched)."""
         return QuadraticScalar(self.H[np.ix_(cols, cols)], self.b[cols], self.c)
 
     def scaled(self, f):
+        """f φ."""
         return QuadraticScalar(f * self.H, f * self.b, f * self.c)
 
 
@@ -78,10 +83,12 @@ class PolynomialRows(NamedTuple):
     products: tuple = ()
 
     def scaled(self, f):
+        """The equations times f (each product term's factor a scaled)."""
         return PolynomialRows(f * self.H, f * self.b, f * self.c,
                               tuple(ProductTerm(p.row, p.a.scaled(f), p.s) for p in self.products))
 
     def value(self, q):
+        """Every equation's value at q."""
         out = 0.5 * np.einsum("kij,i,j->k", self.H, q, q) + self.b @ q + self.c
         for p in self.products:
             out[p.row] += p.a.value(q) * p.s.value(q)
@@ -102,25 +109,43 @@ def _factor_product(f, g):
 
 
 def product_dot(u, w, value=0.0):
-    """u·w − value as one :class:`PolynomialRows` equation, for vectors in *factored form*
-    (A₀, a₀, terms): v(q) = A₀ q + a₀ + Σ_j t_j(q) W_j q with terms (β_j, γ_j, W_j), t_j = β_j·q + γ_j.
+    """u·w − value as one :class:`PolynomialRows` equation.
 
     u·w = P_u·P_w + Σ_k t'_k (P_u·W'_k q) + Σ_j t_j (W_j q·P_w) + Σ_jk t_j t'_k (W_j q·W'_k q) with P = A₀q + a₀:
-    the first is the quadratic part, each other sum a product term (factor, dot product)."""
+    the first is the quadratic part, each other sum a product term (factor, dot product). For u·u the terms
+    that are equal are taken once, with weight 2.
+
+    Parameters
+    ----------
+    u, w : tuple
+        Vectors in *factored form* (A₀ (3, n), a₀ (3,), terms): v(q) = A₀ q + a₀ + Σ_j t_j(q) W_j q with terms
+        ((β_j (n,), γ_j, W_j (3, n)), ...), t_j = β_j·q + γ_j an invariant scalar (elastic coordinates only).
+    value : float
+        The constant subtracted.
+
+    Returns
+    -------
+    PolynomialRows
+        One equation.
+    """
     (Au, au, tu), (Aw, aw, tw) = u, w
+    same = u is w
     n = Au.shape[1]
     base = _affine_dot(Au, au, Aw, aw)
     zero = np.zeros(3)
     products = []
-    for beta, gamma, W in tw:
+    if not same:
+        for beta, gamma, W in tw:
+            a = QuadraticScalar(np.zeros((n, n)), beta, gamma)
+            products.append(ProductTerm(0, a, _affine_dot(Au, au, W, zero)))
+    for j, (beta, gamma, W) in enumerate(tu):
         a = QuadraticScalar(np.zeros((n, n)), beta, gamma)
-        products.append(ProductTerm(0, a, _affine_dot(Au, au, W, zero)))
-    for beta, gamma, W in tu:
-        a = QuadraticScalar(np.zeros((n, n)), beta, gamma)
-        products.append(ProductTerm(0, a, _affine_dot(W, zero, Aw, aw)))
-        for beta2, gamma2, W2 in tw:
-            products.append(ProductTerm(0, _factor_product((beta, gamma), (beta2, gamma2)),
-                                        _affine_dot(W, zero, W2, zero)))
+        products.append(ProductTerm(0, a.scaled(2.0) if same else a, _affine_dot(W, zero, Aw, aw)))
+        for k, (beta2, gamma2, W2) in enumerate(tw):
+            if same and k < j:
+                continue
+            a2 = _factor_product((beta, gamma), (beta2, gamma2))
+            products.append(ProductTerm(0, a2.scaled(2.0) if same and k > j else a2, _affine_dot(W, zero, W2, zero)))
     return PolynomialRows(base.H[None], base.b[None], np.array([base.c - float(value)]), tuple(products))
 
 
@@ -151,6 +176,7 @@ class ProductRows:
         return ProductRows([p._replace(row=where[p.row]) for p in self.terms if p.row in where], len(where), self.n)
 
     def value(self, q):
+        """Σ a s per equation at q."""
         out = np.zeros(self.m)
         for p in self.terms:
             out[p.row] += p.a.value(q) * p.s.value(q)

@@ -7,9 +7,15 @@ Each equation k is a polynomial of degree two in the constraint's local coordina
 with a symmetric H_k and an optional motion law s_k(t). Then Φ_q = H q + b, the Hessian product is
 Σ μ_k H_k, and the mid-point Jacobian D = H (q₀ + q₁)/2 + b is an *exact* discrete gradient:
 D (q₁ − q₀) = Φ(q₁) − Φ(q₀) for any step. The energy–momentum scheme therefore lets no spatial joint do
-work, and since every equation here is invariant under a common rotation of all position vectors
-(dot products and differences of points and directors), its mid-point gradient conserves the angular
-momentum too.
+work. Between affine vectors (rigid bodies, beam nodes, a floating frame's own points) every equation is
+invariant under a common rotation of all position vectors (dot products and differences of points and
+directors), and its mid-point gradient conserves the angular momentum too.
+
+At a floating-frame body's material point (quadratic in q) an equation may gain products of two quadratic
+invariants, Φ_k + Σ_m a_m s_m (:mod:`.product_rows`, with the product rule's exact discrete gradient): a
+material direction against a moving one, a difference of points dotted with a direction. The coincidence of
+such a point with another, r_a − r_b = 0, stays quadratic but is not an invariant: its mid-point gradient
+keeps the energy and the linear momentum, the angular momentum to O(Δt²).
 
 Equations are built from *affine vectors* u(q) = A q + a (:class:`Affine`: a body point, a body-fixed
 direction, a ground point or direction): ``u.equals(w)`` gives three linear equations,
@@ -184,7 +190,8 @@ def _law(law, name):
 
 
 class QuadraticConstraint(Constraint):
-    """Equations Φ_k = ½ qᵀ H_k q + b_k·q + c_k − s_k(t) (module docstring).
+    """Equations Φ_k = ½ qᵀ H_k q + b_k·q + c_k − s_k(t), plus Σ_m a_m(q) s_m(q) on rows with product terms
+    (module docstring).
 
     Parameters
     ----------
@@ -203,7 +210,7 @@ class QuadraticConstraint(Constraint):
     products : sequence of ProductTerm, optional
         Terms a_m(q) s_m(q) added to their rows, over all n local coordinates (:mod:`.product_rows`: axes at
         floating-frame material points against moving bodies). The equations are then not quadratic: their
-        discrete gradient is the product rule's, and they run through their own methods in compiled loops.
+        discrete gradient is the product rule's, and the product-rows family packs them.
     """
 
     quadratic = True
@@ -330,6 +337,8 @@ class QuadraticConstraint(Constraint):
         new.laws = [self.laws[k] for k in keep]
         if self.products is not None:
             new.products = self.products.without_rows(keep)
+            if not new.products.terms:          # every product row dropped: quadratic again
+                new.products, new.quadratic = None, True
         new.rheonomic = any(law is not None for law in new.laws)
         new.n_equations = int(keep.size)
         return new

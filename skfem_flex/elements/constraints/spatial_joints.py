@@ -2,7 +2,9 @@ r"""Spatial joints between the points of spatial bodies, or a body point and the
 
 Every joint is a :class:`~.quadratic.QuadraticConstraint`: its equations are differences of points
 (linear) and dot products of points and body-fixed directions (quadratic), so its mid-point Jacobian is
-an exact discrete gradient (``docs/spatial.md``). Axes are given in **space axes at the initial state**
+an exact discrete gradient (``docs/spatial.md``). At a floating-frame body's material point a dot product
+with a moving direction, or of a difference of points, is cubic or quartic: product rows with the product
+rule's exact discrete gradient (:mod:`.product_rows`, ``docs/spatial_floating_beam.md``). Axes are given in **space axes at the initial state**
 and fixed in each body from there; a joint must hold at the initial state (the scene's consistent start
 projects small misfits away).
 
