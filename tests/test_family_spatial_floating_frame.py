@@ -323,3 +323,38 @@ def test_a_users_strain_object_runs_in_python():
     ref = sf.simulate(gravity_scene(beam()), 0.05, 0.01)
     assert not ref.run_path["python_elements"]
     assert rel_dev(res.q, ref.q) < RUN_TOL
+
+
+@pytest.mark.parametrize("mode", [kernel.EM, kernel.NEWMARK])
+def test_residual_only_terms_are_the_full_terms(mode):
+    """``body_terms(..., residual=True)`` (an evaluation whose matrix the loop does not use) gives the same
+    momentum, discrete gradients, M(q₁), ∂g_p/∂q and energy as the full evaluation, and no kinetic derivatives."""
+    body = beam()
+    data = body.compiled_kernel_data()
+    kd = data.frame._replace(g=np.array(GRAVITY))
+    rng = np.random.default_rng(4)
+    (q0, v0), (q1, v1) = random_state(body, rng), random_state(body, rng)
+    a1 = rng.normal(size=q0.size)
+    full = kernel.body_terms(kd, data.quartic, mode, q0, q1, v0, v1, a1, q0, q1)
+    part = kernel.body_terms(kd, data.quartic, mode, q0, q1, v0, v1, a1, q0, q1, True)
+    for k in (0, 1, 2, 3, 7, 8):                        # p, g_k, g_p, M(q₁), ∂g_p/∂q, V
+        assert np.array_equal(np.asarray(full[k]), np.asarray(part[k]))
+    assert not np.any(part[4]) and not np.any(part[5])  # ∂p/∂q and ∂g_k/∂q are not formed
+    assert np.any(full[4]) and np.any(full[5])
+
+
+def test_residual_only_checks_change_no_iterate(monkeypatch):
+    """A reduced beam whose steps converge in one iteration: the loop checks its updates with residual-only
+    evaluations (``RESIDUAL_ONLY``); the trajectory and the iterations are those of full evaluations."""
+    from skfem_flex.apps import peer_ffrf_beam
+    from skfem_flex.compiled.families import spatial_floating_frame as family
+
+    data = peer_ffrf_beam.beam_data()
+    scheme = sf.Trapezoidal(newton=sf.NewtonSettings(rtol=1e-8, ctol=1e-8, etol=1e-10))
+    runs = []
+    for lazy in (True, False):
+        monkeypatch.setattr(family, "RESIDUAL_ONLY", lazy)
+        runs.append(sf.simulate(peer_ffrf_beam.scene(data, probe=False), 0.3, 0.01, scheme=scheme))
+    assert np.all(runs[0].newton_iterations[1:] == 1)           # so the residual-only checks did run
+    assert np.array_equal(runs[0].newton_iterations, runs[1].newton_iterations)
+    assert np.abs(runs[0].q - runs[1].q).max() <= 1e-14 * np.abs(runs[1].q).max()

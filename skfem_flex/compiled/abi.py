@@ -87,6 +87,10 @@ CONTEXT_FIELDS = (
     ("status", "i"), ("bad_family", "i"), ("refusal", "i"),
     # a float pool kernels may use during one call
     ("scratch", "i"), ("nscratch", "i"),
+    # 1 when an evaluation is to form the Newton matrix; 0 when only its residual is used (the check of an
+    # update: the loop points ``mat`` at ``mat_spare``, which nobody reads, and a family may skip its
+    # derivatives, :data:`..compiled.families` ``RESIDUAL_ONLY``)
+    ("fresh", "i"), ("mat_spare", "i"),
 )
 CONTEXT = _record(*CONTEXT_FIELDS)
 CONTEXT_TYPE = numba.from_dtype(CONTEXT)

@@ -15,7 +15,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from ..numerics.newton import CONVERGED, EVALUATE, newton_evaluated, newton_reset, newton_solved
+from ..numerics.newton import CONVERGED, EVALUATE, SOLVE, newton_evaluated, newton_reset, newton_solved
 from .abi import CONTEXT, FAMILY, call, call_families, fvec
 from .points import NB, OFF, maps_view, position_into
 from .abi import family_at
@@ -107,19 +107,39 @@ def record_step(ctx, records, i, t):
 
 
 @numba.njit(cache=True, _nrt=False)
-def run_steps(ctx, scheme, solver, hs, times, recorded, records, newton, max_iterations, line_search, table):
+def _evaluate(c, kernel, sch, fresh):
+    """The scheme's evaluation (its ``kernel``) at the Newton point; ``fresh`` False: only its residual is used,
+    so its matrix entries go to the spare storage and families may skip their derivatives."""
+    real = c.mat
+    if not fresh:
+        c.mat = c.mat_spare
+    c.fresh = 1 if fresh else 0
+    c.phase = PHASE_EVALUATE
+    call(kernel, c.self, sch)
+    c.mat = real
+    c.fresh = 1
+
+
+@numba.njit(cache=True, _nrt=False)
+def run_steps(ctx, scheme, solver, hs, times, recorded, records, newton, max_iterations, line_search, table, lazy):
     """Advance ``hs.size`` steps; returns (status, steps done, records written, Newton iterations).
 
     ``ctx``: the context array (one record, :mod:`.abi`); ``scheme``, ``solver``: one FAMILY record each;
     ``hs[k]``: the size of step k, from ``times[k]`` to ``times[k + 1]`` (the caller's exact times, so that
     how a run is cut into chunks changes nothing); ``table``: the chunk's functions of time, row 0 at
     times[0] and row k + 1 for step k; ``recorded[k]``: record step k. On a status other than CONVERGED the
-    state is the one before the failing step."""
+    state is the one before the failing step.
+
+    ``lazy``: while the steps converge in one iteration (the last two did), the evaluation after an update asks only for the
+    residual (the converged step never uses that matrix); should the core ask to solve from there, the same
+    point is evaluated again with its matrix. It pays when a family forms its derivatives at a cost well
+    above its residual's (a family with ``RESIDUAL_ONLY``), and changes no iterate."""
     c = ctx[0]
     n_rec = 0
     its_total = 0
     sch, sol = scheme.ctypes.data, solver.ctypes.data
     c.x = newton.x_try.ctypes.data
+    ones = 0                            # steps in a row that converged in one iteration (lazy checks after two)
     for k in range(hs.size):
         c.t = times[k]
         c.h = hs[k]
@@ -129,20 +149,26 @@ def run_steps(ctx, scheme, solver, hs, times, recorded, records, newton, max_ite
         call(scheme[0].kernel, c.self, sch)
         newton_reset(newton, c.x_scale, max_iterations, line_search)
         status = EVALUATE
+        fresh = True
         while status < 0:               # do what the Newton core asks; its rules are all in the core
             if status == EVALUATE:
-                c.phase = PHASE_EVALUATE
-                call(scheme[0].kernel, c.self, sch)
+                _evaluate(c, scheme[0].kernel, sch, fresh)
                 if c.status != STATUS_OK:
                     return REFUSED, k, n_rec, its_total
                 status = newton_evaluated(newton, c.err)
+                if status == SOLVE and not fresh:
+                    _evaluate(c, scheme[0].kernel, sch, True)       # the same point, now with its matrix
+                    if c.status != STATUS_OK:
+                        return REFUSED, k, n_rec, its_total
             else:
                 call(solver[0].kernel, c.self, sol)
+                fresh = not (lazy and ones >= 2)
                 status = newton_solved(newton, fvec(c.y, c.nx), c.regular != 0)
         if status != CONVERGED:
             return status, k, n_rec, its_total
         c.its = newton.ints[0]
         its_total += c.its
+        ones = ones + 1 if c.its <= 1 else 0
         c.phase = PHASE_ACCEPT
         call(scheme[0].kernel, c.self, sch)
         if c.status != STATUS_OK:
@@ -212,6 +238,6 @@ def entry_types():
     def types(*args):
         return tuple(numba.typeof(a) for a in args)
     return {"run_steps": types(ctx, rec, rec, vector, vector, np.zeros(1, dtype=np.bool_), records,
-                               NewtonArrays.empty(1), 0, False, table),
+                               NewtonArrays.empty(1), 0, False, table, False),
             "record_at": types(ctx, records, 0.0, table),
             "start_state": types(ctx, rec, rec, table, 0.0)}

@@ -68,6 +68,9 @@ class Workspace:
             self.mat = np.zeros(max(self.csr_idx.size, 1))
             c["csr_ptr"], c["csr_idx"] = self.csr_ptr.ctypes.data, self.csr_idx.ctypes.data
         c["mat"], c["storage"] = self.mat.ctypes.data, pk.storage
+        # where a residual-only evaluation writes its matrix entries (.abi: "fresh")
+        self.mat_spare = np.zeros_like(self.mat)
+        c["mat_spare"], c["fresh"] = self.mat_spare.ctypes.data, 1
         for name, arr in (("fpos", pk.fpos), ("free", pk.free), ("pres", pk.pres)):
             arr = np.ascontiguousarray(arr, dtype=np.int64)
             if arr.size == 0:

@@ -471,7 +471,7 @@ def gravity_terms(kd, q):
 
 
 @numba.njit(cache=True)
-def body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb):
+def body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb, residual=False):
     r"""Every part of one body's residual and its derivatives, as the compiled core's tasks ask them
     (:mod:`skfem_flex.compiled.tasks`); the one compiled entry of the body's arithmetic.
 
@@ -482,6 +482,9 @@ def body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb):
     g_k = Q_v(q₁, v₁) = ½Bᵀv − Bv with ∂/∂q₁ = ½H(v, v) − (B(v, v) − B(0, v)), ∂/∂v₁ = Bᵀ − B − DM(q₁)[v₁]
     (DM exact as the central difference of the quadratic M). Both: g_p the discrete gradient of strain and
     gravity from q_a to q_b and ∂g_p/∂q_b. :data:`STATE`: only p = M(q₁)v₁ and V (the rest zero).
+
+    ``residual``: only p, g_k, g_p, M(q₁) and ∂g_p/∂q_b (which the round-off floor reads) are formed; the
+    kinetic derivatives come back zero (an evaluation whose matrix is not used, :mod:`skfem_flex.compiled.loop`).
 
     Returns
     -------
@@ -523,6 +526,8 @@ def body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb):
             iq, ia, target, cb, cbt, gt, gb = 0, 1, 1, -1.0, 1.0, 0.5, -1.0
         else:
             iq, ia, target, cb, cbt, gt, gb = (1 if k == 2 else 4), 1, 2, (-1.0 if k == 2 else 1.0), 0.0, 0.0, 0.0
+        if residual and gt == 0.0 and gb == 0.0:
+            continue                                 # a derivative only
         B = _jacobian(kd, X[iq], X[ia], Ns[iq], Ns[ia])
         for i in range(n):
             for j in range(n):
@@ -533,7 +538,7 @@ def body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb):
                     gk[j] += gt * B[i, j] * v1[i]
                     gk[i] += gb * B[i, j] * v1[j]
     # M(q₁) and, for DM(q₁)[v₁] (exact: M is quadratic), M(q₁ ± h v₁)
-    wn = _amax(v1) if mode == NEWMARK else 0.0
+    wn = _amax(v1) if mode == NEWMARK and not residual else 0.0
     h = max(_amax(q1), 1.0) / wn if wn > 0.0 else 0.0
     M1 = _mass(kd, q1, Ns[0])
     qk = np.empty(n)
@@ -557,7 +562,7 @@ def body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb):
         for j in range(n):
             s += M1[i, j] * acc[j]
         p[i] = s
-    if mode != STATE:
+    if mode != STATE and not residual:
         ia = 3 if em else 1                          # H(v₀, v₁) or H(v₁, v₁)
         H = _hessian(kd, X[ia], X[1], Ns[ia], Ns[1])
         ch = 0.25 if em else 0.5

@@ -38,6 +38,9 @@ __all__ = ["NAME", "FORMS", "pack", "kernel"]
 
 NAME = "spatial floating-frame bodies"
 FORMS = ("spatial floating frame", "spatial floating frame gravity")
+#: an evaluation whose matrix is not used (ctx.fresh = 0) forms no kinetic derivatives here (its residual costs a
+#: third of them): the loop then checks an update's residual alone (:func:`..loop.run_steps`, ``lazy``)
+RESIDUAL_ONLY = True
 
 #: fields per body: those of SpatialFrameKernelData, then those of QuarticTerms, after the family's one (the
 #: bodies' offsets)
@@ -104,7 +107,9 @@ def _bodies(ctx, fam):
         else:
             q0, v0, a1 = fvec(ctx.q0, n)[sl].copy(), fvec(ctx.v0, n)[sl].copy(), fvec(ctx.a1, n)[sl].copy()
             qa, qb = fvec(ctx.qa, n)[sl].copy(), fvec(ctx.qb, n)[sl].copy()
-        p, gk, gp, M1, dp_dq, dgk_dq, dgk_dv, dgp_dq, V = body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb)
+        residual = ctx.fresh == 0                 # an update's check: its matrix is not used
+        p, gk, gp, M1, dp_dq, dgk_dq, dgk_dv, dgp_dq, V = body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb,
+                                                                     residual)
         if task == TASK_ENERGY:
             out[0] += V
             continue
@@ -132,9 +137,11 @@ def _bodies(ctx, fam):
                 dvj = dv1[o + j]
                 dm = dvj if mode == EM else ctx.da1
                 tp = th * dgp_dq[i, j]
-                val = w_p * (dp_dq[i, j] * dq1 + M1[i, j] * dm) + w_gk * (dgk_dq[i, j] * dq1 + dgk_dv[i, j] * dvj) + tp
-                if val != 0.0:
-                    add_qq(ctx, st, o + i, o + j, val)
+                if not residual:
+                    val = (w_p * (dp_dq[i, j] * dq1 + M1[i, j] * dm) + w_gk * (dgk_dq[i, j] * dq1 + dgk_dv[i, j] * dvj)
+                           + tp)
+                    if val != 0.0:
+                        add_qq(ctx, st, o + i, o + j, val)
                 fl += abs(tp) * (abs(qa[j]) + abs(qb[j]))
             floor[o + i] += fl
         if mode == NEWMARK:
