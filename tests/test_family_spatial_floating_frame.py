@@ -358,3 +358,17 @@ def test_residual_only_checks_change_no_iterate(monkeypatch):
     assert np.all(runs[0].newton_iterations[1:] == 1)           # so the residual-only checks did run
     assert np.array_equal(runs[0].newton_iterations, runs[1].newton_iterations)
     assert np.abs(runs[0].q - runs[1].q).max() <= 1e-14 * np.abs(runs[1].q).max()
+
+
+def test_recording_halves_are_the_state_terms():
+    """The recording tasks' halves of ``body_terms``: MOMENTUM gives the STATE's p = M(q₁)v₁ and ENERGY its V,
+    bit for bit."""
+    body = beam()
+    data = body.compiled_kernel_data()
+    kd = data.frame._replace(g=np.array(GRAVITY))
+    q, v = random_state(body, np.random.default_rng(6))
+    state = kernel.body_terms(kd, data.quartic, kernel.STATE, q, q, v, v, v, q, q)
+    momentum = kernel.body_terms(kd, data.quartic, kernel.MOMENTUM, q, q, v, v, v, q, q)
+    energy = kernel.body_terms(kd, data.quartic, kernel.ENERGY, q, q, v, v, v, q, q)
+    assert np.array_equal(momentum[0], state[0]) and np.array_equal(momentum[3], state[3])
+    assert energy[8] == state[8] and state[8] != 0.0

@@ -25,11 +25,13 @@ from ..modal.kernel import quartic_discrete_gradient, quartic_energy
 
 __all__ = ["SpatialFrameKernelData", "QuarticTerms", "SpatialBodyData",
            "kernel_data", "mass_matrix", "momentum_jacobian", "kinetic_hessian",
-           "strain_terms", "gravity_terms", "body_terms", "STATE", "EM", "NEWMARK"]
+           "strain_terms", "gravity_terms", "body_terms", "STATE", "EM", "NEWMARK", "MOMENTUM", "ENERGY"]
 
 #: what :func:`body_terms` evaluates: the state's momentum and potential energy, the energy–momentum step's
 #: terms, the Newmark family's
 STATE, EM, NEWMARK = 0, 1, 2
+#: :data:`STATE`'s two halves, for the recording tasks that need one: p = M(q₁)v₁ alone, V alone
+MOMENTUM, ENERGY = 3, 4
 
 
 class SpatialFrameKernelData(NamedTuple):
@@ -481,7 +483,8 @@ def body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb, residual=False):
     ∂/∂v₁ = ½B(q_m, v₀)ᵀ. :data:`NEWMARK`: p = M(q₁)a₁ with ∂p/∂q₁ = B(q₁, a₁), ∂p/∂a₁ = M(q₁);
     g_k = Q_v(q₁, v₁) = ½Bᵀv − Bv with ∂/∂q₁ = ½H(v, v) − (B(v, v) − B(0, v)), ∂/∂v₁ = Bᵀ − B − DM(q₁)[v₁]
     (DM exact as the central difference of the quadratic M). Both: g_p the discrete gradient of strain and
-    gravity from q_a to q_b and ∂g_p/∂q_b. :data:`STATE`: only p = M(q₁)v₁ and V (the rest zero).
+    gravity from q_a to q_b and ∂g_p/∂q_b. :data:`STATE`: only p = M(q₁)v₁ and V (the rest zero);
+    :data:`MOMENTUM` only p, :data:`ENERGY` only V.
 
     ``residual``: only p, g_k, g_p, M(q₁) and ∂g_p/∂q_b (which the round-off floor reads) are formed; the
     kinetic derivatives come back zero (an evaluation whose matrix is not used, :mod:`skfem_flex.compiled.loop`).
@@ -498,6 +501,13 @@ def body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb, residual=False):
     em = mode == EM
     nf = kd.Sbar.shape[1]
     n = 12 + nf
+    if mode == ENERGY:                               # V alone: no mass matrix
+        none = np.zeros((n, n))
+        qk = np.empty(n)
+        for i in range(n):
+            qk[i] = 0.5 * (qa[i] + qb[i])
+        return (np.zeros(n), np.zeros(n), np.zeros(n), none, none, none, none, none,
+                strain_terms(kd, qt, qa[12:], qb[12:])[0] + gravity_terms(kd, qk)[0])
     # plain loops throughout: numba's array expressions and slice assignments cost seconds of compile each
     T = np.zeros((3, n, n))                          # ∂p/∂q₁, ∂g_k/∂v₁, ∂g_k/∂q₁
     p = np.zeros(n)
@@ -516,7 +526,7 @@ def body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb, residual=False):
     for k in range(nx):
         _contract_into(kd, X[k], Ns[k])
     # the B(q, a) the scheme needs: rows of X, and (target, coefficient of B, of Bᵀ, of Bᵀv₁, of B v₁ in g_k)
-    nj = 0 if mode == STATE else (2 if em else 4)
+    nj = 0 if mode == STATE or mode == MOMENTUM else (2 if em else 4)
     for k in range(nj):
         if em:
             iq, ia, target, cb, cbt, gt, gb = (0, 1, 0, 1.0, 0.0, 0.0, 0.0) if k == 0 else (2, 3, 1, 0.0, 0.5, 0.5, 0.0)
@@ -562,6 +572,9 @@ def body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb, residual=False):
         for j in range(n):
             s += M1[i, j] * acc[j]
         p[i] = s
+    if mode == MOMENTUM:                             # p alone: no strain or gravity
+        none = np.zeros((n, n))
+        return p, gk, np.zeros(n), M1, none, none, none, none, 0.0
     if mode != STATE and not residual:
         ia = 3 if em else 1                          # H(v₀, v₁) or H(v₁, v₁)
         H = _hessian(kd, X[ia], X[1], Ns[ia], Ns[1])

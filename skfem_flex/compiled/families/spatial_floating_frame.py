@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import numba
 
-from ...bodies.floating_spatial.kernel import (EM, NEWMARK, STATE, QuarticTerms, SpatialBodyData,
+from ...bodies.floating_spatial.kernel import (EM, ENERGY, MOMENTUM, NEWMARK, QuarticTerms, SpatialBodyData,
                                                SpatialFrameKernelData, body_terms)
 from ..abi import context_of, f1, f2, f3, family_of, fvec, i1
 from ..registry import compiled_kernel
@@ -93,7 +93,8 @@ def _quartic(fam, k):
 def _bodies(ctx, fam):
     """Every body's part of the context's task (module docstring)."""
     n, task = ctx.n, ctx.task
-    mode = STATE if task != TASK_EVAL else (EM if ctx.scheme == SCHEME_EM else NEWMARK)
+    mode = (EM if ctx.scheme == SCHEME_EM else NEWMARK) if task == TASK_EVAL else (
+        ENERGY if task == TASK_ENERGY else MOMENTUM)
     offs = i1(fam, 0)
     out = fvec(ctx.out, 7)
     rp, rgk, rgp, floor = fvec(ctx.p, n), fvec(ctx.gk, n), fvec(ctx.gp, n), fvec(ctx.floor, n)
@@ -102,7 +103,7 @@ def _bodies(ctx, fam):
         o, nb = offs[b], 12 + kd.Sbar.shape[1]
         sl = slice(o, o + nb)
         q1, v1 = fvec(ctx.q1, n)[sl].copy(), fvec(ctx.v1, n)[sl].copy()
-        if mode == STATE:                     # only q₁ and v₁ are set for these tasks
+        if mode == ENERGY or mode == MOMENTUM:  # only q₁ and v₁ are set for these tasks
             q0, v0, a1, qa, qb = q1, v1, v1, q1, q1
         else:
             q0, v0, a1 = fvec(ctx.q0, n)[sl].copy(), fvec(ctx.v0, n)[sl].copy(), fvec(ctx.a1, n)[sl].copy()
