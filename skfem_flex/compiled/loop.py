@@ -130,7 +130,8 @@ def run_steps(ctx, scheme, solver, hs, times, recorded, records, newton, max_ite
     times[0] and row k + 1 for step k; ``recorded[k]``: record step k. On a status other than CONVERGED the
     state is the one before the failing step.
 
-    ``lazy``: while the steps converge in one iteration (the last two did), the evaluation after an update asks only for the
+    ``lazy``: while the steps converge in a steady number of iterations k (the last two steps took k), the
+    evaluation after the k-th update of a step asks only for the
     residual (the converged step never uses that matrix); should the core ask to solve from there, the same
     point is evaluated again with its matrix. It pays when a family forms its derivatives at a cost well
     above its residual's (a family with ``RESIDUAL_ONLY``), and changes no iterate."""
@@ -139,7 +140,7 @@ def run_steps(ctx, scheme, solver, hs, times, recorded, records, newton, max_ite
     its_total = 0
     sch, sol = scheme.ctypes.data, solver.ctypes.data
     c.x = newton.x_try.ctypes.data
-    ones = 0                            # steps in a row that converged in one iteration (lazy checks after two)
+    last_its, steady = 0, False         # the iterations of the last step; the same as the step's before
     for k in range(hs.size):
         c.t = times[k]
         c.h = hs[k]
@@ -150,6 +151,7 @@ def run_steps(ctx, scheme, solver, hs, times, recorded, records, newton, max_ite
         newton_reset(newton, c.x_scale, max_iterations, line_search)
         status = EVALUATE
         fresh = True
+        solves = 0
         while status < 0:               # do what the Newton core asks; its rules are all in the core
             if status == EVALUATE:
                 _evaluate(c, scheme[0].kernel, sch, fresh)
@@ -162,13 +164,15 @@ def run_steps(ctx, scheme, solver, hs, times, recorded, records, newton, max_ite
                         return REFUSED, k, n_rec, its_total
             else:
                 call(solver[0].kernel, c.self, sol)
-                fresh = not (lazy and ones >= 2)
+                solves += 1
+                fresh = not (lazy and steady and solves >= last_its)
                 status = newton_solved(newton, fvec(c.y, c.nx), c.regular != 0)
         if status != CONVERGED:
             return status, k, n_rec, its_total
         c.its = newton.ints[0]
         its_total += c.its
-        ones = ones + 1 if c.its <= 1 else 0
+        steady = c.its == last_its
+        last_its = c.its
         c.phase = PHASE_ACCEPT
         call(scheme[0].kernel, c.self, sch)
         if c.status != STATUS_OK:
