@@ -134,8 +134,9 @@ def test_bad_plans_are_rejected_before_anything_runs(tmp_path):
 
 
 def test_worker_killed_mid_case_the_sweep_still_completes_every_case(client, tmp_path):
-    # case 0 is slow (about 2 s), so the kill lands while it runs; the others are short
-    cases = [{"n_elements": 16, "t_end": 20.0}] + [{"omega": w} for w in (4.0, 5.0, 6.0, 7.0)]
+    # case 0 is slow (60 000 steps, over a second even on a fast machine), so the kill lands while it runs; the
+    # others are short
+    cases = [{"n_elements": 16, "t_end": 60.0}] + [{"omega": w} for w in (4.0, 5.0, 6.0, 7.0)]
     slow = plan("spin_up_beam", cases=cases, t_end=1.0, dt=1e-3)[0].task_name
     pids = client.run(os.getpid)
     out = {}
@@ -149,13 +150,13 @@ def test_worker_killed_mid_case_the_sweep_still_completes_every_case(client, tmp
                 victim = addr
         time.sleep(0.05)
     assert victim is not None, "the slow case never started"
-    time.sleep(0.5)                               # well inside the ~2 s case
+    time.sleep(0.2)                               # well inside the slow case
     assert slow in client.processing()[victim], "the slow case finished before the kill"
     os.kill(pids[victim], signal.SIGKILL)
     runner.join(timeout=120)
     ds = out["ds"]
     assert list(ds.status.values) == ["completed"] * 5
-    assert float(ds.t_reached[0]) == pytest.approx(20.0)
+    assert float(ds.t_reached[0]) == pytest.approx(60.0)
     # the slow case was finished by a worker process other than the one killed
     assert not str(ds.worker.values[0]).endswith(f":{pids[victim]}")
     assert len(open_sweep(tmp_path / "k").case) == 5
