@@ -124,6 +124,8 @@ class Stepper:
         compile_units(units(pk, scheme))
         self.ws = Workspace(scene, scheme.newton, python_only)
         pk = self.packed = self.ws.packed
+        # an update's check evaluates only the residual where a family can skip its derivatives (loop.run_steps)
+        self.lazy = any(getattr(mod, "RESIDUAL_ONLY", False) for mod, _, _ in pk.families)
         self.lapack_work, self.lapack = solvers.lapack_work(pk.nx)
         self.solver_fields = Fields(_plan_fields(pk.plan, self.lapack))
         self.solver_name = pk.solver
@@ -280,11 +282,9 @@ class Stepper:
                 raise ValueError(f"times must hold the end of each of the {hs.size} steps, got {times.size - 1}")
         table = time_table(pk.columns, times, hs, self.scheme.mid_point_loads)
         records = self._records(int(np.count_nonzero(recorded)))
-        # an update's check evaluates only the residual where a family can skip its derivatives
-        lazy = any(getattr(mod, "RESIDUAL_ONLY", False) for mod, _, _ in pk.families)
         status, steps, n_rec, its = _call(run_steps, "the time loop", self.ws.ctx, self.record, self.solver, hs,
                                           times, np.ascontiguousarray(recorded, dtype=np.bool_), records,
-                                          self.newton, int(max_iterations), bool(line_search), table, lazy)
+                                          self.newton, int(max_iterations), bool(line_search), table, self.lazy)
         self._check_status()
         return Chunk(int(status), int(steps), int(n_rec), int(its), records)
 

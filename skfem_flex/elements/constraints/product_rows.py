@@ -90,9 +90,7 @@ class PolynomialRows(NamedTuple):
     def value(self, q):
         """Every equation's value at q."""
         out = 0.5 * np.einsum("kij,i,j->k", self.H, q, q) + self.b @ q + self.c
-        for p in self.products:
-            out[p.row] += p.a.value(q) * p.s.value(q)
-        return out
+        return out + ProductRows(self.products, out.size, q.size).value(q) if self.products else out
 
 
 def _affine_dot(A, a, B, b):
@@ -184,13 +182,10 @@ class ProductRows:
 
     def jacobian(self, q):
         """∇(a s) = a ∇s + s ∇a, (m, n)."""
-        out = np.zeros((self.m, self.n))
-        for p in self.terms:
-            out[p.row] += p.a.value(q) * p.s.gradient(q) + p.s.value(q) * p.a.gradient(q)
-        return out
+        return self.jacobians(np.asarray(q, dtype=float)[None])[0]
 
     def jacobians(self, Q):
-        """:meth:`jacobian` at many states Q (N, n) at once: (N, m, n)."""
+        """∇(a s) = a ∇s + s ∇a at many states Q (N, n) at once: (N, m, n)."""
         out = np.zeros((Q.shape[0], self.m, self.n))
         for p in self.terms:
             ga, gs = Q @ p.a.H + p.a.b, Q @ p.s.H + p.s.b                      # H symmetric
