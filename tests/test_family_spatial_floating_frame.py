@@ -91,6 +91,7 @@ def test_compiled_terms_are_the_numpy_specification(kind):
     pairs = [(kernel.mass_matrix(kd, q0), kinetics.mass_matrix(inv, q0)),
              (kernel.momentum_jacobian(kd, q0, a), kinetics.momentum_jacobian(inv, q0, a)),
              (kernel.kinetic_hessian(kd, v, a), kinetics.kinetic_hessian(inv, v, a))]
+    pairs += list(zip(kernel.quadratic_velocity_terms(kd, q0, v), kinetics.quadratic_velocity_force(inv, q0, v)))
     e1, g, jac = kernel.strain_terms(kd, data.quartic, q0[12:], q1[12:])
     g_ref, jac_ref = body.strain_energy.discrete_gradient(q0[12:], q1[12:])
     pairs += [(np.array([e1]), np.array([body.strain_energy.energy(q1[12:])])), (g, g_ref), (jac, jac_ref)]
@@ -326,21 +327,51 @@ def test_a_users_strain_object_runs_in_python():
 
 
 @pytest.mark.parametrize("mode", [kernel.EM, kernel.NEWMARK])
+def test_kinetic_block_is_the_weighted_numpy_terms(mode):
+    """``body_terms`` forms the momentum, the kinetic force and the Newton block with the task's weights folded
+    in (the elastic blocks gathered, B's passes shared): each equals the weighted sum of the numpy terms
+    (``kinetics``: M, B, H, DM(q)[v], the discrete gradient) at random weights and states."""
+    body = beam()
+    data = body.compiled_kernel_data()
+    kd = data.frame._replace(g=np.array(GRAVITY))
+    rng = np.random.default_rng(5)
+    (q0, v0), (q1, v1) = random_state(body, rng), random_state(body, rng)
+    a1 = rng.normal(size=q0.size)
+    weights = rng.normal(size=5)
+    w_p, w_gk, dq1, dv1, da1 = weights
+    inv = body.inertia
+    M = kinetics.mass_matrix(inv, q1)
+    p, gk, _, M1, K, _, _ = kernel.body_terms(kd, data.quartic, mode, q0, q1, v0, v1, a1, q0, q1, weights)
+    if mode == kernel.EM:
+        g_ref, g_q, g_v = kinetics.kinetic_discrete_gradient(inv, q0, q1, v0, v1)
+        p_ref, B = M @ v1, kinetics.momentum_jacobian(inv, q1, v1)
+        K_ref = w_p * (dq1 * B + dv1 * M) + w_gk * (dq1 * g_q + dv1 * g_v)
+        assert M1.size == 0
+    else:
+        g_ref, g_q, g_v = kinetics.quadratic_velocity_force(inv, q1, v1)
+        p_ref, B = M @ a1, kinetics.momentum_jacobian(inv, q1, a1)
+        K_ref = w_p * (dq1 * B + da1 * M) + w_gk * (dq1 * g_q + dv1 * g_v)
+        assert np.abs(M1 - M).max() <= PARTS_TOL * np.abs(M).max()
+    for mine, ref in ((p, p_ref), (gk, g_ref), (K, K_ref)):
+        assert np.abs(mine - ref).max() <= PARTS_TOL * np.abs(ref).max()
+
+
+@pytest.mark.parametrize("mode", [kernel.EM, kernel.NEWMARK])
 def test_residual_only_terms_are_the_full_terms(mode):
     """``body_terms(..., residual=True)`` (an evaluation whose matrix the loop does not use) gives the same
-    momentum, discrete gradients, M(q₁), ∂g_p/∂q and energy as the full evaluation, and no kinetic derivatives."""
+    momentum, discrete gradients, M(q₁), ∂g_p/∂q and energy as the full evaluation, and no Newton block."""
     body = beam()
     data = body.compiled_kernel_data()
     kd = data.frame._replace(g=np.array(GRAVITY))
     rng = np.random.default_rng(4)
     (q0, v0), (q1, v1) = random_state(body, rng), random_state(body, rng)
     a1 = rng.normal(size=q0.size)
-    full = kernel.body_terms(kd, data.quartic, mode, q0, q1, v0, v1, a1, q0, q1)
-    part = kernel.body_terms(kd, data.quartic, mode, q0, q1, v0, v1, a1, q0, q1, True)
-    for k in (0, 1, 2, 3, 7, 8):                        # p, g_k, g_p, M(q₁), ∂g_p/∂q, V
+    weights = np.array([0.01, -0.01, 1.0, 200.0, 4e4])
+    full = kernel.body_terms(kd, data.quartic, mode, q0, q1, v0, v1, a1, q0, q1, weights)
+    part = kernel.body_terms(kd, data.quartic, mode, q0, q1, v0, v1, a1, q0, q1, weights, True)
+    for k in (0, 1, 2, 3, 5, 6):                        # p, g_k, g_p, M(q₁), ∂g_p/∂q, V
         assert np.array_equal(np.asarray(full[k]), np.asarray(part[k]))
-    assert not np.any(part[4]) and not np.any(part[5])  # ∂p/∂q and ∂g_k/∂q are not formed
-    assert np.any(full[4]) and np.any(full[5])
+    assert not np.any(part[4]) and np.any(full[4])     # the Newton block is not formed
 
 
 @pytest.mark.parametrize("scheme, its", [("trapezoidal", 1), ("energy-momentum", 2)])
@@ -370,8 +401,10 @@ def test_recording_halves_are_the_state_terms():
     data = body.compiled_kernel_data()
     kd = data.frame._replace(g=np.array(GRAVITY))
     q, v = random_state(body, np.random.default_rng(6))
-    state = kernel.body_terms(kd, data.quartic, kernel.STATE, q, q, v, v, v, q, q)
-    momentum = kernel.body_terms(kd, data.quartic, kernel.MOMENTUM, q, q, v, v, v, q, q)
-    energy = kernel.body_terms(kd, data.quartic, kernel.ENERGY, q, q, v, v, v, q, q)
-    assert np.array_equal(momentum[0], state[0]) and np.array_equal(momentum[3], state[3])
-    assert energy[8] == state[8] and state[8] != 0.0
+    weights = np.zeros(5)
+    state = kernel.body_terms(kd, data.quartic, kernel.STATE, q, q, v, v, v, q, q, weights)
+    momentum = kernel.body_terms(kd, data.quartic, kernel.MOMENTUM, q, q, v, v, v, q, q, weights)
+    energy = kernel.body_terms(kd, data.quartic, kernel.ENERGY, q, q, v, v, v, q, q, weights)
+    assert np.array_equal(momentum[0], state[0])
+    assert np.abs(state[0] - kinetics.mass_matrix(body.inertia, q) @ v).max() <= PARTS_TOL * np.abs(state[0]).max()
+    assert energy[6] == state[6] and state[6] != 0.0

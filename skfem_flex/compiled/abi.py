@@ -91,6 +91,9 @@ CONTEXT_FIELDS = (
     # update: the loop points ``mat`` at ``mat_spare``, which nobody reads, and a family may skip its
     # derivatives, :data:`..compiled.families` ``RESIDUAL_ONLY``)
     ("fresh", "i"), ("mat_spare", "i"),
+    # T at (q1, v1) and 1 while it and ``out`` hold the energies and momenta of the state there
+    # (:func:`..compiled.acceptance.energies`): a step's record reuses what its acceptance computed
+    ("kin", "f"), ("energies_valid", "i"),
 )
 CONTEXT = _record(*CONTEXT_FIELDS)
 CONTEXT_TYPE = numba.from_dtype(CONTEXT)

@@ -80,7 +80,9 @@ def momentum(ctx):
 def energies(ctx):
     """(T, V) at (ctx.q1, ctx.v1), J: T = ½ vᵀ M(q) v and the potential V(q).
 
-    On the way :func:`momentum` fills ``ctx.p`` and ``ctx.out[1:7]``; V is ``ctx.out[0]`` (TASK_ENERGY)."""
+    On the way :func:`momentum` fills ``ctx.p`` and ``ctx.out[1:7]``; V is ``ctx.out[0]`` (TASK_ENERGY). T goes
+    to ``ctx.kin`` and ``ctx.energies_valid`` is set: the time loop clears it before a step's acceptance and
+    records the step with these values when the acceptance computed them."""
     n = ctx.n
     v, p = fvec(ctx.v1, n), fvec(ctx.p, n)
     out = fvec(ctx.out, 7)
@@ -89,6 +91,8 @@ def energies(ctx):
     for j in range(n):
         kin += v[j] * p[j]
     call_families(ctx, TASK_ENERGY)
+    ctx.kin = 0.5 * kin
+    ctx.energies_valid = 1
     return 0.5 * kin, out[0]
 
 

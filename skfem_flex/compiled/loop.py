@@ -84,7 +84,8 @@ def record_step(ctx, records, i, t):
         records.reaction[i, j] = reaction[j]
     records.work[i] = fvec(ctx.work, 1)[0]
     records.iterations[i] = ctx.its
-    kin, _ = energies(ctx)
+    # the acceptance of the step may have computed the energies and momenta at this state already
+    kin = ctx.kin if ctx.energies_valid else energies(ctx)[0]
     d = records.derived[i]
     d[0] = kin
     for j in range(7):
@@ -174,6 +175,7 @@ def run_steps(ctx, scheme, solver, hs, times, recorded, records, newton, max_ite
         steady = c.its == last_its
         last_its = c.its
         c.phase = PHASE_ACCEPT
+        c.energies_valid = 0
         call(scheme[0].kernel, c.self, sch)
         if c.status != STATUS_OK:
             return REFUSED, k, n_rec, its_total
@@ -192,6 +194,7 @@ def record_at(ctx, records, t, table):
     c.h = 0.0
     c.te = c.t1 = t
     c.status = STATUS_OK
+    c.energies_valid = 0
     record_step(c, records, 0, t)
 
 

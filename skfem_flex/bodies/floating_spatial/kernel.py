@@ -22,10 +22,13 @@ import numba
 import numpy as np
 
 from ..modal.kernel import quartic_discrete_gradient, quartic_energy
+from .kinetic_kernel import (add_elastic_block, add_hessian, add_jacobian, add_jacobian_linear_part, add_mass,
+                             add_mass_derivative, configuration, contract_into, derivative_times, directors,
+                             form_gradient, mass_times)
 
 __all__ = ["SpatialFrameKernelData", "QuarticTerms", "SpatialBodyData",
-           "kernel_data", "mass_matrix", "momentum_jacobian", "kinetic_hessian",
-           "strain_terms", "gravity_terms", "body_terms", "STATE", "EM", "NEWMARK", "MOMENTUM", "ENERGY"]
+           "kernel_data", "mass_matrix", "momentum_jacobian", "kinetic_hessian", "quadratic_velocity_terms",
+           "strain_energy", "strain_terms", "gravity_terms", "body_terms", "STATE", "EM", "NEWMARK", "MOMENTUM", "ENERGY"]
 
 #: what :func:`body_terms` evaluates: the state's momentum and potential energy, the energy–momentum step's
 #: terms, the Newmark family's
@@ -62,6 +65,9 @@ class SpatialFrameKernelData(NamedTuple):
         EA times the quadrature weight, N m.
     g : ndarray (3,)
         The gravity field acting on the body, m/s² (zero: none).
+    Nt : ndarray (n_f, 9 n_f)
+        N with its last index first, Nt[b, (i, k, a)] = N_ikab: the order of the contraction with a vector, whose
+        inner loop then runs over 9 n_f contiguous entries.
     """
 
     mass: np.ndarray
@@ -75,6 +81,7 @@ class SpatialFrameKernelData(NamedTuple):
     A: np.ndarray
     w: np.ndarray
     g: np.ndarray
+    Nt: np.ndarray
 
 
 class QuarticTerms(NamedTuple):
@@ -155,224 +162,96 @@ def kernel_data(inertia, K, A=None, w=None, quartic=None, gravity=(0.0, 0.0, 0.0
         if [a.shape for a in quartic_arrays] != shapes:
             raise ValueError(f"the quartic terms on {nf} elastic coordinates must have the shapes {shapes}, "
                              f"got {[a.shape for a in quartic_arrays]}")
+    Nsym = 0.5 * (N + N.transpose(1, 0, 3, 2))
     frame = SpatialFrameKernelData(
         np.array([float(inertia.mass)]), np.ascontiguousarray(inertia.S0, dtype=float),
         np.ascontiguousarray(Sbar), np.ascontiguousarray(inertia.I0, dtype=float),
         np.ascontiguousarray(inertia.P, dtype=float).reshape(3, 3, nf),
-        np.ascontiguousarray(0.5 * (N + N.transpose(1, 0, 3, 2))).ravel(), np.ascontiguousarray(K),
-        np.array([1 if green else 0], dtype=np.int64), A, w, np.asarray(gravity, dtype=float).reshape(3).copy())
+        np.ascontiguousarray(Nsym).ravel(), np.ascontiguousarray(K),
+        np.array([1 if green else 0], dtype=np.int64), A, w, np.asarray(gravity, dtype=float).reshape(3).copy(),
+        np.ascontiguousarray(Nsym.reshape(9 * nf, nf).T))
     return SpatialBodyData(frame, QuarticTerms(np.array([0 if quartic is None else 1], dtype=np.int64),
                                                *quartic_arrays))
 
 
 @numba.njit(cache=True)
-def _gram(A, B):
-    """Aᵀ B of two 3 × 3 matrices."""
-    out = np.zeros((3, 3))
-    for i in range(3):
-        for j in range(3):
-            out[i, j] = A[0, i] * B[0, j] + A[1, i] * B[1, j] + A[2, i] * B[2, j]
+def _contract(kd, u):
+    """N applied to the elastic part of u, a new (3, 3, n_f) array (:func:`.kinetic_kernel.contract_into`)."""
+    out = np.empty((3, 3, kd.Sbar.shape[1]))
+    contract_into(kd.Nt, u, out)
     return out
 
 
 @numba.njit(cache=True)
-def _amax(x):
-    out = 0.0
-    for v in x:
-        out = max(out, abs(v))
-    return out
+def _configuration(kd, q, Nq=None):
+    """(D, s, J, C, gJ) at q (:func:`.kinetic_kernel.configuration`); ``Nq`` N applied to q, formed here when
+    not given."""
+    if Nq is None:
+        Nq = _contract(kd, q)
+    return configuration(kd.S0, kd.Sbar, kd.I0, kd.P, q, Nq)
 
 
 @numba.njit(cache=True)
-def _directors(q):
-    D = np.empty((3, 3))
-    for k in range(3):
-        for c in range(3):
-            D[c, k] = q[3 + 3 * k + c]
-    return D
+def _has_gravity(kd):
+    """False when no gravity field acts on the body (its terms are zero and are skipped)."""
+    return kd.g[0] != 0.0 or kd.g[1] != 0.0 or kd.g[2] != 0.0
 
 
 @numba.njit(cache=True)
-def _contract_into(kd, q, out):
-    """out[i, k, a] = Σ_b N_ikab y_b (y = q[12:]). As N_ikab = N_kiba, Σ_b N_ikba y_b = out[k, i, a]: one
-    contraction (over the contiguous last index) serves both."""
-    nf = kd.Sbar.shape[1]
-    N = kd.N.reshape(9 * nf, nf)
-    flat = out.reshape(9 * nf)
-    for r in range(9 * nf):
-        acc = 0.0
-        for b in range(nf):
-            acc += N[r, b] * q[12 + b]
-        flat[r] = acc
-
-
-@numba.njit(cache=True)
-def _contract(kd, q):
-    """:func:`_contract_into` into a new array (3, 3, n_f)."""
-    out = np.zeros((3, 3, kd.Sbar.shape[1]))
-    _contract_into(kd, q, out)
-    return out
-
-
-@numba.njit(cache=True)
-def _add_weighted(kd, W, out, scale, transpose):
-    """out[12 + a, 12 + b] += scale Σ_ik W_ik N_ikab (N_ikba with ``transpose``); loops, no slices: numba's
-    slice assignment costs seconds of compile."""
-    nf = kd.Sbar.shape[1]
-    N = kd.N.reshape(9, nf, nf)
-    for r in range(9):
-        w = scale * W[r // 3, r % 3]
-        if w != 0.0:
-            for a in range(nf):
-                for b in range(nf):
-                    out[12 + a, 12 + b] += w * (N[r, b, a] if transpose else N[r, a, b])
-
-
-@numba.njit(cache=True)
-def _configuration(kd, q, Ny):
-    """s (3,), J (3, 3), C (3, 3, n_f) at the elastic coordinates of q (``kinetics._configuration``); Ny the
-    contraction of N with them (:func:`_contract`)."""
-    nf = kd.Sbar.shape[1]
-    y = q[12:]
-    s = kd.S0.copy()
-    J = kd.I0.copy()
-    C = kd.P.copy()
-    for i in range(3):
-        for a in range(nf):
-            s[i] += kd.Sbar[i, a] * y[a]
-        for j in range(3):
-            acc = 0.0
-            for a in range(nf):
-                acc += (kd.P[i, j, a] + kd.P[j, i, a] + Ny[i, j, a]) * y[a]
-                C[i, j, a] += Ny[j, i, a]
-            J[i, j] += acc
-    return s, J, C
-
-
-@numba.njit(cache=True)
-def _mass(kd, q, Ny):
-    nf = kd.Sbar.shape[1]
-    n = 12 + nf
-    D = _directors(q)
-    s, J, C = _configuration(kd, q, Ny)
-    M = np.zeros((n, n))
-    for c in range(3):
-        M[c, c] = kd.mass[0]
-        for i in range(3):
-            M[c, 3 + 3 * i + c] = s[i]
-            M[3 + 3 * i + c, c] = s[i]
-            for j in range(3):
-                M[3 + 3 * i + c, 3 + 3 * j + c] = J[i, j]
-        for ell in range(nf):
-            acc = 0.0
-            for k in range(3):
-                acc += D[c, k] * kd.Sbar[k, ell]
-            M[c, 12 + ell] = acc
-            M[12 + ell, c] = acc
-            for i in range(3):
-                acc = 0.0
-                for k in range(3):
-                    acc += D[c, k] * C[i, k, ell]
-                M[3 + 3 * i + c, 12 + ell] = acc
-                M[12 + ell, 3 + 3 * i + c] = acc
-    _add_weighted(kd, _gram(D, D), M, 1.0, False)
-    return M
+def _square(kd):
+    """(zero (n, n) matrix, zero 3 × 3 weight of its elastic block)."""
+    n = 12 + kd.Sbar.shape[1]
+    return np.zeros((n, n)), np.zeros((3, 3))
 
 
 @numba.njit(cache=True)
 def mass_matrix(kd, q):
     """M(q), (12 + n_f) × (12 + n_f), kg (``kinetics.mass_matrix``)."""
-    return _mass(kd, q, _contract(kd, q))
-
-
-@numba.njit(cache=True)
-def _jacobian(kd, q, a, Ny, Na):
-    nf = kd.Sbar.shape[1]
-    n = 12 + nf
-    D = _directors(q)
-    A = _directors(a)
-    _, _, C = _configuration(kd, q, Ny)
-    ay = a[12:]
-    Wa = np.zeros((3, 3))
-    Sa = np.zeros(3)
-    for i in range(3):
-        for ell in range(nf):
-            Sa[i] += kd.Sbar[i, ell] * ay[ell]
-        for k in range(3):
-            for ell in range(nf):
-                Wa[i, k] += C[i, k, ell] * ay[ell]
-    B = np.zeros((n, n))
-    for c in range(3):
-        for ell in range(nf):
-            acc = 0.0
-            for k in range(3):
-                acc += A[c, k] * kd.Sbar[k, ell]
-            B[c, 12 + ell] = acc
-        for i in range(3):
-            B[c, 3 + 3 * i + c] = Sa[i]
-            for k in range(3):
-                B[3 + 3 * i + c, 3 + 3 * k + c] = Wa[i, k]
-    for i in range(3):
-        for c in range(3):
-            for ell in range(nf):
-                acc = a[c] * kd.Sbar[i, ell]
-                for j in range(3):
-                    # ∂J_ij/∂y_l = P_ijl + P_jil + Σ_b (N_ijlb + N_ijbl) y_b
-                    gj = kd.P[i, j, ell] + kd.P[j, i, ell] + Ny[i, j, ell] + Ny[j, i, ell]
-                    acc += A[c, j] * gj + D[c, j] * Na[i, j, ell]
-                B[3 + 3 * i + c, 12 + ell] = acc
-    for k in range(3):
-        for c in range(3):
-            for ell in range(nf):
-                acc = kd.Sbar[k, ell] * a[c]
-                for i in range(3):
-                    acc += C[i, k, ell] * A[c, i] + (Na[k, i, ell] + Na[i, k, ell]) * D[c, i]
-                B[12 + ell, 3 + 3 * k + c] = acc
-    _add_weighted(kd, _gram(A, D), B, 1.0, True)
-    return B
+    out, W = _square(kd)
+    D, s, J, C, _ = _configuration(kd, q)
+    add_mass(kd.mass, kd.Sbar, D, s, J, C, 1.0, out, W)
+    add_elastic_block(kd.N, W, out)
+    return out
 
 
 @numba.njit(cache=True)
 def momentum_jacobian(kd, q, a):
     """B(q, a) = ∂(M(q) a)/∂q (``kinetics.momentum_jacobian``)."""
-    return _jacobian(kd, q, a, _contract(kd, q), _contract(kd, a))
-
-
-@numba.njit(cache=True)
-def _hessian(kd, a, b, Na, Nb):
-    nf = kd.Sbar.shape[1]
-    n = 12 + nf
-    A = _directors(a)
-    Bv = _directors(b)
-    by = b[12:]
-    alpha = np.zeros((3, 3))
-    for i in range(3):
-        for k in range(3):
-            for e in range(nf):
-                alpha[i, k] += Na[i, k, e] * by[e]
-    H = np.zeros((n, n))
-    for k in range(3):
-        for ell in range(3):
-            val = alpha[k, ell] + alpha[ell, k]
-            for c in range(3):
-                H[3 + 3 * k + c, 3 + 3 * ell + c] = val
-        for c in range(3):
-            for e in range(nf):
-                acc = 0.0
-                for i in range(3):
-                    acc += A[c, i] * Nb[i, k, e] + Bv[c, i] * Na[i, k, e]
-                H[3 + 3 * k + c, 12 + e] = acc
-                H[12 + e, 3 + 3 * k + c] = acc
-    T = _gram(A, Bv)
-    _add_weighted(kd, T, H, 1.0, False)
-    _add_weighted(kd, T, H, 1.0, True)
-    return H
+    out, W = _square(kd)
+    D, _, _, C, gJ = _configuration(kd, q)
+    add_jacobian(kd.Sbar, D, C, gJ, a, _contract(kd, a), 1.0, 0.0, out, W)
+    add_elastic_block(kd.N, W, out)
+    return out
 
 
 @numba.njit(cache=True)
 def kinetic_hessian(kd, a, b):
     """H(a, b) = ∇²_q aᵀM(q)b, constant in q (``kinetics.kinetic_hessian``)."""
-    return _hessian(kd, a, b, _contract(kd, a), _contract(kd, b))
+    out, W = _square(kd)
+    add_hessian(a, _contract(kd, a), b, _contract(kd, b), 1.0, out, W)
+    add_elastic_block(kd.N, W, out)
+    return out
+
+
+@numba.njit(cache=True)
+def quadratic_velocity_terms(kd, q, v):
+    """(Q_v, ∂Q_v/∂q, ∂Q_v/∂v) (``kinetics.quadratic_velocity_force``): the products and matrices
+    :func:`body_terms` forms for the Newmark family, one at a time."""
+    n = 12 + kd.Sbar.shape[1]
+    Nv = _contract(kd, v)
+    D, _, _, C, gJ = _configuration(kd, q)
+    f = np.zeros(n)
+    form_gradient(kd.Sbar, D, C, gJ, v, Nv, v, Nv, 0.5, f)
+    derivative_times(kd.Sbar, D, C, gJ, v, Nv, v, Nv, -1.0, f)
+    fq, Wq = _square(kd)
+    add_hessian(v, Nv, v, Nv, 0.5, fq, Wq)
+    add_jacobian_linear_part(v, Nv, -1.0, fq, Wq)
+    add_elastic_block(kd.N, Wq, fq)
+    fv, Wv = _square(kd)
+    add_jacobian(kd.Sbar, D, C, gJ, v, Nv, -1.0, 1.0, fv, Wv)
+    add_mass_derivative(kd.Sbar, D, C, gJ, v, Nv, -1.0, fv, Wv)
+    add_elastic_block(kd.N, Wv, fv)
+    return f, fq, fv
 
 
 @numba.njit(cache=True)
@@ -393,6 +272,26 @@ def _axial(kd, y):
 
 
 @numba.njit(cache=True)
+def strain_energy(kd, qt, y):
+    """V(y), J: ½ yᵀK y plus the quartic terms (``qt``) or the Green–Lagrange axis ½ Σ w ε² (module
+    docstring)."""
+    nf = kd.K.shape[0]
+    energy = 0.0
+    for a in range(nf):
+        acc = 0.0
+        for b in range(nf):
+            acc += kd.K[a, b] * y[b]
+        energy += 0.5 * y[a] * acc
+    if qt.quartic[0] != 0:
+        energy += quartic_energy(qt.k3p, qt.k4a, y, 0)
+    elif kd.green[0] != 0:
+        e = _axial(kd, y)[1]
+        for p in range(e.size):
+            energy += 0.5 * kd.w[p] * e[p] * e[p]
+    return energy
+
+
+@numba.njit(cache=True)
 def strain_terms(kd, qt, y0, y1):
     """(V(y1), g, ∂g/∂y1): the strain energy at y1 and its exact discrete gradient from y0 to y1 (at y0 = y1:
     the gradient and half the Hessian), ``SpatialBeamStrain.discrete_gradient`` / ``QuadraticEnergy`` /
@@ -400,15 +299,13 @@ def strain_terms(kd, qt, y0, y1):
     nf = kd.K.shape[0]
     g = np.zeros(nf)
     jac = np.empty((nf, nf))
-    energy = 0.0
+    energy = strain_energy(kd, qt, y1)
     for a in range(nf):
         for b in range(nf):
             kab = kd.K[a, b]
             g[a] += 0.5 * kab * (y0[b] + y1[b])
             jac[a, b] = 0.5 * kab
-            energy += 0.5 * y1[a] * kab * y1[b]
     if qt.quartic[0] != 0:
-        energy += quartic_energy(qt.k3p, qt.k4a, y1, 0)
         g4, dg4 = quartic_discrete_gradient(qt.k3p, qt.k3q, qt.k3a, qt.k3b, qt.k4a, qt.k4s, qt.k4w, y0, y1, 0)
         for a in range(nf):
             g[a] += g4[a]
@@ -424,7 +321,6 @@ def strain_terms(kd, qt, y0, y1):
     b1 = np.empty(nf)
     for p in range(npts):
         w = kd.w[p]
-        energy += 0.5 * w * e1[p] * e1[p]
         t = w * 0.5 * (e0[p] + e1[p])
         for a in range(nf):
             bm[a] = kd.A[2, p, a]
@@ -448,7 +344,7 @@ def gravity_terms(kd, q):
     nf = kd.Sbar.shape[1]
     n = 12 + nf
     g = kd.g
-    D = _directors(q)
+    D = directors(q)
     s = kd.S0.copy()
     for i in range(3):
         for a in range(nf):
@@ -473,126 +369,131 @@ def gravity_terms(kd, q):
 
 
 @numba.njit(cache=True)
-def body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb, residual=False):
-    r"""Every part of one body's residual and its derivatives, as the compiled core's tasks ask them
+def body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb, weights, residual=False):
+    r"""Every part of one body's residual and its Newton block, as the compiled core's tasks ask them
     (:mod:`skfem_flex.compiled.tasks`); the one compiled entry of the body's arithmetic.
 
-    ``kd`` and ``qt``: the body's :class:`SpatialFrameKernelData` and :class:`QuarticTerms`. ``mode`` :data:`EM`
-    (energy–momentum): p = M(q₁)v₁ with ∂p/∂q₁ = B(q₁, v₁), ∂p/∂v₁ = M(q₁);
-    g_k = ½B(q_m, v₀)ᵀv₁ (the exact discrete gradient of ½v₀ᵀM(q)v₁) with ∂/∂q₁ = ¼H(v₀, v₁),
-    ∂/∂v₁ = ½B(q_m, v₀)ᵀ. :data:`NEWMARK`: p = M(q₁)a₁ with ∂p/∂q₁ = B(q₁, a₁), ∂p/∂a₁ = M(q₁);
-    g_k = Q_v(q₁, v₁) = ½Bᵀv − Bv with ∂/∂q₁ = ½H(v, v) − (B(v, v) − B(0, v)), ∂/∂v₁ = Bᵀ − B − DM(q₁)[v₁]
-    (DM exact as the central difference of the quadratic M). Both: g_p the discrete gradient of strain and
-    gravity from q_a to q_b and ∂g_p/∂q_b. :data:`STATE`: only p = M(q₁)v₁ and V (the rest zero);
-    :data:`MOMENTUM` only p, :data:`ENERGY` only V.
+    ``kd`` and ``qt``: the body's :class:`SpatialFrameKernelData` and :class:`QuarticTerms`; ``weights``: the
+    task's (w_p, w_gk, dq1, dv1, da1) (:mod:`skfem_flex.compiled.tasks`; dv1 the same for every coordinate of
+    the body: it has no angle coordinate). ``mode`` :data:`EM` (energy–momentum): p = M(q₁)v₁,
+    g_k = ½B(q_m, v₀)ᵀv₁ (the exact discrete gradient of ½v₀ᵀM(q)v₁), and the kinetic block
 
-    ``residual``: only p, g_k, g_p, M(q₁) and ∂g_p/∂q_b (which the round-off floor reads) are formed; the
-    kinetic derivatives come back zero (an evaluation whose matrix is not used, :mod:`skfem_flex.compiled.loop`).
+    .. math::
+
+        K = w_p (dq_1 B(q_1, v_1) + dv_1 M(q_1)) + w_{gk} (\tfrac14 dq_1 H(v_0, v_1)
+            + \tfrac12 dv_1 B(q_m, v_0)^T) .
+
+    :data:`NEWMARK`: p = M(q₁)a₁, g_k = Q_v(q₁, v₁) = ½B(q₁, v₁)ᵀv₁ − B(q₁, v₁)v₁ and
+
+    .. math::
+
+        K = w_p (dq_1 B(q_1, a_1) + da_1 M(q_1)) + w_{gk} \big(dq_1 [\tfrac12 H(v, v) − (B(v, v) − B(0, v))]
+            + dv_1 [B(q_1, v)^T − B(q_1, v) − DM(q_1)[v]]\big) ,
+
+    with v = v₁ (``kinetics`` docstring). Both: g_p the discrete gradient of strain and gravity from q_a to
+    q_b and ∂g_p/∂q_b. :data:`STATE`: only p = M(q₁)v₁ and V (g_k zero, no matrices); :data:`MOMENTUM`
+    only p, :data:`ENERGY` only V (its vectors empty).
+
+    ``residual``: K is not formed (it comes back (0, 0)): an evaluation whose matrix is not used
+    (:mod:`skfem_flex.compiled.loop`).
 
     Returns
     -------
     p, gk, gp : ndarray (n,)
-    M1, dp_dq, dgk_dq, dgk_dv, dgp_dq : ndarray (n, n)
-        M(q₁) (the derivative of p with respect to v₁ or a₁) and the other derivatives.
+    M1 : ndarray (n, n)
+        M(q₁) under :data:`NEWMARK` (its round-off scale needs the entries), else (0, 0).
+    K, dgp_dq : ndarray (n, n)
+        The kinetic block above ((0, 0) with ``residual`` and for the other modes) and ∂g_p/∂q_b.
     V : float
         Strain energy at q_b plus gravity's potential at (q_a + q_b)/2, J (the potential energy at q₁ when
         q_a = q_b = q₁).
     """
-    em = mode == EM
     nf = kd.Sbar.shape[1]
     n = 12 + nf
-    if mode == ENERGY:                               # V alone: no mass matrix
-        none = np.zeros((n, n))
-        qk = np.empty(n)
-        for i in range(n):
-            qk[i] = 0.5 * (qa[i] + qb[i])
-        return (np.zeros(n), np.zeros(n), np.zeros(n), none, none, none, none, none,
-                strain_terms(kd, qt, qa[12:], qb[12:])[0] + gravity_terms(kd, qk)[0])
-    # plain loops throughout: numba's array expressions and slice assignments cost seconds of compile each
-    T = np.zeros((3, n, n))                          # ∂p/∂q₁, ∂g_k/∂v₁, ∂g_k/∂q₁
+    none = np.zeros((0, 0))
+    qk = np.empty(n)
+    if mode == ENERGY:                               # V alone: no mass matrix, the vectors empty
+        V = strain_energy(kd, qt, qb[12:])
+        if _has_gravity(kd):
+            for i in range(n):
+                qk[i] = 0.5 * (qa[i] + qb[i])
+            V += gravity_terms(kd, qk)[0]
+        empty = np.zeros(0)
+        return empty, empty, empty, none, none, none, V
     p = np.zeros(n)
     gk = np.zeros(n)
-    # the vectors the terms need (rows of X) and their contractions with N (linear: combined, not recomputed)
-    X = np.zeros((5, n))
-    Ns = np.zeros((5, 3, 3, nf))
-    if mode == NEWMARK:                              # q₁, v₁, a₁, 0
-        nx = 3
+    w_p, w_gk, dq1, dv1, da1 = weights[0], weights[1], weights[2], weights[3], weights[4]
+    Nq1, Nv1 = _contract(kd, q1), _contract(kd, v1)
+    D1, s1, J1, C1, gJ1 = _configuration(kd, q1, Nq1)
+    Sbar = kd.Sbar
+    K, W = none, np.zeros((3, 3))
+    M1 = none
+    if mode == NEWMARK:
+        M1, Wm = _square(kd)
+        add_mass(kd.mass, Sbar, D1, s1, J1, C1, 1.0, M1, Wm)
+        add_elastic_block(kd.N, Wm, M1)
         for i in range(n):
-            X[0, i], X[1, i], X[2, i] = q1[i], v1[i], a1[i]
-    else:                                            # q₁, v₁, q_m, v₀
-        nx = 4 if mode == EM else 1
-        for i in range(n):
-            X[0, i], X[1, i], X[2, i], X[3, i] = q1[i], v1[i], 0.5 * (q0[i] + q1[i]), v0[i]
-    for k in range(nx):
-        _contract_into(kd, X[k], Ns[k])
-    # the B(q, a) the scheme needs: rows of X, and (target, coefficient of B, of Bᵀ, of Bᵀv₁, of B v₁ in g_k)
-    nj = 0 if mode == STATE or mode == MOMENTUM else (2 if em else 4)
-    for k in range(nj):
-        if em:
-            iq, ia, target, cb, cbt, gt, gb = (0, 1, 0, 1.0, 0.0, 0.0, 0.0) if k == 0 else (2, 3, 1, 0.0, 0.5, 0.5, 0.0)
-        elif k == 0:
-            iq, ia, target, cb, cbt, gt, gb = 0, 2, 0, 1.0, 0.0, 0.0, 0.0
-        elif k == 1:
-            iq, ia, target, cb, cbt, gt, gb = 0, 1, 1, -1.0, 1.0, 0.5, -1.0
-        else:
-            iq, ia, target, cb, cbt, gt, gb = (1 if k == 2 else 4), 1, 2, (-1.0 if k == 2 else 1.0), 0.0, 0.0, 0.0
-        if residual and gt == 0.0 and gb == 0.0:
-            continue                                 # a derivative only
-        B = _jacobian(kd, X[iq], X[ia], Ns[iq], Ns[ia])
-        for i in range(n):
+            s = 0.0
             for j in range(n):
-                T[target, i, j] += cb * B[i, j] + cbt * B[j, i]
-        if gt != 0.0 or gb != 0.0:
+                s += M1[i, j] * a1[j]
+            p[i] = s
+        form_gradient(Sbar, D1, C1, gJ1, v1, Nv1, v1, Nv1, 0.5, gk)
+        derivative_times(Sbar, D1, C1, gJ1, v1, Nv1, v1, Nv1, -1.0, gk)
+        if not residual:
+            # B(q₁, ·) is linear in its vector: w_p dq1 B(q₁, a₁) − w_gk dv1 B(q₁, v₁) in one pass
+            ct, cq = w_gk * dv1, w_gk * dq1
+            Na1 = _contract(kd, a1)
+            at = np.empty(n)
             for i in range(n):
-                for j in range(n):
-                    gk[j] += gt * B[i, j] * v1[i]
-                    gk[i] += gb * B[i, j] * v1[j]
-    # M(q₁) and, for DM(q₁)[v₁] (exact: M is quadratic), M(q₁ ± h v₁)
-    wn = _amax(v1) if mode == NEWMARK and not residual else 0.0
-    h = max(_amax(q1), 1.0) / wn if wn > 0.0 else 0.0
-    M1 = _mass(kd, q1, Ns[0])
-    qk = np.empty(n)
-    if wn > 0.0:
-        Nk = np.empty((3, 3, nf))
-        for sign in (1.0, -1.0):
-            for i in range(n):
-                qk[i] = q1[i] + sign * h * v1[i]
+                at[i] = w_p * dq1 * a1[i] - ct * v1[i]
+            Nat = np.empty((3, 3, nf))
             for i in range(3):
-                for j in range(3):
-                    for a in range(nf):
-                        Nk[i, j, a] = Ns[0, i, j, a] + sign * h * Ns[1, i, j, a]
-            Mk = _mass(kd, qk, Nk)
-            c = -sign / (2.0 * h)
+                for k in range(3):
+                    for e in range(nf):
+                        Nat[i, k, e] = w_p * dq1 * Na1[i, k, e] - ct * Nv1[i, k, e]
+            K, W = _square(kd)
             for i in range(n):
                 for j in range(n):
-                    T[1, i, j] += c * Mk[i, j]
-    acc = a1 if mode == NEWMARK else v1
-    for i in range(n):
-        s = 0.0
-        for j in range(n):
-            s += M1[i, j] * acc[j]
-        p[i] = s
+                    K[i, j] = w_p * da1 * M1[i, j]
+            add_jacobian(Sbar, D1, C1, gJ1, at, Nat, 1.0, 0.0, K, W)
+            add_jacobian(Sbar, D1, C1, gJ1, v1, Nv1, 0.0, ct, K, W)
+            add_mass_derivative(Sbar, D1, C1, gJ1, v1, Nv1, -ct, K, W)
+            add_hessian(v1, Nv1, v1, Nv1, 0.5 * cq, K, W)
+            add_jacobian_linear_part(v1, Nv1, -cq, K, W)
+    else:
+        mass_times(kd.mass, Sbar, D1, s1, J1, C1, v1, Nv1, p)
+        if mode == EM:
+            qm = np.empty(n)
+            for i in range(n):
+                qm[i] = 0.5 * (q0[i] + q1[i])
+            Nv0 = _contract(kd, v0)
+            Dm, _, _, Cm, gJm = _configuration(kd, qm)
+            form_gradient(Sbar, Dm, Cm, gJm, v0, Nv0, v1, Nv1, 0.5, gk)
+            if not residual:
+                K, W = _square(kd)
+                add_mass(kd.mass, Sbar, D1, s1, J1, C1, w_p * dv1, K, W)
+                add_jacobian(Sbar, D1, C1, gJ1, v1, Nv1, w_p * dq1, 0.0, K, W)
+                add_hessian(v0, Nv0, v1, Nv1, 0.25 * w_gk * dq1, K, W)
+                add_jacobian(Sbar, Dm, Cm, gJm, v0, Nv0, 0.0, 0.5 * w_gk * dv1, K, W)
     if mode == MOMENTUM:                             # p alone: no strain or gravity
-        none = np.zeros((n, n))
-        return p, gk, np.zeros(n), M1, none, none, none, none, 0.0
-    if mode != STATE and not residual:
-        ia = 3 if em else 1                          # H(v₀, v₁) or H(v₁, v₁)
-        H = _hessian(kd, X[ia], X[1], Ns[ia], Ns[1])
-        ch = 0.25 if em else 0.5
-        for i in range(n):
-            for j in range(n):
-                T[2, i, j] += ch * H[i, j]
+        return p, gk, np.zeros(n), M1, none, none, 0.0
+    if K.size:
+        add_elastic_block(kd.N, W, K)
     # strain and gravity: discrete gradients from q_a to q_b
-    for i in range(n):
-        qk[i] = 0.5 * (qa[i] + qb[i])
-    vg, gp, Hg = gravity_terms(kd, qk)
+    gp = np.zeros(n)
     dgp_dq = np.zeros((n, n))
-    for i in range(n):
-        for j in range(n):
-            dgp_dq[i, j] = 0.5 * Hg[i, j]
+    vg = 0.0
+    if _has_gravity(kd):
+        for i in range(n):
+            qk[i] = 0.5 * (qa[i] + qb[i])
+        vg, grad, Hg = gravity_terms(kd, qk)
+        for i in range(n):
+            gp[i] = grad[i]
+            for j in range(n):
+                dgp_dq[i, j] = 0.5 * Hg[i, j]
     vs, gs, js = strain_terms(kd, qt, qa[12:], qb[12:])
     for a in range(nf):
         gp[12 + a] += gs[a]
         for b in range(nf):
             dgp_dq[12 + a, 12 + b] += js[a, b]
-    return p, gk, gp, M1, T[0], T[2], T[1], dgp_dq, vs + vg
+    return p, gk, gp, M1, K, dgp_dq, vs + vg

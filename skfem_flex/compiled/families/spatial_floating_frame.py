@@ -15,7 +15,9 @@ body's ``compiled_kernel_data()``); this family adds its results where the task 
       w_p(∂_{q_1}p\,dq_1 + M(q_1)\,d\dot{}) + w_{gk}(∂_{q_1}g_k\,dq_1 + ∂_{v_1}g_k\,dv_1)
       + w_{gp} c_{dg}\,dq_1\, ∂_{q_b} g_p ,
 
-  with d = dv₁ (energy–momentum: p = M(q₁)v₁) or da₁ (Newmark: p = M(q₁)a₁); the potential's round-off
+  with d = dv₁ (energy–momentum: p = M(q₁)v₁) or da₁ (Newmark: p = M(q₁)a₁), its kinetic part formed by
+  ``body_terms`` with the task's weights folded in (its block K; dv₁ is the same for every coordinate of a
+  body, which has no angle coordinate); the potential's round-off
   floor |w_gp c_dg dq₁ ∂g_p/∂q_b| (|q_a| + |q_b|) into ``floor`` and, for the Newmark family,
   Σ_j |M_ij| terms_j into ``mterms``;
 * TASK_MOMENTUM: p = M(q₁)v₁ into ``p``, the linear momentum (the x rows of p) into ``out[1:4]`` and the
@@ -25,6 +27,7 @@ body's ``compiled_kernel_data()``); this family adds its results where the task 
 from __future__ import annotations
 
 import numba
+import numpy as np
 
 from ...bodies.floating_spatial.kernel import (EM, ENERGY, MOMENTUM, NEWMARK, QuarticTerms, SpatialBodyData,
                                                SpatialFrameKernelData, body_terms)
@@ -79,7 +82,7 @@ def _body(fam, k):
     """Body data from the pools, field by field (SpatialFrameKernelData's order)."""
     return SpatialFrameKernelData(f1(fam, k), f1(fam, k + 1), f2(fam, k + 2), f2(fam, k + 3), f3(fam, k + 4),
                                   f1(fam, k + 5), f2(fam, k + 6), i1(fam, k + 7), f3(fam, k + 8), f1(fam, k + 9),
-                                  f1(fam, k + 10))
+                                  f1(fam, k + 10), f2(fam, k + 11))
 
 
 @numba.njit(cache=True, inline="always")
@@ -109,8 +112,8 @@ def _bodies(ctx, fam):
             q0, v0, a1 = fvec(ctx.q0, n)[sl].copy(), fvec(ctx.v0, n)[sl].copy(), fvec(ctx.a1, n)[sl].copy()
             qa, qb = fvec(ctx.qa, n)[sl].copy(), fvec(ctx.qb, n)[sl].copy()
         residual = ctx.fresh == 0                 # an update's check: its matrix is not used
-        p, gk, gp, M1, dp_dq, dgk_dq, dgk_dv, dgp_dq, V = body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb,
-                                                                     residual)
+        weights = np.array([ctx.w_p, ctx.w_gk, ctx.dq1, fvec(ctx.dv1, n)[o], ctx.da1])
+        p, gk, gp, M1, K, dgp_dq, V = body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb, weights, residual)
         if task == TASK_ENERGY:
             out[0] += V
             continue
@@ -125,22 +128,17 @@ def _bodies(ctx, fam):
                 out[5] += x2 * p[3 * k] - x0 * p[3 * k + 2]
                 out[6] += x0 * p[3 * k + 1] - x1 * p[3 * k]
             continue
-        dv1 = fvec(ctx.dv1, n)
         st = storage_of(ctx)
-        w_p, w_gk, dq1 = ctx.w_p, ctx.w_gk, ctx.dq1
-        th = ctx.w_gp * ctx.c_dg * dq1
+        th = ctx.w_gp * ctx.c_dg * ctx.dq1
         for i in range(nb):
             rp[o + i] += p[i]
             rgk[o + i] += gk[i]
             rgp[o + i] += gp[i]
             fl = 0.0
             for j in range(nb):
-                dvj = dv1[o + j]
-                dm = dvj if mode == EM else ctx.da1
                 tp = th * dgp_dq[i, j]
                 if not residual:
-                    val = (w_p * (dp_dq[i, j] * dq1 + M1[i, j] * dm) + w_gk * (dgk_dq[i, j] * dq1 + dgk_dv[i, j] * dvj)
-                           + tp)
+                    val = K[i, j] + tp
                     if val != 0.0:
                         add_qq(ctx, st, o + i, o + j, val)
                 fl += abs(tp) * (abs(qa[j]) + abs(qb[j]))
