@@ -15,7 +15,8 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from ..numerics.newton import CONVERGED, EVALUATE, SOLVE, newton_evaluated, newton_reset, newton_solved
+from ..numerics.newton import (CONVERGED, CONVERGED_BELOW, EVALUATE, newton_evaluated, newton_reset,
+                              newton_solved)
 from .abi import CONTEXT, FAMILY, call, call_families, fvec
 from .points import NB, OFF, maps_view, position_into
 from .abi import family_at
@@ -132,10 +133,12 @@ def run_steps(ctx, scheme, solver, hs, times, recorded, records, newton, max_ite
     state is the one before the failing step.
 
     ``lazy``: while the steps converge in a steady number of iterations k (the last two steps took k), the
-    evaluation after the k-th update of a step asks only for the
-    residual (the converged step never uses that matrix); should the core ask to solve from there, the same
-    point is evaluated again with its matrix. It pays when a family forms its derivatives at a cost well
-    above its residual's (a family with ``RESIDUAL_ONLY``), and changes no iterate."""
+    evaluation after the k-th update of a step asks only for the residual (the converged step never uses
+    that matrix); unless its scaled error shows convergence, the same point is evaluated again with its
+    matrix before the core decides. It pays when a family forms its derivatives at a cost well above its
+    residual's (a family with ``RESIDUAL_ONLY``), and changes no iterate: a residual-only evaluation gives the
+    residual and the error scales of the full one, and may leave out only the round-off floor of the
+    error, which matters (:func:`~skfem_flex.numerics.newton.roundoff_floor`) only above convergence."""
     c = ctx[0]
     n_rec = 0
     its_total = 0
@@ -158,11 +161,13 @@ def run_steps(ctx, scheme, solver, hs, times, recorded, records, newton, max_ite
                 _evaluate(c, scheme[0].kernel, sch, fresh)
                 if c.status != STATUS_OK:
                     return REFUSED, k, n_rec, its_total
-                status = newton_evaluated(newton, c.err)
-                if status == SOLVE and not fresh:
-                    _evaluate(c, scheme[0].kernel, sch, True)       # the same point, now with its matrix
+                if not fresh and not c.err <= CONVERGED_BELOW:
+                    # not converged: the same point again, with its matrix and every family's round-off
+                    # floor (which may cap the error above 1 and is not formed by a residual-only evaluation)
+                    _evaluate(c, scheme[0].kernel, sch, True)
                     if c.status != STATUS_OK:
                         return REFUSED, k, n_rec, its_total
+                status = newton_evaluated(newton, c.err)
             else:
                 call(solver[0].kernel, c.self, sol)
                 solves += 1

@@ -88,7 +88,7 @@ _SIN_SERIES = _series([(-1.0) ** n / _FACTORIAL[2 * n + 1] for n in range(15)])
 _COS_SERIES = _series([(-1.0) ** n / _FACTORIAL[2 * n + 2] for n in range(15)])
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _terms(x, most):
     """How many terms of a series in x (0 ≤ x < 1, coefficients at most 1) reach round-off: the first n with
     xⁿ below 1e-17, at most ``most``."""
@@ -99,7 +99,7 @@ def _terms(x, most):
     return n
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _horner(table, row, x, n):
     """Σ_{k<n} table[row, k] x^k, by Horner's rule."""
     s = 0.0
@@ -108,7 +108,7 @@ def _horner(table, row, x, n):
     return s
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _atan_ratio(y):
     """A(y) = arctan(√y)/√y and its first two derivatives in y (y ≥ 0)."""
     if y < _SERIES_BELOW:
@@ -123,7 +123,7 @@ def _atan_ratio(y):
     return a, da, dda
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _rodrigues(tau):
     """exp(ŵ) = γ I + α ŵ + β w wᵀ with τ = w·w: (γ, α, β) and their first and second derivatives in τ."""
     if tau < _SERIES_BELOW:
@@ -152,7 +152,7 @@ _EPS[0, 1, 2] = _EPS[1, 2, 0] = _EPS[2, 0, 1] = 1.0
 _EPS[0, 2, 1] = _EPS[2, 1, 0] = _EPS[1, 0, 2] = -1.0
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _skew(x, out):
     """out = x̂, the matrix of x × ·."""
     out[0, 0], out[0, 1], out[0, 2] = 0.0, -x[2], x[1]
@@ -160,7 +160,7 @@ def _skew(x, out):
     out[2, 0], out[2, 1], out[2, 2] = -x[1], x[0], 0.0
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _turn(w, x, level, y, yw, yx, yww, ywx, W, X, cr):
     """y = exp(ŵ) x = γ x + α w × x + β (w·x) w and (``level`` ≥ 1) its derivatives ∂y/∂w, ∂y/∂x and
     (``level`` 2) ∂²y/∂w², ∂²y/∂w∂x (y_i, [i, l], [i, m], [i, l, m], [i, l, m]), written into the given
@@ -213,8 +213,7 @@ def _workspace():
             np.empty(3))
 
 
-@numba.njit(cache=True)
-def _jets(z, h, level, eps, J, H, wk):
+def _jets_py(z, h, level, eps, J, H, wk):
     """The strains ε(z) (without reference values) and, by ``level`` (0, 1, 2), J = ∂ε/∂z (6, 10) and
     H = ∂²ε/∂z² (6, 10, 10), into the given arrays (``wk``: :func:`_workspace`); False (and nothing
     written) where 1 + c ≤ 1e-12 or z is not finite."""
@@ -303,11 +302,17 @@ def _jets(z, h, level, eps, J, H, wk):
     return True
 
 
+#: :func:`_jets_py` compiled into its one call site in :func:`discrete_gradient_terms` (the per-element calls
+#: with their work arrays cost as much as the arithmetic), and as a called function for the strains alone
+_jets = numba.njit(cache=True, inline="always")(_jets_py)
+_jets_called = numba.njit(cache=True)(_jets_py)
+
+
 @numba.njit(cache=True)
-def _invariants(qe, h, z, G):
-    """z = (a, c, u, v) (10,) and ∇z (10, 24) of the element coordinates ``qe`` (module docstring):
-    a = axial ½(Q − Qᵀ), c = ½(tr Q − 1) with Q_ij = d^a_i · d^b_j, u_i = d^a_i · Δφ/h, v_i = d^b_i · Δφ/h."""
-    G[:, :] = 0.0
+def _invariants(qe, h, z, G, gradient):
+    """z = (a, c, u, v) (10,) and, with ``gradient``, ∇z (10, 24) of the element coordinates ``qe`` (module
+    docstring): a = axial ½(Q − Qᵀ), c = ½(tr Q − 1) with Q_ij = d^a_i · d^b_j, u_i = d^a_i · Δφ/h,
+    v_i = d^b_i · Δφ/h."""
     dphi = qe[12:15] - qe[0:3]
     # a_k = ½ (Q_ij − Q_ji) for (k, i, j) = (0, 2, 1), (1, 0, 2), (2, 1, 0)
     for k in range(3):
@@ -316,11 +321,6 @@ def _invariants(qe, h, z, G):
         dbi, dbj = qe[15 + 3 * i:18 + 3 * i], qe[15 + 3 * j:18 + 3 * j]
         z[k] = 0.5 * (dai[0] * dbj[0] + dai[1] * dbj[1] + dai[2] * dbj[2]
                       - daj[0] * dbi[0] - daj[1] * dbi[1] - daj[2] * dbi[2])
-        for c in range(3):
-            G[k, 3 + 3 * i + c] = 0.5 * dbj[c]
-            G[k, 15 + 3 * j + c] = 0.5 * dai[c]
-            G[k, 3 + 3 * j + c] = -0.5 * dbi[c]
-            G[k, 15 + 3 * i + c] = -0.5 * daj[c]
     z[3] = -0.5
     for i in range(3):
         dai = qe[3 + 3 * i:6 + 3 * i]
@@ -328,15 +328,27 @@ def _invariants(qe, h, z, G):
         z[3] += 0.5 * (dai[0] * dbi[0] + dai[1] * dbi[1] + dai[2] * dbi[2])
         z[4 + i] = (dai[0] * dphi[0] + dai[1] * dphi[1] + dai[2] * dphi[2]) / h
         z[7 + i] = (dbi[0] * dphi[0] + dbi[1] * dphi[1] + dbi[2] * dphi[2]) / h
+    if not gradient:
+        return
+    G[:, :] = 0.0
+    for k in range(3):
+        i, j = (k + 2) % 3, (k + 1) % 3
         for c in range(3):
-            G[3, 3 + 3 * i + c] = 0.5 * dbi[c]
-            G[3, 15 + 3 * i + c] = 0.5 * dai[c]
+            G[k, 3 + 3 * i + c] = 0.5 * qe[15 + 3 * j + c]
+            G[k, 15 + 3 * j + c] = 0.5 * qe[3 + 3 * i + c]
+            G[k, 3 + 3 * j + c] = -0.5 * qe[15 + 3 * i + c]
+            G[k, 15 + 3 * i + c] = -0.5 * qe[3 + 3 * j + c]
+    for i in range(3):
+        for c in range(3):
+            dai, dbi = qe[3 + 3 * i + c], qe[15 + 3 * i + c]
+            G[3, 3 + 3 * i + c] = 0.5 * dbi
+            G[3, 15 + 3 * i + c] = 0.5 * dai
             G[4 + i, 3 + 3 * i + c] = dphi[c] / h
-            G[4 + i, 12 + c] = dai[c] / h
-            G[4 + i, c] = -dai[c] / h
+            G[4 + i, 12 + c] = dai / h
+            G[4 + i, c] = -dai / h
             G[7 + i, 15 + 3 * i + c] = dphi[c] / h
-            G[7 + i, 12 + c] = dbi[c] / h
-            G[7 + i, c] = -dbi[c] / h
+            G[7 + i, 12 + c] = dbi / h
+            G[7 + i, c] = -dbi / h
 
 
 @numba.njit(cache=True)
@@ -393,8 +405,8 @@ def element_strains(kd, q):
     for e in range(ne):
         for a in range(NLOC):
             qe[a] = q[kd.ed[e, a]]
-        _invariants(qe, kd.h[e], z, G)
-        ok = _jets(z, kd.h[e], 0, eps, J, H, wk)
+        _invariants(qe, kd.h[e], z, G, False)
+        ok = _jets_called(z, kd.h[e], 0, eps, J, H, wk)
         for j in range(6):
             out[e, j] = eps[j] - kd.e_ref[6 * e + j] if ok else np.nan
     return out
@@ -422,22 +434,26 @@ def potential_energy(kd, q):
 
 
 @numba.njit(cache=True)
-def discrete_gradient_terms(kd, qa, qb):
+def discrete_gradient_terms(kd, qa, qb, residual=False):
     """(ok, g (n,), data (nnz,) of ∂g/∂q_b on the CSR pattern, floor (n,)): the module docstring's discrete
     gradient and its derivative; the floor is Σ_b abs(∂g_a/∂q_b) (abs(q_a,b) + abs(q_b,b)), the round-off
     size of g. At q_a = q_b: the gradient and half the Hessian. ``ok`` is False if an element of q_a, q_b
-    or their mean has turned half a turn (:func:`first_turned` names it)."""
+    or their mean has turned half a turn (:func:`first_turned` names it). ``residual``: g alone (the same
+    numbers), data empty and floor zero: the strains' second derivatives and the element matrices, most of
+    the work, are skipped."""
     n = kd.n[0]
     ne = kd.ed.shape[0]
     mp = kd.map_el.reshape(ne, NLOC, NLOC)
     g = np.zeros(n)
-    data = np.zeros(kd.pat_idx.size)
+    data = np.zeros(0 if residual else kd.pat_idx.size)
     floor = np.zeros(n)
-    q0, q1 = np.empty(NLOC), np.empty(NLOC)
-    z0, z1, zb, dz = np.empty(NZ), np.empty(NZ), np.empty(NZ), np.empty(NZ)
+    q0, q1, qm = np.empty(NLOC), np.empty(NLOC), np.empty(NLOC)
+    zs, dz, zm = np.empty((3, NZ)), np.empty(NZ), np.empty(NZ)   # z at q_a, q_b, and their mean
+    z0, z1, zb = zs[0], zs[1], zs[2]
     G0, G1, Gm = np.empty((NZ, NLOC)), np.empty((NZ, NLOC)), np.empty((NZ, NLOC))
-    eps0, eps1, epsb = np.empty(6), np.empty(6), np.empty(6)
-    J0, J1, Jb = np.empty((6, NZ)), np.empty((6, NZ)), np.empty((6, NZ))
+    epss, Js = np.empty((3, 6)), np.empty((3, 6, NZ))
+    eps0, eps1, epsb = epss[0], epss[1], epss[2]
+    J1, Jb = Js[1], Js[2]
     Hb, none = np.empty((6, NZ, NZ)), np.empty((1, 1, 1))
     B, r, D, dc = np.empty((NZ, NZ)), np.empty(NZ), np.empty(NZ), np.empty(NZ)
     T, ke = np.empty((NZ, NLOC)), np.empty((NLOC, NLOC))
@@ -447,19 +463,20 @@ def discrete_gradient_terms(kd, qa, qb):
         for a in range(NLOC):
             q0[a] = qa[kd.ed[e, a]]
             q1[a] = qb[kd.ed[e, a]]
-        _invariants(q0, h, z0, G0)
-        _invariants(q1, h, z1, G1)
+            qm[a] = 0.5 * (q0[a] + q1[a])
+        _invariants(q0, h, z0, G0, False)
+        _invariants(q1, h, z1, G1, not residual)
+        _invariants(qm, h, zm, Gm, True)                  # ∇z is linear in q: Gm is its mid-point value
         nd, nb = 0.0, 0.0
         for k in range(NZ):
             zb[k] = 0.5 * (z0[k] + z1[k])
             dz[k] = z1[k] - z0[k]
             nd += dz[k] * dz[k]
             nb += zb[k] * zb[k]
-            for a in range(NLOC):
-                Gm[k, a] = 0.5 * (G0[k, a] + G1[k, a])          # ∇z is linear in q: its mid-point value
-        if not (_jets(z0, h, 0, eps0, J0, none, wk) and _jets(z1, h, 1, eps1, J1, none, wk)
-                and _jets(zb, h, 2, epsb, Jb, Hb, wk)):
-            return False, g, data, floor
+        for s in range(3):          # values at q_a; with J at q_b and J, H at the mean (less for the residual)
+            level = s - 1 if residual and s > 0 else (0 if s == 0 else s)
+            if not _jets(zs[s], h, level, epss[s], Js[s], Hb if s == 2 else none, wk):
+                return False, g, data, floor
         B[:, :] = 0.0
         r[:] = 0.0
         for j in range(6):
@@ -474,7 +491,7 @@ def discrete_gradient_terms(kd, qa, qb):
                 for k in range(NZ):
                     jd += Jb[j, k] * dz[k]
                 cj = (eps1[j] - eps0[j] - jd) / nd
-                for l in range(NZ):
+                for l in range(NZ if not residual else 0):
                     hd = 0.0
                     for k in range(NZ):
                         hd += Hb[j, l, k] * dz[k]
@@ -482,11 +499,20 @@ def discrete_gradient_terms(kd, qa, qb):
             for k in range(NZ):
                 D[k] = Jb[j, k] + cj * dz[k]
                 r[k] += s * D[k]
+            if residual:
+                continue
             hc = 0.5 * h * kd.C[j]
             for k in range(NZ):
                 for l in range(NZ):
                     B[k, l] += hc * D[k] * J1[j, l] + s * (0.5 * Hb[j, k, l] + dz[k] * dc[l])
                 B[k, k] += s * cj
+        if residual:
+            for a in range(NLOC):
+                ga = 0.0
+                for k in range(NZ):
+                    ga += Gm[k, a] * r[k]
+                g[kd.ed[e, a]] += ga
+            continue
         # ke = G_mᵀ B G₁ + ½ Σ_k r_k ∇²z_k, g = G_mᵀ r
         for k in range(NZ):
             for b in range(NLOC):

@@ -8,6 +8,7 @@ body's ``compiled_strain_data()``), the same kernel the Python path calls:
 
 * TASK_EVAL: g_p ← the exact discrete gradient D_V(q_a, q_b) (at q_a = q_b the gradient), the tangent
   w_gp c_dg dq1 ∂D_V/∂q_b and the round-off floor w_gp c_dg dq1 Σ abs(∂D_V/∂q_b) (abs(q_a) + abs(q_b));
+  when the matrix is not used (``ctx.fresh`` = 0), g_p alone;
 * TASK_ENERGY: V(q₁) into ``out[0]``.
 
 Where an element of the step has turned half a turn (its rotation vector undefined), the kernel refuses the
@@ -31,6 +32,9 @@ __all__ = ["NAME", "FORMS", "pack", "kernel", "REFUSAL_STATE", "refusal_error"]
 
 NAME = "rotation-interpolated spatial beams"
 FORMS = ("rotation beam",)
+#: an evaluation whose matrix is not used (ctx.fresh = 0) forms g alone, neither the tangent nor the floor
+#: (a fifth of the work): the loop then checks an update's residual alone (:func:`..loop.run_steps`, ``lazy``)
+RESIDUAL_ONLY = True
 
 _HEAD = 3
 _NKD = len(RotationKernelData._fields)
@@ -63,7 +67,8 @@ def _beams(ctx, fam):
             fvec(ctx.out, 7)[0] += potential_energy(kd, fvec(ctx.q1, n)[o:o + nb])
             continue
         qa, qb = fvec(ctx.qa, n), fvec(ctx.qb, n)
-        ok, g, data, fl = discrete_gradient_terms(kd, qa[o:o + nb], qb[o:o + nb])
+        # an update's check (its matrix not used): g alone, no tangent and no floor (.loop.run_steps)
+        ok, g, data, fl = discrete_gradient_terms(kd, qa[o:o + nb], qb[o:o + nb], ctx.fresh == 0)
         if not ok:
             ctx.status = STATUS_REFUSED
             return
