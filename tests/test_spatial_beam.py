@@ -319,33 +319,44 @@ def test_rotation_element_derivatives_at_large_relative_rotations_and_tiny_steps
     assert np.abs(dense(jac) - half).max() <= 1e-6 * np.abs(half).max()
 
 
-def test_rotation_element_residual_only_terms_are_the_full_terms():
-    """The rotation element's residual-only discrete gradient (an evaluation whose matrix the loop does not use)
-    is the full one's g, bit for bit, without the tangent and the round-off floor."""
-    from skfem_flex.bodies.exact.rotation_kernel import discrete_gradient_terms
-    beam = SpatialExactBeam.straight(SECTION, (0.0, 0.0, 0.0), (2.0, 0.0, 1.0), n_elements=4)
+@pytest.mark.parametrize("interpolation", ["rotations", "directors"])
+def test_residual_only_strain_terms_are_the_full_terms(interpolation):
+    """The elements' residual-only discrete gradient (an evaluation whose matrix the loop does not use) is the
+    full one's g, bit for bit, without the tangent and the round-off floor."""
+    from skfem_flex.bodies.exact import director_kernel, rotation_kernel
+    beam = SpatialExactBeam.straight(SECTION, (0.0, 0.0, 0.0), (2.0, 0.0, 1.0), n_elements=4,
+                                     interpolation=interpolation)
     q0, q1 = states(beam, seed=3, size=0.05)
     kd = beam.compiled_strain_data()
-    ok, g, data, floor = discrete_gradient_terms(kd, q0, q1)
-    ok_r, g_r, data_r, floor_r = discrete_gradient_terms(kd, q0, q1, True)
-    assert ok and ok_r and np.array_equal(g, g_r) and np.any(g)
+    if interpolation == "rotations":
+        full = rotation_kernel.discrete_gradient_terms(kd, q0, q1)
+        part = rotation_kernel.discrete_gradient_terms(kd, q0, q1, True)
+        assert full[0] and part[0]
+        full, part = full[1:], part[1:]
+    else:
+        full = director_kernel.discrete_gradient_terms(kd, q0, q1)
+        part = director_kernel.discrete_gradient_terms(kd, q0, q1, True)
+    (g, data, floor), (g_r, data_r, floor_r) = full, part
+    assert np.array_equal(g, g_r) and np.any(g)
     assert data_r.size == 0 and not np.any(floor_r) and np.any(data) and np.any(floor)
 
 
-def test_residual_only_checks_on_rotation_elements_change_no_iterate(monkeypatch):
-    """A cantilever of rotation elements under gravity, energy–momentum at Newton rtol 1e-8: its steps converge
-    in a steady two iterations, and the loop checks the second update with a residual-only evaluation of the
-    beam (``RESIDUAL_ONLY``); trajectory and iterations are those of full evaluations."""
-    from skfem_flex.compiled.families import rotation_beam
+@pytest.mark.parametrize("interpolation", ["rotations", "directors"])
+def test_residual_only_checks_on_beam_elements_change_no_iterate(monkeypatch, interpolation):
+    """A cantilever under gravity, energy–momentum at Newton rtol 1e-8: its steps converge in a steady two
+    iterations, and the loop checks the second update with a residual-only evaluation of the beam
+    (``RESIDUAL_ONLY`` of its family); trajectory and iterations are those of full evaluations."""
+    from skfem_flex.compiled.families import director_beam, rotation_beam
+    family = rotation_beam if interpolation == "rotations" else director_beam
 
     def cantilever():
         beam = SpatialExactBeam.straight(SECTION, (0.0, 0.0, 0.0), (2.0, 0.0, 0.0), n_elements=6,
-                                         normal=(0.0, 1.0, 0.0))
+                                         normal=(0.0, 1.0, 0.0), interpolation=interpolation)
         return sf.Scene([beam], constraints=[sf.Weld3D(beam.point(0.0))], forces=[sf.Gravity((0.0, 0.0, -9.81))])
     scheme = sf.EnergyMomentum(newton=sf.NewtonSettings(rtol=1e-8, ctol=1e-8, etol=1e-10))
     runs = []
     for lazy in (True, False):
-        monkeypatch.setattr(rotation_beam, "RESIDUAL_ONLY", lazy)
+        monkeypatch.setattr(family, "RESIDUAL_ONLY", lazy)
         runs.append(sf.simulate(cantilever(), 0.1, 0.005, scheme=scheme))
     its = runs[0].newton_iterations[1:]
     assert np.mean(its == np.median(its)) > 0.8                # steady: the residual-only checks did run

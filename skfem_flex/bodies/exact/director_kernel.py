@@ -91,15 +91,16 @@ def potential_energy(kd, q):
 
 
 @numba.njit(cache=True)
-def discrete_gradient_terms(kd, qa, qb):
+def discrete_gradient_terms(kd, qa, qb, residual=False):
     """(g (n,), data (nnz,) of ∂g/∂q_b on the CSR pattern, floor (n,)): the module docstring's terms; the
-    floor is Σ_b abs(∂g_a/∂q_b) (abs(q_a,b) + abs(q_b,b)), the round-off size of g."""
+    floor is Σ_b abs(∂g_a/∂q_b) (abs(q_a,b) + abs(q_b,b)), the round-off size of g. ``residual``: g alone
+    (the same numbers), data empty and floor zero (the element matrices, most of the work, are skipped)."""
     n = kd.n[0]
     ne, npnt, nloc = _shape(kd)
     eref = kd.e_ref.reshape(ne, npnt, 6)
     mp = kd.map_el.reshape(ne, nloc, nloc)
     g = np.zeros(n)
-    data = np.zeros(kd.pat_idx.size)
+    data = np.zeros(0 if residual else kd.pat_idx.size)
     floor = np.zeros(n)
     q0, q1, qm, h0 = np.empty(nloc), np.empty(nloc), np.empty(nloc), np.empty(nloc)
     hm, h1 = np.empty((6, nloc)), np.empty((6, nloc))
@@ -121,19 +122,22 @@ def discrete_gradient_terms(kd, qa, qb):
                 s[j] = 0.5 * kd.C[j] * (0.5 * np.dot(q0, h0) + 0.5 * np.dot(q1, h1[j]) - 2.0 * eref[e, p, j])
                 for a in range(nloc):
                     g[kd.ed[e, a]] += w * s[j] * hm[j, a]
+                if residual:
+                    continue
                 # ½ w s_j H_j: the block entries times I₃
                 for t in range(kd.h_ptr[k], kd.h_ptr[k + 1]):
                     a3, b3, hv = 3 * kd.h_a[t], 3 * kd.h_b[t], 0.5 * w * s[j] * kd.h_v[t]
                     ke[a3, b3] += hv
                     ke[a3 + 1, b3 + 1] += hv
                     ke[a3 + 2, b3 + 2] += hv
-            for a in range(nloc):
+            for a in range(nloc if not residual else 0):
                 for b in range(nloc):
                     t = 0.0
                     for j in range(6):
                         t += kd.C[j] * hm[j, a] * h1[j, b]
                     ke[a, b] += 0.5 * w * t
-        scatter_element(ke, mp[e], kd.ed[e], q0, q1, data, floor)
+        if not residual:
+            scatter_element(ke, mp[e], kd.ed[e], q0, q1, data, floor)
     return g, data, floor
 
 

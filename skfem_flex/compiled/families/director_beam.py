@@ -7,7 +7,8 @@ rows; this family adds only the strain energy, by the beams' compiled kernels
 
 * TASK_EVAL: g_p ← the exact discrete gradient D_V(q_a, q_b) (at q_a = q_b the gradient), the tangent
   w_gp c_dg dq1 ∂D_V/∂q_b (energy-momentum: Δt ∂g/∂q₁; Newmark: 2Δt × ½ ∇²V) and the round-off floor
-  w_gp c_dg dq1 Σ abs(∂D_V/∂q_b) (abs(q_a) + abs(q_b));
+  w_gp c_dg dq1 Σ abs(∂D_V/∂q_b) (abs(q_a) + abs(q_b)); when the matrix is not used (``ctx.fresh`` = 0),
+  g_p alone;
 * TASK_ENERGY: V(q₁) into ``out[0]``.
 
 The tangent is the data of the beam's CSR pattern (the union of its element blocks, handed to the scene
@@ -28,6 +29,9 @@ __all__ = ["NAME", "FORMS", "pack", "kernel"]
 
 NAME = "spatial exact beams"
 FORMS = ("director beam",)
+#: an evaluation whose matrix is not used (ctx.fresh = 0) forms g alone, neither the tangent nor the floor:
+#: the loop then checks an update's residual alone (:func:`..loop.run_steps`, ``lazy``)
+RESIDUAL_ONLY = True
 
 _HEAD = 3
 _NKD = len(DirectorKernelData._fields)
@@ -61,7 +65,8 @@ def _beams(ctx, fam):
             fvec(ctx.out, 7)[0] += potential_energy(kd, fvec(ctx.q1, n)[o:o + nb])
             continue
         qa, qb = fvec(ctx.qa, n), fvec(ctx.qb, n)
-        g, data, fl = discrete_gradient_terms(kd, qa[o:o + nb], qb[o:o + nb])
+        # an update's check (its matrix not used): g alone, no tangent and no floor (.loop.run_steps)
+        g, data, fl = discrete_gradient_terms(kd, qa[o:o + nb], qb[o:o + nb], ctx.fresh == 0)
         add_strain_terms(ctx, o, g, data, fl, pos_all, ptr[b])
 
 
