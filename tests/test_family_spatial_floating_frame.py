@@ -326,17 +326,21 @@ def test_a_users_strain_object_runs_in_python():
     assert rel_dev(res.q, ref.q) < RUN_TOL
 
 
+def _kernel_case(seed):
+    """(beam, its kernel data, the frame data with gravity, (q0, v0, q1, v1, a1) at random states, the rng)."""
+    body = beam()
+    data = body.compiled_kernel_data()
+    rng = np.random.default_rng(seed)
+    (q0, v0), (q1, v1) = random_state(body, rng), random_state(body, rng)
+    return body, data, data.frame._replace(g=np.array(GRAVITY)), (q0, v0, q1, v1, rng.normal(size=q0.size)), rng
+
+
 @pytest.mark.parametrize("mode", [kernel.EM, kernel.NEWMARK])
 def test_kinetic_block_is_the_weighted_numpy_terms(mode):
     """``body_terms`` forms the momentum, the kinetic force and the Newton block with the task's weights folded
     in (the elastic blocks gathered, B's passes shared): each equals the weighted sum of the numpy terms
     (``kinetics``: M, B, H, DM(q)[v], the discrete gradient) at random weights and states."""
-    body = beam()
-    data = body.compiled_kernel_data()
-    kd = data.frame._replace(g=np.array(GRAVITY))
-    rng = np.random.default_rng(5)
-    (q0, v0), (q1, v1) = random_state(body, rng), random_state(body, rng)
-    a1 = rng.normal(size=q0.size)
+    body, data, kd, (q0, v0, q1, v1, a1), rng = _kernel_case(5)
     weights = rng.normal(size=5)
     w_p, w_gk, dq1, dv1, da1 = weights
     inv = body.inertia
@@ -360,12 +364,7 @@ def test_kinetic_block_is_the_weighted_numpy_terms(mode):
 def test_residual_only_terms_are_the_full_terms(mode):
     """``body_terms(..., residual=True)`` (an evaluation whose matrix the loop does not use) gives the same
     momentum, discrete gradients, M(q₁), ∂g_p/∂q and energy as the full evaluation, and no Newton block."""
-    body = beam()
-    data = body.compiled_kernel_data()
-    kd = data.frame._replace(g=np.array(GRAVITY))
-    rng = np.random.default_rng(4)
-    (q0, v0), (q1, v1) = random_state(body, rng), random_state(body, rng)
-    a1 = rng.normal(size=q0.size)
+    _, data, kd, (q0, v0, q1, v1, a1), _ = _kernel_case(4)
     weights = np.array([0.01, -0.01, 1.0, 200.0, 4e4])
     full = kernel.body_terms(kd, data.quartic, mode, q0, q1, v0, v1, a1, q0, q1, weights)
     part = kernel.body_terms(kd, data.quartic, mode, q0, q1, v0, v1, a1, q0, q1, weights, True)

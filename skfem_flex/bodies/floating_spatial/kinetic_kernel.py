@@ -36,7 +36,7 @@ __all__ = ["directors", "contract_into", "configuration", "mass_times", "form_gr
            "add_elastic_block"]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def directors(q):
     """D (3, 3), the director parts of a coordinate (or velocity) vector as columns."""
     D = np.empty((3, 3))
@@ -83,7 +83,7 @@ def configuration(S0, Sbar, I0, P, q, Nq):
     return D, s, J, C, gJ
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _sbar_times(Sbar, u):
     """S̄ u_y (3,)."""
     nf = Sbar.shape[1]
@@ -94,7 +94,7 @@ def _sbar_times(Sbar, u):
     return out
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _c_times(C, u):
     """Σ_e C[i, k, e] u_y,e (3, 3)."""
     nf = C.shape[2]
@@ -187,19 +187,19 @@ def form_gradient(Sbar, D, C, gJ, a, Na, b, Nb, scale, out):
 
 
 @numba.njit(cache=True)
-def derivative_times(Sbar, D, C, gJ, w, Nw, b, Nb, scale, out):
-    """out += scale DM(q)[w] b = scale B(q, b) w at the configuration (D, C, gJ), without the matrix."""
+def _derivative_blocks(Sbar, D, C, gJ, w, Nw):
+    """The blocks of DM(q)[w] in M's layout (:func:`_add_mass_shaped`): (S̄ w_y, Σ_e gJ w_e, its (x, y) block
+    X[c, e], its (d_i, y) blocks Y[c, i, e], the weight WdᵀD + DᵀWd of its elastic block)."""
     nf = Sbar.shape[1]
-    Wd, Bm = directors(w), directors(b)
+    Wd = directors(w)
     Sw = _sbar_times(Sbar, w)
     gJw = np.zeros((3, 3))
     for i in range(3):
         for j in range(3):
             for e in range(nf):
                 gJw[i, j] += gJ[i, j, e] * w[12 + e]
-    # G[c, i, e]: the (d_i c, y e) entry of DM(q)[w]; X[c, e] the (x c, y e) one
-    G = np.zeros((3, 3, nf))
     X = np.zeros((3, nf))
+    Y = np.zeros((3, 3, nf))
     for c in range(3):
         for e in range(nf):
             acc = 0.0
@@ -210,12 +210,21 @@ def derivative_times(Sbar, D, C, gJ, w, Nw, b, Nb, scale, out):
                 acc = 0.0
                 for k in range(3):
                     acc += Wd[c, k] * C[i, k, e] + D[c, k] * Nw[k, i, e]
-                G[c, i, e] = acc
-    Wt = np.zeros((3, 3))                          # WdᵀD + DᵀWd
+                Y[c, i, e] = acc
+    Wt = np.zeros((3, 3))
     for i in range(3):
         for k in range(3):
             for c in range(3):
                 Wt[i, k] += Wd[c, i] * D[c, k] + D[c, i] * Wd[c, k]
+    return Sw, gJw, X, Y, Wt
+
+
+@numba.njit(cache=True)
+def derivative_times(Sbar, D, C, gJ, w, Nw, b, Nb, scale, out):
+    """out += scale DM(q)[w] b = scale B(q, b) w at the configuration (D, C, gJ), without the matrix."""
+    nf = Sbar.shape[1]
+    Bm = directors(b)
+    Sw, gJw, X, Y, Wt = _derivative_blocks(Sbar, D, C, gJ, w, Nw)
     for c in range(3):
         acc = 0.0
         for i in range(3):
@@ -228,50 +237,92 @@ def derivative_times(Sbar, D, C, gJ, w, Nw, b, Nb, scale, out):
             for j in range(3):
                 acc += gJw[i, j] * Bm[c, j]
             for e in range(nf):
-                acc += G[c, i, e] * b[12 + e]
+                acc += Y[c, i, e] * b[12 + e]
             out[3 + 3 * i + c] += scale * acc
     for e in range(nf):
         acc = 0.0
         for c in range(3):
             acc += X[c, e] * b[c]
             for i in range(3):
-                acc += G[c, i, e] * Bm[c, i]
+                acc += Y[c, i, e] * Bm[c, i]
         for i in range(3):
             for k in range(3):
                 acc += Wt[i, k] * Nb[i, k, e]
         out[12 + e] += scale * acc
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _add_pair(out, i, j, c, ct, val):
     """out[i, j] += c val and out[j, i] += ct val."""
     out[i, j] += c * val
     out[j, i] += ct * val
 
 
+@numba.njit(cache=True, inline="always")
+def _add_director_block(S, c, out):
+    """out[(d_i, d_k)] += c S_ik I₃: a 3 × 3 matrix of scalars on the directors' blocks."""
+    for i in range(3):
+        for k in range(3):
+            for cc in range(3):
+                out[3 + 3 * i + cc, 3 + 3 * k + cc] += c * S[i, k]
+
+
+@numba.njit(cache=True, inline="always")
+def _add_director_elastic(Y, c, out):
+    """out[(d_i c, y e)] and out[(y e, d_i c)] += c Y[c, i, e]: a symmetric coupling of directors and elastic
+    coordinates."""
+    for i in range(3):
+        for e in range(Y.shape[2]):
+            for cc in range(3):
+                _add_pair(out, 3 + 3 * i + cc, 12 + e, c, c, Y[cc, i, e])
+
+
+@numba.njit(cache=True, inline="always")
+def _add_gram(A, B, c, ct, W):
+    """W += c AᵀB + ct (AᵀB)ᵀ for two 3 × 3 matrices (an elastic block's weight, module docstring)."""
+    for i in range(3):
+        for k in range(3):
+            t = A[0, i] * B[0, k] + A[1, i] * B[1, k] + A[2, i] * B[2, k]
+            W[i, k] += c * t
+            W[k, i] += ct * t
+
+
+@numba.njit(cache=True)
+def _add_mass_shaped(mass, s, J, X, Y, Wyy, c, out, W):
+    """c times a matrix laid out as M(q) (module docstring), from its blocks: mass I on (x, x), s_i I on
+    (x, d_i), J_ij I on (d_i, d_j), X on (x, y), Y[:, i] on (d_i, y), each with its transpose, and the weight
+    Wyy of its elastic block (into W)."""
+    nf = X.shape[1]
+    _add_director_block(J, c, out)
+    for cc in range(3):
+        out[cc, cc] += c * mass
+        for i in range(3):
+            _add_pair(out, cc, 3 + 3 * i + cc, c, c, s[i])
+        for e in range(nf):
+            _add_pair(out, cc, 12 + e, c, c, X[cc, e])
+    _add_director_elastic(Y, c, out)
+    for i in range(3):
+        for k in range(3):
+            W[i, k] += c * Wyy[i, k]
+
+
 @numba.njit(cache=True)
 def add_mass(mass, Sbar, D, s, J, C, c, out, W):
     """c M(q) at the configuration (D, s, J, C)."""
     nf = Sbar.shape[1]
+    X = np.zeros((3, nf))
+    Y = np.zeros((3, 3, nf))
+    DtD = np.zeros((3, 3))
     for cc in range(3):
-        out[cc, cc] += c * mass[0]
-        for i in range(3):
-            _add_pair(out, cc, 3 + 3 * i + cc, c, c, s[i])
-            for j in range(3):
-                out[3 + 3 * i + cc, 3 + 3 * j + cc] += c * J[i, j]
         for e in range(nf):
-            acc = 0.0
             for k in range(3):
-                acc += D[cc, k] * Sbar[k, e]
-            _add_pair(out, cc, 12 + e, c, c, acc)
-            for i in range(3):
-                acc = 0.0
-                for k in range(3):
-                    acc += D[cc, k] * C[i, k, e]
-                _add_pair(out, 3 + 3 * i + cc, 12 + e, c, c, acc)
-    for i in range(3):
-        for k in range(3):
-            W[i, k] += c * (D[0, i] * D[0, k] + D[1, i] * D[1, k] + D[2, i] * D[2, k])
+                X[cc, e] += D[cc, k] * Sbar[k, e]
+                for i in range(3):
+                    Y[cc, i, e] += D[cc, k] * C[i, k, e]
+        for i in range(3):
+            for k in range(3):
+                DtD[i, k] += D[cc, i] * D[cc, k]
+    _add_mass_shaped(mass[0], s, J, X, Y, DtD, c, out, W)
 
 
 @numba.njit(cache=True)
@@ -303,11 +354,7 @@ def add_jacobian(Sbar, D, C, gJ, a, Na, cb, ct, out, W):
                     col += C[j, i, e] * A[cc, j] + (Na[i, j, e] + Na[j, i, e]) * D[cc, j]
                 _add_pair(out, 3 + 3 * i + cc, 12 + e, cb, ct, row)
                 _add_pair(out, 12 + e, 3 + 3 * i + cc, cb, ct, col)
-    for i in range(3):
-        for k in range(3):
-            dta = D[0, i] * A[0, k] + D[1, i] * A[1, k] + D[2, i] * A[2, k]
-            W[i, k] += cb * dta
-            W[k, i] += ct * dta
+    _add_gram(D, A, cb, ct, W)
 
 
 @numba.njit(cache=True)
@@ -315,55 +362,27 @@ def add_jacobian_linear_part(v, Nv, c, out, W):
     """c (B(v, v) − B(0, v)): the part of B(·, v) linear in the configuration, at v (``kinetics`` docstring)."""
     nf = Nv.shape[2]
     V = directors(v)
+    S = np.zeros((3, 3))
     for i in range(3):
         for k in range(3):
-            acc = 0.0
             for e in range(nf):
-                acc += Nv[k, i, e] * v[12 + e]
-            for cc in range(3):
-                out[3 + 3 * i + cc, 3 + 3 * k + cc] += c * acc
+                S[i, k] += Nv[k, i, e] * v[12 + e]
+    _add_director_block(S, c, out)
+    Y = np.zeros((3, 3, nf))
     for i in range(3):
         for e in range(nf):
             for cc in range(3):
-                acc = 0.0
                 for j in range(3):
-                    acc += V[cc, j] * (2.0 * Nv[i, j, e] + Nv[j, i, e])
-                _add_pair(out, 3 + 3 * i + cc, 12 + e, c, c, acc)
-    for i in range(3):
-        for k in range(3):
-            W[i, k] += c * (V[0, i] * V[0, k] + V[1, i] * V[1, k] + V[2, i] * V[2, k])
+                    Y[cc, i, e] += V[cc, j] * (2.0 * Nv[i, j, e] + Nv[j, i, e])
+    _add_director_elastic(Y, c, out)
+    _add_gram(V, V, c, 0.0, W)
 
 
 @numba.njit(cache=True)
 def add_mass_derivative(Sbar, D, C, gJ, w, Nw, c, out, W):
     """c DM(q)[w] = c Σ_k w_k ∂M/∂q_k at the configuration (D, C, gJ) (M is quadratic: exact)."""
-    nf = Sbar.shape[1]
-    Wd = directors(w)
-    Sw = _sbar_times(Sbar, w)
-    for i in range(3):
-        for j in range(3):
-            acc = 0.0
-            for e in range(nf):
-                acc += gJ[i, j, e] * w[12 + e]
-            for cc in range(3):
-                out[3 + 3 * i + cc, 3 + 3 * j + cc] += c * acc
-    for cc in range(3):
-        for i in range(3):
-            _add_pair(out, cc, 3 + 3 * i + cc, c, c, Sw[i])
-        for e in range(nf):
-            acc = 0.0
-            for k in range(3):
-                acc += Wd[cc, k] * Sbar[k, e]
-            _add_pair(out, cc, 12 + e, c, c, acc)
-            for i in range(3):
-                acc = 0.0
-                for k in range(3):
-                    acc += Wd[cc, k] * C[i, k, e] + D[cc, k] * Nw[k, i, e]
-                _add_pair(out, 3 + 3 * i + cc, 12 + e, c, c, acc)
-    for i in range(3):
-        for k in range(3):
-            W[i, k] += c * (Wd[0, i] * D[0, k] + Wd[1, i] * D[1, k] + Wd[2, i] * D[2, k]
-                            + D[0, i] * Wd[0, k] + D[1, i] * Wd[1, k] + D[2, i] * Wd[2, k])
+    Sw, gJw, X, Y, Wt = _derivative_blocks(Sbar, D, C, gJ, w, Nw)
+    _add_mass_shaped(0.0, Sw, gJw, X, Y, Wt, c, out, W)
 
 
 @numba.njit(cache=True)
@@ -371,25 +390,20 @@ def add_hessian(a, Na, b, Nb, c, out, W):
     """c H(a, b) = c ∇²_q aᵀM(q)b (constant in q)."""
     nf = Na.shape[2]
     A, Bm = directors(a), directors(b)
+    S = np.zeros((3, 3))
     for k in range(3):
         for ell in range(3):
-            acc = 0.0
             for e in range(nf):
-                acc += (Na[k, ell, e] + Na[ell, k, e]) * b[12 + e]
-            for cc in range(3):
-                out[3 + 3 * k + cc, 3 + 3 * ell + cc] += c * acc
+                S[k, ell] += (Na[k, ell, e] + Na[ell, k, e]) * b[12 + e]
+    _add_director_block(S, c, out)
+    Y = np.zeros((3, 3, nf))
     for k in range(3):
         for e in range(nf):
             for cc in range(3):
-                acc = 0.0
                 for i in range(3):
-                    acc += A[cc, i] * Nb[i, k, e] + Bm[cc, i] * Na[i, k, e]
-                _add_pair(out, 3 + 3 * k + cc, 12 + e, c, c, acc)
-    for i in range(3):
-        for k in range(3):
-            t = A[0, i] * Bm[0, k] + A[1, i] * Bm[1, k] + A[2, i] * Bm[2, k]
-            W[i, k] += c * t
-            W[k, i] += c * t
+                    Y[cc, k, e] += A[cc, i] * Nb[i, k, e] + Bm[cc, i] * Na[i, k, e]
+    _add_director_elastic(Y, c, out)
+    _add_gram(A, Bm, c, c, W)
 
 
 @numba.njit(cache=True)
