@@ -25,6 +25,7 @@ from skfem_flex.fem.spatial_beam import TimoshenkoBeam3D
 from skfem_flex.fem.spatial_section import SpatialSection
 
 from family_checks import SCHEMES, dense, em_reference, fd_mismatch, loaded_stepper, rel_dev, run_both, run_new
+from helpers import assert_loop_measures_are_the_scenes
 from skfem_flex.schemes.stepper import Stepper
 
 #: the Newton matrix against Richardson-extrapolated central differences, relative to each row's largest entry
@@ -391,6 +392,14 @@ def test_residual_only_checks_change_no_iterate(monkeypatch, scheme, its):
     assert np.mean(runs[0].newton_iterations[1:] == its) > 0.8    # steady: the residual-only checks did run
     assert np.array_equal(runs[0].newton_iterations, runs[1].newton_iterations)
     assert np.abs(runs[0].q - runs[1].q).max() <= 1e-14 * np.abs(runs[1].q).max()
+
+
+@pytest.mark.parametrize("scheme", ["trapezoidal", "generalized-alpha"])
+def test_recorded_energies_and_momenta_under_the_newmark_schemes_are_the_scenes(scheme):
+    """Under the Newmark schemes a step's record takes T, V and the momenta from its acceptance (its energy
+    guard computed them at the same state): at every recorded state they are the scene's at (q, v), for a
+    spinning, deforming beam under gravity, whose M(q) and V(q) change from step to step."""
+    assert_loop_measures_are_the_scenes(gravity_scene(beam()), rel=1e-12, scheme=scheme)
 
 
 def test_recording_halves_are_the_state_terms():
