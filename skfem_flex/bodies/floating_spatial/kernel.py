@@ -1,10 +1,13 @@
-r"""Compiled arithmetic of a spatial floating-frame body: M(q), B(q, a), H(a, b), the strain energy and gravity.
+r"""Compiled arithmetic of a spatial floating-frame body: :func:`body_terms` (a step's momentum, forces and
+Newton block), the strain energy and gravity, and M(q), B(q, a), H(a, b) one at a time (for tests).
 
-These are the compiled twins of ``kinetics.py``, the strain objects (``strain.py``, ``solid.py``) and
+These are the compiled twins of ``kinetics.py`` (through :mod:`.kinetic_kernel`), the strain objects
+(``strain.py``, ``solid.py``) and
 :meth:`FloatingFrame3D.gravity_potential <skfem_flex.bodies.floating_spatial.frame.FloatingFrame3D.gravity_potential>`,
 held to them at round-off by ``tests/test_family_spatial_floating_frame.py``: the same equations written as
-loops, for the compiled core (:mod:`skfem_flex.compiled.families.spatial_floating_frame`), which calls them
-once per Newton evaluation. The coordinates are q = (x, d₁, d₂, d₃, y); D[c, k] = q[3 + 3k + c].
+loops, for the compiled core (:mod:`skfem_flex.compiled.families.spatial_floating_frame`), which calls
+:func:`body_terms` once per Newton evaluation. The coordinates are q = (x, d₁, d₂, d₃, y);
+D[c, k] = q[3 + 3k + c].
 
 The strain energy is V = ½ yᵀK y + ½ Σ_q w_q ε_q² with the Green–Lagrange axis ε = u₃' + ½|u'|²,
 u'_k = A_k y (a beam with ``green``), or V = ½ yᵀK y + ½ K3_ijk y_i y_j y_k + ⅛ K4_ijkl y_i y_j y_k y_l (a
