@@ -346,7 +346,7 @@ def test_kinetic_block_is_the_weighted_numpy_terms(mode):
     w_p, w_gk, dq1, dv1, da1 = weights
     inv = body.inertia
     M = kinetics.mass_matrix(inv, q1)
-    p, gk, _, M1, K, _, _ = kernel.body_terms(kd, data.quartic, mode, q0, q1, v0, v1, a1, q0, q1, weights)
+    p, gk, _, M1, K, _, _ = kernel.body_terms(kd, data.quartic, mode, q0, q1, v0, v1, a1, q0, q1, weights, False)
     if mode == kernel.EM:
         g_ref, g_q, g_v = kinetics.kinetic_discrete_gradient(inv, q0, q1, v0, v1)
         p_ref, B = M @ v1, kinetics.momentum_jacobian(inv, q1, v1)
@@ -367,7 +367,7 @@ def test_residual_only_terms_are_the_full_terms(mode):
     momentum, discrete gradients, M(q₁), ∂g_p/∂q and energy as the full evaluation, and no Newton block."""
     _, data, kd, (q0, v0, q1, v1, a1), _ = _kernel_case(4)
     weights = np.array([0.01, -0.01, 1.0, 200.0, 4e4])
-    full = kernel.body_terms(kd, data.quartic, mode, q0, q1, v0, v1, a1, q0, q1, weights)
+    full = kernel.body_terms(kd, data.quartic, mode, q0, q1, v0, v1, a1, q0, q1, weights, False)
     part = kernel.body_terms(kd, data.quartic, mode, q0, q1, v0, v1, a1, q0, q1, weights, True)
     for k in (0, 1, 2, 3, 5, 6):                        # p, g_k, g_p, M(q₁), ∂g_p/∂q, V
         assert np.array_equal(np.asarray(full[k]), np.asarray(part[k]))
@@ -410,9 +410,9 @@ def test_recording_halves_are_the_state_terms():
     kd = data.frame._replace(g=np.array(GRAVITY))
     q, v = random_state(body, np.random.default_rng(6))
     weights = np.zeros(5)
-    state = kernel.body_terms(kd, data.quartic, kernel.STATE, q, q, v, v, v, q, q, weights)
-    momentum = kernel.body_terms(kd, data.quartic, kernel.MOMENTUM, q, q, v, v, v, q, q, weights)
-    energy = kernel.body_terms(kd, data.quartic, kernel.ENERGY, q, q, v, v, v, q, q, weights)
+    state = kernel.body_terms(kd, data.quartic, kernel.STATE, q, q, v, v, v, q, q, weights, False)
+    momentum = kernel.body_terms(kd, data.quartic, kernel.MOMENTUM, q, q, v, v, v, q, q, weights, False)
+    energy = kernel.body_terms(kd, data.quartic, kernel.ENERGY, q, q, v, v, v, q, q, weights, False)
     assert np.array_equal(momentum[0], state[0])
     assert np.abs(state[0] - kinetics.mass_matrix(body.inertia, q) @ v).max() <= PARTS_TOL * np.abs(state[0]).max()
     assert energy[6] == state[6] and state[6] != 0.0

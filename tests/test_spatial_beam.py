@@ -80,7 +80,7 @@ def test_compiled_kernel_matches_the_numpy_strain_energy(director_beam):
     n = beam.n_dofs
     for q0, q1 in (states(beam, 5), (states(beam, 6)[0],) * 2):
         g_ref, jac_ref = beam.potential_discrete_gradient(q0, q1)
-        g, data, floor = discrete_gradient_terms(kd, q0, q1)
+        g, data, floor = discrete_gradient_terms(kd, q0, q1, False)
         jac = sps.csr_matrix((data, kd.pat_idx, kd.pat_ptr), shape=(n, n)).toarray()
         scale = np.abs(g_ref).max()
         assert np.abs(g - g_ref).max() <= 1e-12 * scale
@@ -329,12 +329,12 @@ def test_residual_only_strain_terms_are_the_full_terms(interpolation):
     q0, q1 = states(beam, seed=3, size=0.05)
     kd = beam.compiled_strain_data()
     if interpolation == "rotations":
-        full = rotation_kernel.discrete_gradient_terms(kd, q0, q1)
+        full = rotation_kernel.discrete_gradient_terms(kd, q0, q1, False)
         part = rotation_kernel.discrete_gradient_terms(kd, q0, q1, True)
         assert full[0] and part[0]
         full, part = full[1:], part[1:]
     else:
-        full = director_kernel.discrete_gradient_terms(kd, q0, q1)
+        full = director_kernel.discrete_gradient_terms(kd, q0, q1, False)
         part = director_kernel.discrete_gradient_terms(kd, q0, q1, True)
     (g, data, floor), (g_r, data_r, floor_r) = full, part
     assert np.array_equal(g, g_r) and np.any(g)

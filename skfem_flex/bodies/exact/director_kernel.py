@@ -91,7 +91,7 @@ def potential_energy(kd, q):
 
 
 @numba.njit(cache=True)
-def discrete_gradient_terms(kd, qa, qb, residual=False):
+def discrete_gradient_terms(kd, qa, qb, residual):
     """(g (n,), data (nnz,) of ∂g/∂q_b on the CSR pattern, floor (n,)): the module docstring's terms; the
     floor is Σ_b abs(∂g_a/∂q_b) (abs(q_a,b) + abs(q_b,b)), the round-off size of g. ``residual``: g alone
     (the same numbers), data empty and floor zero (the element matrices, most of the work, are skipped)."""

@@ -434,7 +434,7 @@ def potential_energy(kd, q):
 
 
 @numba.njit(cache=True)
-def discrete_gradient_terms(kd, qa, qb, residual=False):
+def discrete_gradient_terms(kd, qa, qb, residual):
     """(ok, g (n,), data (nnz,) of ∂g/∂q_b on the CSR pattern, floor (n,)): the module docstring's discrete
     gradient and its derivative; the floor is Σ_b abs(∂g_a/∂q_b) (abs(q_a,b) + abs(q_b,b)), the round-off
     size of g. At q_a = q_b: the gradient and half the Hessian. ``ok`` is False if an element of q_a, q_b

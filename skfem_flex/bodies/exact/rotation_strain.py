@@ -127,7 +127,7 @@ class RotationStrainPoints:
 
     def _terms(self, q0, q1):
         q0, q1 = self._checked(q0), self._checked(q1)
-        ok, g, data, _ = kernel.discrete_gradient_terms(self.data, q0, q1)
+        ok, g, data, _ = kernel.discrete_gradient_terms(self.data, q0, q1, False)
         if not ok:
             raise self._turned(q0, q1, 0.5 * (q0 + q1))
         return g, data

@@ -372,7 +372,7 @@ def gravity_terms(kd, q):
 
 
 @numba.njit(cache=True)
-def body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb, weights, residual=False):
+def body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb, weights, residual):
     r"""Every part of one body's residual and its Newton block, as the compiled core's tasks ask them
     (:mod:`skfem_flex.compiled.tasks`); the one compiled entry of the body's arithmetic.
 
