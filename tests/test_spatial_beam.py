@@ -347,6 +347,7 @@ def test_residual_only_checks_on_beam_elements_change_no_iterate(monkeypatch, in
     iterations, and the loop checks the second update with a residual-only evaluation of the beam
     (``RESIDUAL_ONLY`` of its family); trajectory and iterations are those of full evaluations."""
     from skfem_flex.compiled.families import director_beam, rotation_beam
+    from skfem_flex.schemes.stepper import Stepper
     family = rotation_beam if interpolation == "rotations" else director_beam
 
     def cantilever():
@@ -358,6 +359,7 @@ def test_residual_only_checks_on_beam_elements_change_no_iterate(monkeypatch, in
     for lazy in (True, False):
         monkeypatch.setattr(family, "RESIDUAL_ONLY", lazy)
         runs.append(sf.simulate(cantilever(), 0.1, 0.005, scheme=scheme))
+        assert Stepper(cantilever(), scheme).lazy == lazy        # the loop checks updates residual-only
     its = runs[0].newton_iterations[1:]
     assert np.mean(its == np.median(its)) > 0.8                # steady: the residual-only checks did run
     assert np.array_equal(runs[0].newton_iterations, runs[1].newton_iterations)

@@ -116,6 +116,7 @@ def _loads_at_start(ctx, s):
     for i in range(n):
         s.ext0[i] = ext[i]
     s.energy[0], s.energy[1] = energies(ctx)
+    ctx.energies_valid = 0              # computed at the start state, not at q1: no record may take them
     s.energy[2] = max(s.energy[2], s.energy[0] + abs(s.energy[1]) + abs(s.work[0]))
     if s.params[5] != 0.0:
         phit = fvec(ctx.phit, m)

@@ -4,7 +4,7 @@ and as one weighted matrix.
 The compiled twin of ``kinetics.py`` (held to it at round-off by ``tests/test_family_spatial_floating_frame.py``).
 The coordinates are q = (x, d₁, d₂, d₃, y); D[c, k] = q[3 + 3k + c] (the directors as columns), and for any
 vector a of the same layout a_x, A (its director parts as columns) and a_y. With the invariants of
-``inertia.py`` and s = S₀ + S̄y, J_ij = I₀ + (P_ij + P_ji)·y + yᵀN_ij y, C_ik = P_ik + N_kiᵀ y (as (3, 3, n_f)
+``inertia.py`` and s = S₀ + S̄y, J_ij = I₀,ij + (P_ij + P_ji)·y + yᵀN_ij y, C_ik = P_ik + N_ikᵀ y (as (3, 3, n_f)
 arrays C[i, k, e]) and their y-derivative gJ[i, j, e] = ∂J_ij/∂y_e, the kinetic bilinear form is
 
 .. math::

@@ -33,7 +33,7 @@ __all__ = ["NAME", "FORMS", "pack", "kernel", "REFUSAL_STATE", "refusal_error"]
 NAME = "rotation-interpolated spatial beams"
 FORMS = ("rotation beam",)
 #: an evaluation whose matrix is not used (ctx.fresh = 0) forms g alone, neither the tangent nor the floor
-#: (a fifth of the work): the loop then checks an update's residual alone (:func:`..loop.run_steps`, ``lazy``)
+#: (about half of the work): the loop then checks an update's residual alone (:func:`..loop.run_steps`, ``lazy``)
 RESIDUAL_ONLY = True
 
 _HEAD = 3

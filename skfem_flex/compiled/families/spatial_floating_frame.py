@@ -41,8 +41,8 @@ __all__ = ["NAME", "FORMS", "pack", "kernel"]
 
 NAME = "spatial floating-frame bodies"
 FORMS = ("spatial floating frame", "spatial floating frame gravity")
-#: an evaluation whose matrix is not used (ctx.fresh = 0) forms no kinetic derivatives here (its residual costs a
-#: third of them): the loop then checks an update's residual alone (:func:`..loop.run_steps`, ``lazy``)
+#: an evaluation whose matrix is not used (ctx.fresh = 0) forms no Newton block, only products with
+#: vectors (about half of the work): the loop then checks an update's residual alone (:func:`..loop.run_steps`, ``lazy``)
 RESIDUAL_ONLY = True
 
 #: fields per body: those of SpatialFrameKernelData, then those of QuarticTerms, after the family's one (the
