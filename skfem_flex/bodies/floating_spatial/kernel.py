@@ -25,7 +25,7 @@ import numba
 import numpy as np
 
 from ..modal.kernel import quartic_discrete_gradient, quartic_energy
-from .kinetic_kernel import (add_elastic_block, add_hessian, add_jacobian, add_jacobian_linear_part, add_mass,
+from .kinetic_kernel import (add_elastic_block, add_hessian, add_jacobian, add_mass, add_velocity_force_derivative,
                              add_mass_derivative, configuration, contract_into, derivative_times, directors,
                              form_gradient, mass_times)
 
@@ -246,10 +246,8 @@ def quadratic_velocity_terms(kd, q, v):
     f = np.zeros(n)
     form_gradient(kd.Sbar, D, C, gJ, v, Nv, v, Nv, 0.5, f)
     derivative_times(kd.Sbar, D, C, gJ, v, Nv, v, Nv, -1.0, f)
-    fq, Wq = _square(kd)
-    add_hessian(v, Nv, v, Nv, 0.5, fq, Wq)
-    add_jacobian_linear_part(v, Nv, -1.0, fq, Wq)
-    add_elastic_block(kd.N, Wq, fq)
+    fq, _ = _square(kd)
+    add_velocity_force_derivative(v, Nv, 1.0, fq)
     fv, Wv = _square(kd)
     add_jacobian(kd.Sbar, D, C, gJ, v, Nv, -1.0, 1.0, fv, Wv)
     add_mass_derivative(kd.Sbar, D, C, gJ, v, Nv, -1.0, fv, Wv)
@@ -461,8 +459,7 @@ def body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb, weights, residual):
             add_jacobian(Sbar, D1, C1, gJ1, at, Nat, 1.0, 0.0, K, W)
             add_jacobian(Sbar, D1, C1, gJ1, v1, Nv1, 0.0, ct, K, W)
             add_mass_derivative(Sbar, D1, C1, gJ1, v1, Nv1, -ct, K, W)
-            add_hessian(v1, Nv1, v1, Nv1, 0.5 * cq, K, W)
-            add_jacobian_linear_part(v1, Nv1, -cq, K, W)
+            add_velocity_force_derivative(v1, Nv1, cq, K)
     else:
         mass_times(kd.mass, Sbar, D1, s1, J1, C1, v1, Nv1, p)
         if mode == EM:

@@ -32,7 +32,7 @@ import numba
 import numpy as np
 
 __all__ = ["directors", "contract_into", "configuration", "mass_times", "form_gradient", "derivative_times",
-           "add_mass", "add_jacobian", "add_jacobian_linear_part", "add_mass_derivative", "add_hessian",
+           "add_mass", "add_jacobian", "add_velocity_force_derivative", "add_mass_derivative", "add_hessian",
            "add_elastic_block"]
 
 
@@ -358,24 +358,20 @@ def add_jacobian(Sbar, D, C, gJ, a, Na, cb, ct, out, W):
 
 
 @numba.njit(cache=True)
-def add_jacobian_linear_part(v, Nv, c, out, W):
-    """c (B(v, v) − B(0, v)): the part of B(·, v) linear in the configuration, at v (``kinetics`` docstring)."""
+def add_velocity_force_derivative(v, Nv, c, out):
+    """c ∂Q_v/∂q = c (½ H(v, v) − (B(v, v) − B(0, v))) (``kinetics`` docstring). Of the two terms only a
+    coupling of directors and elastic coordinates is left: their director blocks (½ S_H = α, α_ik = v_yᵀN_ik v_y,
+    symmetric since N_ik = N_kiᵀ) and elastic blocks (weights VᵀV) cancel, and
+    ∂Q_v/∂q [(d_k c, y e)] = ∂Q_v/∂q [(y e, d_k c)] = −2 Σ_j V_cj (N_kj v_y)_e."""
     nf = Nv.shape[2]
     V = directors(v)
-    S = np.zeros((3, 3))
-    for i in range(3):
-        for k in range(3):
-            for e in range(nf):
-                S[i, k] += Nv[k, i, e] * v[12 + e]
-    _add_director_block(S, c, out)
     Y = np.zeros((3, 3, nf))
-    for i in range(3):
+    for k in range(3):
         for e in range(nf):
             for cc in range(3):
                 for j in range(3):
-                    Y[cc, i, e] += V[cc, j] * (2.0 * Nv[i, j, e] + Nv[j, i, e])
+                    Y[cc, k, e] -= 2.0 * V[cc, j] * Nv[k, j, e]
     _add_director_elastic(Y, c, out)
-    _add_gram(V, V, c, 0.0, W)
 
 
 @numba.njit(cache=True)
