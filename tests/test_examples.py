@@ -98,6 +98,14 @@ def test_profile_step():
     assert 0 < fast < slow
 
 
+def test_calibrate_dense_solve():
+    """The calibration prints one row per size, LAPACK's time beside the model's (no timing is asserted)."""
+    out = run_script("calibrate_dense_solve")
+    rows = re.findall(r"^\| (\d+) \| ([0-9.]+) \| ([0-9.]+) \| ([0-9.]+) \|$", out, re.M)
+    assert [int(r[0]) for r in rows] == [12, 20, 24, 28, 33, 40, 50, 64, 80, 100]
+    assert all(float(v) > 0 for r in rows for v in r[1:])
+
+
 def test_your_own_scene(monkeypatch, tmp_path):
     """The tutorial's scene (tests/test_your_own_scene.py checks its physics) runs to its end as a script."""
     run_example("your_own_scene", monkeypatch, tmp_path)

@@ -31,7 +31,7 @@ from ..numerics.sparse_lu import StaticLUPlan, static_lu_solve
 from .abi import call_pointers, context_of, f1, family_of, fmat, fvec, i1, i32vec, ivec
 from .registry import compiled_kernel
 
-__all__ = ["SolverPlan", "StaticLUFields", "dense_solver", "bordered_band_solver", "csr_bordered_band_solver",
+__all__ = ["SolverPlan", "StaticLUFields", "lapack_solve", "small_lu_solve", "dense_solver", "bordered_band_solver", "csr_bordered_band_solver",
            "static_lu_solver", "static_lu_fields", "SMALL_DENSE", "STATIC_LU_FAILURES"]
 
 #: below this many unknowns the written-out LU is faster than LAPACK's
@@ -134,7 +134,7 @@ def small_lu_solve(a, b, x):
 
 
 @numba.njit(cache=True, _nrt=False)
-def _lapack_solve(lapack, a, y):
+def lapack_solve(lapack, a, y):
     """y ← a⁻¹ y by LAPACK (dgetrf, dgetrs) for the row-major ``a`` (destroyed): Fortran sees aᵀ, so the
     solve is done with its transpose ('T'); True if it succeeded."""
     n = y.size
@@ -157,7 +157,7 @@ def _dense(ctx, a, res, y, lapack):
     if nx <= SMALL_DENSE:
         ok = small_lu_solve(a, y, y)
     else:
-        ok = _lapack_solve(lapack, a, y)
+        ok = lapack_solve(lapack, a, y)
         for i in range(nx):
             if not np.isfinite(y[i]):
                 ok = False

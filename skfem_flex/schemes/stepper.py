@@ -60,9 +60,23 @@ _STATIC_LU_FALLBACK = {"dense": 0, "bordered band": 1, "bordered band (CSR)": 2}
 STATIC_LU_GAIN = 0.8
 
 
-#: modeled time of a dense or band solve per multiply-add of its work model (band_plans.solve_work), s,
-#: and per call (measured on the catalogue's Newton matrices, one core)
+#: modeled time of a band solve per multiply-add of its work model (band_plans.solve_work), s, and per call
+#: (measured on the catalogue's Newton matrices, one core)
 SECONDS_PER_SOLVE_WORK, SECONDS_PER_SOLVE = 1e-10, 2e-6
+#: modeled time of a dense LAPACK solve (getrf and getrs, with the copy of its right-hand side) of n unknowns:
+#: DENSE_SOLVE_SECONDS (n / SMALL_DENSE)^DENSE_SOLVE_EXPONENT, s. At these sizes LAPACK's time grows far slower
+#: than n³ (its unblocked kernels and call overhead): measured by ``python examples/calibrate_dense_solve.py``
+#: (2.2, 4.2, 8.3, 13, 31 µs at n = 24, 33, 50, 64, 100 on the benchmark machine); the work model above
+#: underestimated it by a quarter at n ≈ 30 to 60, where it decides whether the static-pivot LU pays.
+DENSE_SOLVE_SECONDS, DENSE_SOLVE_EXPONENT = 2.2e-6, 1.85
+
+
+def modeled_solve_seconds(nx, plan, dense_storage):
+    """Modeled time of one solve of the scene's solver, s: the dense LAPACK fit above without a band ``plan``,
+    else the band's work model (:func:`~skfem_flex.numerics.band_plans.solve_work`)."""
+    if plan is None:
+        return DENSE_SOLVE_SECONDS * (nx / solvers.SMALL_DENSE) ** DENSE_SOLVE_EXPONENT
+    return SECONDS_PER_SOLVE_WORK * solve_work(nx, plan, dense_storage) + SECONDS_PER_SOLVE
 
 
 def units(packed, scheme):
@@ -190,7 +204,7 @@ class Stepper:
         pattern = pk.pattern.tocsr()
         pattern.sort_indices()
         # the budget: a share of the scene's solver's modeled time, less the LU's backward-error check
-        budget = (STATIC_LU_GAIN * (SECONDS_PER_SOLVE_WORK * solve_work(pk.nx, pk.plan, dense) + SECONDS_PER_SOLVE)
+        budget = (STATIC_LU_GAIN * modeled_solve_seconds(pk.nx, pk.plan, dense)
                   - SECONDS_PER_SOLVE_WORK * (2.0 * pk.nx ** 2 if dense else 2.0 * pattern.nnz))
         if SECONDS_PER_ENTRY * pattern.nnz + SECONDS_PER_CALL >= budget:
             return False                # not even the entries of A would pay (the band of a beam)

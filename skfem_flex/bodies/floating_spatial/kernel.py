@@ -1,21 +1,17 @@
-r"""Compiled arithmetic of a spatial floating-frame body: :func:`body_terms` (a step's momentum, forces and
-Newton block), the strain energy and gravity, and M(q), B(q, a), H(a, b) one at a time (for tests).
+r"""Compiled arithmetic of a spatial floating-frame body: :func:`body_terms_into` (a step's momentum, forces and
+Newton block, into the body's :class:`BodyWork`), and M(q), B(q, a), H(a, b) one at a time (for tests).
 
 These are the compiled twins of ``kinetics.py`` (through :mod:`.kinetic_kernel`), the strain objects
 (``strain.py``, ``solid.py``) and
-:meth:`FloatingFrame3D.gravity_potential <skfem_flex.bodies.floating_spatial.frame.FloatingFrame3D.gravity_potential>`,
-held to them at round-off by ``tests/test_family_spatial_floating_frame.py``: the same equations written as
-loops, for the compiled core (:mod:`skfem_flex.compiled.families.spatial_floating_frame`), which calls
-:func:`body_terms` once per Newton evaluation. The coordinates are q = (x, d₁, d₂, d₃, y);
+:meth:`FloatingFrame3D.gravity_potential <skfem_flex.bodies.floating_spatial.frame.FloatingFrame3D.gravity_potential>`
+(through :mod:`.potential_kernel`), held to them at round-off by ``tests/test_family_spatial_floating_frame.py``:
+the same equations written as loops, for the compiled core (:mod:`skfem_flex.compiled.families.spatial_floating_frame`),
+which calls :func:`body_terms_into` once per Newton evaluation. The coordinates are q = (x, d₁, d₂, d₃, y);
 D[c, k] = q[3 + 3k + c].
 
-The strain energy is V = ½ yᵀK y + ½ Σ_q w_q ε_q² with the Green–Lagrange axis ε = u₃' + ½|u'|²,
-u'_k = A_k y (a beam with ``green``), or V = ½ yᵀK y + ½ K3_ijk y_i y_j y_k + ⅛ K4_ijkl y_i y_j y_k y_l (a
-meshed solid's Green–Lagrange energy, with ``quartic``: the tensors of ``SolidGreenLagrange.quartic``, folded
-by :func:`~skfem_flex.bodies.modal.kernel.pack_quartic` and evaluated by that module's kernels, which the
-planar reduced body uses too), or V = ½ yᵀK y (linear strain: a beam's or a meshed solid's). Its
-discrete gradient is the stress at the mean strain (exact), gravity's the mid-point gradient (exact:
-V_g = −g·(m x + D(S₀ + S̄ y)) is quadratic).
+:func:`body_terms_into` allocates nothing and is compiled without reference counting: its results and
+temporaries live in a :class:`BodyWork` made once per body (:func:`body_work`) and packed with the body's data
+(:mod:`.kinetic_kernel` says why). :func:`body_terms` is the same with a new work, its results returned.
 """
 from __future__ import annotations
 
@@ -24,14 +20,16 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from ..modal.kernel import quartic_discrete_gradient, quartic_energy
-from .kinetic_kernel import (add_elastic_block, add_hessian, add_jacobian, add_mass, add_velocity_force_derivative,
-                             add_mass_derivative, configuration, contract_into, derivative_times, directors,
-                             form_gradient, mass_times)
+from .kinetic_kernel import (Configuration, add_elastic_block, add_hessian, add_jacobian, add_mass,
+                             add_mass_derivative, add_velocity_force_derivative, configuration, contract_into,
+                             derivative_times, form_gradient, mass_times, tmp_size)
+from .potential_kernel import (gravity_into, gravity_terms, has_gravity, strain_energy, strain_energy_into,
+                               strain_terms, strain_terms_into, strain_work_size)
 
-__all__ = ["SpatialFrameKernelData", "QuarticTerms", "SpatialBodyData",
-           "kernel_data", "mass_matrix", "momentum_jacobian", "kinetic_hessian", "quadratic_velocity_terms",
-           "strain_energy", "strain_terms", "gravity_terms", "body_terms", "STATE", "EM", "NEWMARK", "MOMENTUM", "ENERGY"]
+__all__ = ["SpatialFrameKernelData", "QuarticTerms", "SpatialBodyData", "BodyWork", "kernel_data", "body_work",
+           "mass_matrix", "momentum_jacobian", "kinetic_hessian", "quadratic_velocity_terms", "strain_energy",
+           "strain_terms", "gravity_terms", "body_terms", "body_terms_into", "STATE", "EM", "NEWMARK", "MOMENTUM",
+           "ENERGY"]
 
 #: what :func:`body_terms` evaluates: the state's momentum and potential energy, the energy–momentum step's
 #: terms, the Newmark family's
@@ -177,42 +175,109 @@ def kernel_data(inertia, K, A=None, w=None, quartic=None, gravity=(0.0, 0.0, 0.0
                                                *quartic_arrays))
 
 
+class BodyWork(NamedTuple):
+    """The arrays one body's evaluation writes (its results and temporaries), made once by :func:`body_work` and
+    packed with the body's data, so that :func:`body_terms_into` allocates nothing (:mod:`.kinetic_kernel`
+    says why).
+
+    Attributes
+    ----------
+    p, gk, gp : ndarray (n,)
+        Results: momentum (or M(q₁)a₁), kinetic and potential discrete gradients.
+    M1, block, dgp : ndarray (n, n)
+        Results: M(q₁) (Newmark), the weighted kinetic block K, ∂g_p/∂q_b.
+    Nu : ndarray (4, 9, n_f)
+        N applied to up to four vectors of a step.
+    D, s, J, C, gJ : ndarray (2, ...)
+        Two :class:`~.kinetic_kernel.Configuration` s (at q₁ and at the mid-point).
+    vec : ndarray (2, n)
+        Two coordinate vectors (the mid-point, the combined vector of B).
+    W : ndarray (2, 3, 3)
+        Weights of elastic blocks.
+    weights : ndarray (5,)
+        The task's weights (w_p, w_gk, dq₁, dv₁, da₁), written by the caller.
+    tmp : ndarray
+        The kinetic functions' temporaries (:func:`~.kinetic_kernel.tmp_size`).
+    strain : ndarray
+        The strain energy's temporaries (:func:`strain_work_size`).
+    """
+
+    p: np.ndarray
+    gk: np.ndarray
+    gp: np.ndarray
+    M1: np.ndarray
+    block: np.ndarray
+    dgp: np.ndarray
+    Nu: np.ndarray
+    D: np.ndarray
+    s: np.ndarray
+    J: np.ndarray
+    C: np.ndarray
+    gJ: np.ndarray
+    vec: np.ndarray
+    W: np.ndarray
+    weights: np.ndarray
+    tmp: np.ndarray
+    strain: np.ndarray
+
+
+def body_work(kd, qt):
+    """Zeroed :class:`BodyWork` for the body of ``kd`` (:class:`SpatialFrameKernelData`) and ``qt``
+    (:class:`QuarticTerms`)."""
+    nf = kd.Sbar.shape[1]
+    n = 12 + nf
+    z = np.zeros
+    return BodyWork(z(n), z(n), z(n), z((n, n)), z((n, n)), z((n, n)), z((4, 9, nf)), z((2, 3, 3)), z((2, 3)),
+                    z((2, 3, 3)), z((2, 9, nf)), z((2, 9, nf)), z((2, n)), z((2, 3, 3)), z(5), z(tmp_size(nf)),
+                    z(max(1, strain_work_size(nf, kd.A.shape[1], qt.quartic[0] != 0))))
+
+
+@numba.njit(cache=True, _nrt=False, inline="always")
+def _nu(wk, k):
+    """The k-th (3, 3, n_f) contraction array of the work."""
+    nf = wk.Nu.shape[2]
+    return wk.Nu[k].reshape((3, 3, nf))
+
+
+@numba.njit(cache=True, _nrt=False, inline="always")
+def _config(wk, k):
+    """The k-th Configuration of the work (views)."""
+    nf = wk.C.shape[2]
+    return Configuration(wk.D[k], wk.s[k], wk.J[k], wk.C[k].reshape((3, 3, nf)), wk.gJ[k].reshape((3, 3, nf)))
+
+
+@numba.njit(cache=True, _nrt=False, inline="always")
+def _at(kd, q, Nq, cf):
+    """The Configuration ``cf`` at q, with ``Nq`` (written here) N applied to q."""
+    contract_into(kd.Nt, q, Nq)
+    configuration(kd.S0, kd.Sbar, kd.I0, kd.P, q, Nq, cf)
+
+
+@numba.njit(cache=True, _nrt=False, inline="always")
+def _fill(a, value):
+    """Every entry of the C-contiguous array ``a`` ← value."""
+    flat = a.reshape(a.size)
+    for i in range(flat.size):
+        flat[i] = value
+
+
+# ------------------------------------------------------------------ one term at a time (tests), allocating
 @numba.njit(cache=True)
-def _contract(kd, u):
-    """N applied to the elastic part of u, a new (3, 3, n_f) array (:func:`.kinetic_kernel.contract_into`)."""
-    out = np.empty((3, 3, kd.Sbar.shape[1]))
-    contract_into(kd.Nt, u, out)
-    return out
-
-
-@numba.njit(cache=True)
-def _configuration(kd, q, Nq=None):
-    """(D, s, J, C, gJ) at q (:func:`.kinetic_kernel.configuration`); ``Nq`` N applied to q, formed here when
-    not given."""
-    if Nq is None:
-        Nq = _contract(kd, q)
-    return configuration(kd.S0, kd.Sbar, kd.I0, kd.P, q, Nq)
-
-
-@numba.njit(cache=True)
-def _has_gravity(kd):
-    """False when no gravity field acts on the body (its terms are zero and are skipped)."""
-    return kd.g[0] != 0.0 or kd.g[1] != 0.0 or kd.g[2] != 0.0
-
-
-@numba.njit(cache=True)
-def _square(kd):
-    """(zero (n, n) matrix, zero 3 × 3 weight of its elastic block)."""
-    n = 12 + kd.Sbar.shape[1]
-    return np.zeros((n, n)), np.zeros((3, 3))
+def _case(kd):
+    """(zero (n, n) matrix, zero 3 × 3 weight, a Configuration, N-contraction arrays (3, 9, n_f), tmp) for the
+    one-term functions below."""
+    nf = kd.Sbar.shape[1]
+    n = 12 + nf
+    cf = Configuration(np.empty((3, 3)), np.empty(3), np.empty((3, 3)), np.empty((3, 3, nf)), np.empty((3, 3, nf)))
+    return np.zeros((n, n)), np.zeros((3, 3)), cf, np.empty((3, 3, 3, nf)), np.empty(tmp_size(nf))
 
 
 @numba.njit(cache=True)
 def mass_matrix(kd, q):
     """M(q), (12 + n_f) × (12 + n_f), kg (``kinetics.mass_matrix``)."""
-    out, W = _square(kd)
-    D, s, J, C, _ = _configuration(kd, q)
-    add_mass(kd.mass, kd.Sbar, D, s, J, C, 1.0, out, W)
+    out, W, cf, Nu, tmp = _case(kd)
+    _at(kd, q, Nu[0], cf)
+    add_mass(kd.mass, kd.Sbar, cf, 1.0, out, W, tmp)
     add_elastic_block(kd.N, W, out)
     return out
 
@@ -220,9 +285,10 @@ def mass_matrix(kd, q):
 @numba.njit(cache=True)
 def momentum_jacobian(kd, q, a):
     """B(q, a) = ∂(M(q) a)/∂q (``kinetics.momentum_jacobian``)."""
-    out, W = _square(kd)
-    D, _, _, C, gJ = _configuration(kd, q)
-    add_jacobian(kd.Sbar, D, C, gJ, a, _contract(kd, a), 1.0, 0.0, out, W)
+    out, W, cf, Nu, tmp = _case(kd)
+    _at(kd, q, Nu[0], cf)
+    contract_into(kd.Nt, a, Nu[1])
+    add_jacobian(kd.Sbar, cf, a, Nu[1], 1.0, 0.0, out, W, tmp)
     add_elastic_block(kd.N, W, out)
     return out
 
@@ -230,8 +296,10 @@ def momentum_jacobian(kd, q, a):
 @numba.njit(cache=True)
 def kinetic_hessian(kd, a, b):
     """H(a, b) = ∇²_q aᵀM(q)b, constant in q (``kinetics.kinetic_hessian``)."""
-    out, W = _square(kd)
-    add_hessian(a, _contract(kd, a), b, _contract(kd, b), 1.0, out, W)
+    out, W, cf, Nu, tmp = _case(kd)
+    contract_into(kd.Nt, a, Nu[0])
+    contract_into(kd.Nt, b, Nu[1])
+    add_hessian(a, Nu[0], b, Nu[1], 1.0, out, W, tmp)
     add_elastic_block(kd.N, W, out)
     return out
 
@@ -239,140 +307,52 @@ def kinetic_hessian(kd, a, b):
 @numba.njit(cache=True)
 def quadratic_velocity_terms(kd, q, v):
     """(Q_v, ∂Q_v/∂q, ∂Q_v/∂v) (``kinetics.quadratic_velocity_force``): the products and matrices
-    :func:`body_terms` forms for the Newmark family, one at a time."""
-    n = 12 + kd.Sbar.shape[1]
-    Nv = _contract(kd, v)
-    D, _, _, C, gJ = _configuration(kd, q)
-    f = np.zeros(n)
-    form_gradient(kd.Sbar, D, C, gJ, v, Nv, v, Nv, 0.5, f)
-    derivative_times(kd.Sbar, D, C, gJ, v, Nv, v, Nv, -1.0, f)
-    fq, _ = _square(kd)
-    add_velocity_force_derivative(v, Nv, 1.0, fq)
-    fv, Wv = _square(kd)
-    add_jacobian(kd.Sbar, D, C, gJ, v, Nv, -1.0, 1.0, fv, Wv)
-    add_mass_derivative(kd.Sbar, D, C, gJ, v, Nv, -1.0, fv, Wv)
+    :func:`body_terms_into` forms for the Newmark family, one at a time."""
+    fq, _, cf, Nu, tmp = _case(kd)
+    fv, Wv = np.zeros_like(fq), np.zeros((3, 3))
+    _at(kd, q, Nu[0], cf)
+    Nv = Nu[1]
+    contract_into(kd.Nt, v, Nv)
+    f = np.zeros(fq.shape[0])
+    form_gradient(kd.Sbar, cf, v, Nv, v, Nv, 0.5, f, tmp)
+    derivative_times(kd.Sbar, cf, v, Nv, v, Nv, -1.0, f, tmp)
+    add_velocity_force_derivative(v, Nv, 1.0, fq, tmp)
+    add_jacobian(kd.Sbar, cf, v, Nv, -1.0, 1.0, fv, Wv, tmp)
+    add_mass_derivative(kd.Sbar, cf, v, Nv, -1.0, fv, Wv, tmp)
     add_elastic_block(kd.N, Wv, fv)
     return f, fq, fv
 
 
-@numba.njit(cache=True)
-def _axial(kd, y):
-    """(u' (3, n_points), ε (n_points,)) of the Green–Lagrange axis."""
-    npts, nf = kd.A.shape[1], kd.A.shape[2]
-    up = np.zeros((3, npts))
-    eps = np.zeros(npts)
-    for k in range(3):
-        for p in range(npts):
-            acc = 0.0
-            for a in range(nf):
-                acc += kd.A[k, p, a] * y[a]
-            up[k, p] = acc
-    for p in range(npts):
-        eps[p] = up[2, p] + 0.5 * (up[0, p] ** 2 + up[1, p] ** 2 + up[2, p] ** 2)
-    return up, eps
-
-
-@numba.njit(cache=True)
-def strain_energy(kd, qt, y):
-    """V(y), J: ½ yᵀK y plus the quartic terms (``qt``) or the Green–Lagrange axis ½ Σ w ε² (module
-    docstring)."""
-    nf = kd.K.shape[0]
-    energy = 0.0
-    for a in range(nf):
-        acc = 0.0
-        for b in range(nf):
-            acc += kd.K[a, b] * y[b]
-        energy += 0.5 * y[a] * acc
-    if qt.quartic[0] != 0:
-        energy += quartic_energy(qt.k3p, qt.k4a, y, 0)
-    elif kd.green[0] != 0:
-        e = _axial(kd, y)[1]
-        for p in range(e.size):
-            energy += 0.5 * kd.w[p] * e[p] * e[p]
-    return energy
-
-
-@numba.njit(cache=True)
-def strain_terms(kd, qt, y0, y1):
-    """(V(y1), g, ∂g/∂y1): the strain energy at y1 and its exact discrete gradient from y0 to y1 (at y0 = y1:
-    the gradient and half the Hessian), ``SpatialBeamStrain.discrete_gradient`` / ``QuadraticEnergy`` /
-    ``SolidGreenLagrange.discrete_gradient``; ``qt`` the body's :class:`QuarticTerms`."""
-    nf = kd.K.shape[0]
-    g = np.zeros(nf)
-    jac = np.empty((nf, nf))
-    energy = strain_energy(kd, qt, y1)
-    for a in range(nf):
-        for b in range(nf):
-            kab = kd.K[a, b]
-            g[a] += 0.5 * kab * (y0[b] + y1[b])
-            jac[a, b] = 0.5 * kab
-    if qt.quartic[0] != 0:
-        g4, dg4 = quartic_discrete_gradient(qt.k3p, qt.k3q, qt.k3a, qt.k3b, qt.k4a, qt.k4s, qt.k4w, y0, y1, 0)
-        for a in range(nf):
-            g[a] += g4[a]
-            for b in range(nf):
-                jac[a, b] += dg4[a, b]
-        return energy, g, jac
-    if kd.green[0] == 0:
-        return energy, g, jac
-    npts = kd.A.shape[1]
-    up0, e0 = _axial(kd, y0)
-    up1, e1 = _axial(kd, y1)
-    bm = np.empty(nf)
-    b1 = np.empty(nf)
-    for p in range(npts):
-        w = kd.w[p]
-        t = w * 0.5 * (e0[p] + e1[p])
-        for a in range(nf):
-            bm[a] = kd.A[2, p, a]
-            b1[a] = kd.A[2, p, a]
-            for k in range(3):
-                bm[a] += 0.5 * (up0[k, p] + up1[k, p]) * kd.A[k, p, a]
-                b1[a] += up1[k, p] * kd.A[k, p, a]
-        for a in range(nf):
-            g[a] += bm[a] * t
-            for b in range(nf):
-                curv = 0.0
-                for k in range(3):
-                    curv += kd.A[k, p, a] * kd.A[k, p, b]
-                jac[a, b] += 0.5 * w * bm[a] * b1[b] + 0.5 * t * curv
-    return energy, g, jac
-
-
-@numba.njit(cache=True)
-def gravity_terms(kd, q):
-    """(V_g(q), ∇V_g(q), ∇²V_g) of V_g = −g·(m x + D(S₀ + S̄ y)) (``FloatingFrame3D.gravity_potential``)."""
+@numba.njit(cache=True, _nrt=False, inline="always")
+def _potential(kd, qt, wk, qa, qb, gradient, jacobian):
+    """Strain energy at q_b plus gravity's potential at (q_a + q_b)/2, J; with ``gradient`` gp ← their discrete
+    gradient from q_a to q_b and, with ``jacobian``, dgp ← ∂gp/∂q_b."""
     nf = kd.Sbar.shape[1]
     n = 12 + nf
-    g = kd.g
-    D = directors(q)
-    s = kd.S0.copy()
-    for i in range(3):
-        for a in range(nf):
-            s[i] += kd.Sbar[i, a] * q[12 + a]
-    grad = np.zeros(n)
-    H = np.zeros((n, n))
-    energy = 0.0
-    for c in range(3):
-        grad[c] = -kd.mass[0] * g[c]
-        energy -= g[c] * (kd.mass[0] * q[c] + D[c, 0] * s[0] + D[c, 1] * s[1] + D[c, 2] * s[2])
-        for i in range(3):
-            grad[3 + 3 * i + c] = -s[i] * g[c]
-            for a in range(nf):
-                H[3 + 3 * i + c, 12 + a] = -g[c] * kd.Sbar[i, a]
-                H[12 + a, 3 + 3 * i + c] = -g[c] * kd.Sbar[i, a]
-    for a in range(nf):
-        acc = 0.0
-        for i in range(3):
-            acc += kd.Sbar[i, a] * (D[0, i] * g[0] + D[1, i] * g[1] + D[2, i] * g[2])
-        grad[12 + a] = -acc
-    return energy, grad, H
+    gp, dgp = wk.gp, wk.dgp
+    if jacobian:
+        _fill(dgp, 0.0)
+    vg = 0.0
+    if has_gravity(kd):
+        qk = wk.vec[1]
+        for i in range(n):
+            qk[i] = 0.5 * (qa[i] + qb[i])
+        # gp doubles as the gradient's target: gravity's comes first, the strain's is added to it
+        vg = gravity_into(kd, qk, wk.D[1], gp, dgp, 0.5, jacobian)
+        if not gradient:
+            return vg + strain_energy_into(kd, qt, qb[12:], wk.strain)
+    elif gradient:
+        _fill(gp, 0.0)
+    else:
+        return strain_energy_into(kd, qt, qb[12:], wk.strain)
+    return vg + strain_terms_into(kd, qt, qa[12:], qb[12:], gp, dgp, 12, jacobian, wk.strain)
 
 
-@numba.njit(cache=True)
-def body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb, weights, residual):
+@numba.njit(cache=True, _nrt=False)
+def body_terms_into(kd, qt, wk, mode, q0, q1, v0, v1, a1, qa, qb, weights, residual):
     r"""Every part of one body's residual and its Newton block, as the compiled core's tasks ask them
-    (:mod:`skfem_flex.compiled.tasks`); the one compiled entry of the body's arithmetic.
+    (:mod:`skfem_flex.compiled.tasks`), into the body's :class:`BodyWork` ``wk``; returns the potential energy V.
+    The one compiled entry of the body's arithmetic; it allocates nothing.
 
     ``kd`` and ``qt``: the body's :class:`SpatialFrameKernelData` and :class:`QuarticTerms`; ``weights``: the
     task's (w_p, w_gk, dq1, dv1, da1) (:mod:`skfem_flex.compiled.tasks`; dv1 the same for every coordinate of
@@ -384,7 +364,7 @@ def body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb, weights, residual):
         K = w_p (dq_1 B(q_1, v_1) + dv_1 M(q_1)) + w_{gk} (\tfrac14 dq_1 H(v_0, v_1)
             + \tfrac12 dv_1 B(q_m, v_0)^T) .
 
-    :data:`NEWMARK`: p = M(q₁)a₁, g_k = Q_v(q₁, v₁) = ½B(q₁, v₁)ᵀv₁ − B(q₁, v₁)v₁ and
+    :data:`NEWMARK`: M1 = M(q₁), p = M(q₁)a₁, g_k = Q_v(q₁, v₁) = ½B(q₁, v₁)ᵀv₁ − B(q₁, v₁)v₁ and
 
     .. math::
 
@@ -392,108 +372,102 @@ def body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb, weights, residual):
             + dv_1 [B(q_1, v)^T − B(q_1, v) − DM(q_1)[v]]\big) ,
 
     with v = v₁ (``kinetics`` docstring). Both: g_p the discrete gradient of strain and gravity from q_a to
-    q_b and ∂g_p/∂q_b. :data:`STATE`: only p = M(q₁)v₁ and V (g_k zero, no matrices); :data:`MOMENTUM`
-    only p, :data:`ENERGY` only V (its vectors empty).
+    q_b and dgp = ∂g_p/∂q_b. :data:`STATE`: only p = M(q₁)v₁ and V; :data:`MOMENTUM` only p, :data:`ENERGY`
+    only V.
 
-    ``residual``: K is not formed (it comes back (0, 0)): an evaluation whose matrix is not used
-    (:mod:`skfem_flex.compiled.loop`).
+    ``residual``: neither K nor dgp is formed: an evaluation whose matrix is not used, which needs no
+    round-off floor either (:mod:`skfem_flex.compiled.loop`). What is not formed keeps stale values.
 
     Returns
     -------
-    p, gk, gp : ndarray (n,)
-    M1 : ndarray (n, n)
-        M(q₁) under :data:`NEWMARK` (its round-off scale needs the entries), else (0, 0).
-    K, dgp_dq : ndarray (n, n)
-        The kinetic block above ((0, 0) with ``residual`` and for the other modes) and ∂g_p/∂q_b.
     V : float
         Strain energy at q_b plus gravity's potential at (q_a + q_b)/2, J (the potential energy at q₁ when
-        q_a = q_b = q₁).
+        q_a = q_b = q₁); 0 for :data:`MOMENTUM`.
     """
+    if mode == ENERGY:                               # V alone: no mass matrix
+        return _potential(kd, qt, wk, qa, qb, False, False)
     nf = kd.Sbar.shape[1]
     n = 12 + nf
-    none = np.zeros((0, 0))
-    qk = np.empty(n)
-    if mode == ENERGY:                               # V alone: no mass matrix, the vectors empty
-        V = strain_energy(kd, qt, qb[12:])
-        if _has_gravity(kd):
-            for i in range(n):
-                qk[i] = 0.5 * (qa[i] + qb[i])
-            V += gravity_terms(kd, qk)[0]
-        empty = np.zeros(0)
-        return empty, empty, empty, none, none, none, V
-    p = np.zeros(n)
-    gk = np.zeros(n)
+    Sbar, tmp = kd.Sbar, wk.tmp
+    p, gk = wk.p, wk.gk
+    _fill(p, 0.0)
+    _fill(gk, 0.0)
     w_p, w_gk, dq1, dv1, da1 = weights[0], weights[1], weights[2], weights[3], weights[4]
-    Nq1, Nv1 = _contract(kd, q1), _contract(kd, v1)
-    D1, s1, J1, C1, gJ1 = _configuration(kd, q1, Nq1)
-    Sbar = kd.Sbar
-    K, W = none, np.zeros((3, 3))
-    M1 = none
+    Nv1 = _nu(wk, 1)
+    cf1 = _config(wk, 0)
+    _at(kd, q1, _nu(wk, 0), cf1)
+    contract_into(kd.Nt, v1, Nv1)
+    full = not residual and (mode == EM or mode == NEWMARK)
+    K, W = wk.block, wk.W[0]
+    if full:
+        _fill(K, 0.0)
+        _fill(W, 0.0)
     if mode == NEWMARK:
-        M1, Wm = _square(kd)
-        add_mass(kd.mass, Sbar, D1, s1, J1, C1, 1.0, M1, Wm)
+        M1, Wm = wk.M1, wk.W[1]
+        _fill(M1, 0.0)
+        _fill(Wm, 0.0)
+        add_mass(kd.mass, Sbar, cf1, 1.0, M1, Wm, tmp)
         add_elastic_block(kd.N, Wm, M1)
         for i in range(n):
             s = 0.0
             for j in range(n):
                 s += M1[i, j] * a1[j]
             p[i] = s
-        form_gradient(Sbar, D1, C1, gJ1, v1, Nv1, v1, Nv1, 0.5, gk)
-        derivative_times(Sbar, D1, C1, gJ1, v1, Nv1, v1, Nv1, -1.0, gk)
-        if not residual:
+        form_gradient(Sbar, cf1, v1, Nv1, v1, Nv1, 0.5, gk, tmp)
+        derivative_times(Sbar, cf1, v1, Nv1, v1, Nv1, -1.0, gk, tmp)
+        if full:
             # B(q₁, ·) is linear in its vector: w_p dq1 B(q₁, a₁) − w_gk dv1 B(q₁, v₁) in one pass
             ct, cq = w_gk * dv1, w_gk * dq1
-            Na1 = _contract(kd, a1)
-            at = np.empty(n)
+            Na1, Nat = _nu(wk, 2), _nu(wk, 3)
+            contract_into(kd.Nt, a1, Na1)
+            at = wk.vec[0]
             for i in range(n):
                 at[i] = w_p * dq1 * a1[i] - ct * v1[i]
-            Nat = np.empty((3, 3, nf))
             for i in range(3):
                 for k in range(3):
                     for e in range(nf):
                         Nat[i, k, e] = w_p * dq1 * Na1[i, k, e] - ct * Nv1[i, k, e]
-            K, W = _square(kd)
             for i in range(n):
                 for j in range(n):
                     K[i, j] = w_p * da1 * M1[i, j]
-            add_jacobian(Sbar, D1, C1, gJ1, at, Nat, 1.0, 0.0, K, W)
-            add_jacobian(Sbar, D1, C1, gJ1, v1, Nv1, 0.0, ct, K, W)
-            add_mass_derivative(Sbar, D1, C1, gJ1, v1, Nv1, -ct, K, W)
-            add_velocity_force_derivative(v1, Nv1, cq, K)
+            add_jacobian(Sbar, cf1, at, Nat, 1.0, 0.0, K, W, tmp)
+            add_jacobian(Sbar, cf1, v1, Nv1, 0.0, ct, K, W, tmp)
+            add_mass_derivative(Sbar, cf1, v1, Nv1, -ct, K, W, tmp)
+            add_velocity_force_derivative(v1, Nv1, cq, K, tmp)
     else:
-        mass_times(kd.mass, Sbar, D1, s1, J1, C1, v1, Nv1, p)
+        mass_times(kd.mass, Sbar, cf1, v1, Nv1, p, tmp)
         if mode == EM:
-            qm = np.empty(n)
+            qm = wk.vec[0]
             for i in range(n):
                 qm[i] = 0.5 * (q0[i] + q1[i])
-            Nv0 = _contract(kd, v0)
-            Dm, _, _, Cm, gJm = _configuration(kd, qm)
-            form_gradient(Sbar, Dm, Cm, gJm, v0, Nv0, v1, Nv1, 0.5, gk)
-            if not residual:
-                K, W = _square(kd)
-                add_mass(kd.mass, Sbar, D1, s1, J1, C1, w_p * dv1, K, W)
-                add_jacobian(Sbar, D1, C1, gJ1, v1, Nv1, w_p * dq1, 0.0, K, W)
-                add_hessian(v0, Nv0, v1, Nv1, 0.25 * w_gk * dq1, K, W)
-                add_jacobian(Sbar, Dm, Cm, gJm, v0, Nv0, 0.0, 0.5 * w_gk * dv1, K, W)
+            Nv0 = _nu(wk, 2)
+            contract_into(kd.Nt, v0, Nv0)
+            cfm = _config(wk, 1)
+            _at(kd, qm, _nu(wk, 3), cfm)
+            form_gradient(Sbar, cfm, v0, Nv0, v1, Nv1, 0.5, gk, tmp)
+            if full:
+                add_mass(kd.mass, Sbar, cf1, w_p * dv1, K, W, tmp)
+                add_jacobian(Sbar, cf1, v1, Nv1, w_p * dq1, 0.0, K, W, tmp)
+                add_hessian(v0, Nv0, v1, Nv1, 0.25 * w_gk * dq1, K, W, tmp)
+                add_jacobian(Sbar, cfm, v0, Nv0, 0.0, 0.5 * w_gk * dv1, K, W, tmp)
     if mode == MOMENTUM:                             # p alone: no strain or gravity
-        return p, gk, np.zeros(n), M1, none, none, 0.0
-    if K.size:
+        return 0.0
+    if full:
         add_elastic_block(kd.N, W, K)
     # strain and gravity: discrete gradients from q_a to q_b
-    gp = np.zeros(n)
-    dgp_dq = np.zeros((n, n))
-    vg = 0.0
-    if _has_gravity(kd):
-        for i in range(n):
-            qk[i] = 0.5 * (qa[i] + qb[i])
-        vg, grad, Hg = gravity_terms(kd, qk)
-        for i in range(n):
-            gp[i] = grad[i]
-            for j in range(n):
-                dgp_dq[i, j] = 0.5 * Hg[i, j]
-    vs, gs, js = strain_terms(kd, qt, qa[12:], qb[12:])
-    for a in range(nf):
-        gp[12 + a] += gs[a]
-        for b in range(nf):
-            dgp_dq[12 + a, 12 + b] += js[a, b]
-    return p, gk, gp, M1, K, dgp_dq, vs + vg
+    return _potential(kd, qt, wk, qa, qb, True, not residual)
+
+
+def body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb, weights, residual):
+    """:func:`body_terms_into` on a new :class:`BodyWork`, its results returned (tests): (p, g_k, g_p, M1, K,
+    dgp, V), each matrix (0, 0) where the mode or ``residual`` does not form it, and the vectors empty for
+    :data:`ENERGY`."""
+    wk = body_work(kd, qt)
+    V = body_terms_into(kd, qt, wk, mode, q0, q1, v0, v1, a1, qa, qb, np.asarray(weights, dtype=float), residual)
+    none, empty = np.zeros((0, 0)), np.zeros(0)
+    if mode == ENERGY:
+        return empty, empty, empty, none, none, none, V
+    full = not residual and mode in (EM, NEWMARK)
+    return (wk.p.copy(), wk.gk.copy(), np.zeros_like(wk.p) if mode == MOMENTUM else wk.gp.copy(),
+            wk.M1.copy() if mode == NEWMARK else none, wk.block.copy() if full else none,
+            wk.dgp.copy() if mode in (EM, NEWMARK) and not residual else none, V)

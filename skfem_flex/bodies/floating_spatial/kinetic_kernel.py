@@ -25,28 +25,75 @@ which are formed without any matrix.
 
 Every ``add_*`` function adds ``c`` times its term to ``out`` outside the elastic block and ``c`` times the
 term's weight to ``W``; :func:`add_elastic_block` then adds Σ_ik W_ik N_ik once.
+
+Nothing here allocates: every function writes into arrays it is given and takes its temporaries from ``tmp``
+(a float vector of at least :func:`tmp_size` entries), and all are compiled without numba's reference
+counting (``_nrt=False``). Why: a call that allocates, or that unpacks arrays from a tuple under reference
+counting, pays an atomic increment and decrement per array (the body's data are a dozen arrays); measured on
+the reduced rotating beam of ``examples/benchmark_peers.py``, those, not the arithmetic, were two thirds of a
+Newton evaluation.
 """
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numba
 import numpy as np
 
-__all__ = ["directors", "contract_into", "configuration", "mass_times", "form_gradient", "derivative_times",
-           "add_mass", "add_jacobian", "add_velocity_force_derivative", "add_mass_derivative", "add_hessian",
-           "add_elastic_block"]
+__all__ = ["Configuration", "tmp_size", "directors", "contract_into", "configuration", "mass_times", "form_gradient",
+           "derivative_times", "add_mass", "add_jacobian", "add_velocity_force_derivative", "add_mass_derivative",
+           "add_hessian", "add_elastic_block"]
 
 
-@numba.njit(cache=True, inline="always")
-def directors(q):
-    """D (3, 3), the director parts of a coordinate (or velocity) vector as columns."""
-    D = np.empty((3, 3))
+class Configuration(NamedTuple):
+    """What the kinetic terms need of a configuration q (module docstring), written by :func:`configuration`.
+
+    Attributes
+    ----------
+    D : ndarray (3, 3)
+        The directors as columns.
+    s : ndarray (3,)
+        S₀ + S̄ y, kg m.
+    J : ndarray (3, 3)
+        I₀ + (P_ij + P_ji)·y + yᵀN_ij y, kg m².
+    C : ndarray (3, 3, n_f)
+        C_ik = P_ik + N_ikᵀ y.
+    gJ : ndarray (3, 3, n_f)
+        ∂J_ij/∂y_e.
+    """
+
+    D: np.ndarray
+    s: np.ndarray
+    J: np.ndarray
+    C: np.ndarray
+    gJ: np.ndarray
+
+
+@numba.njit(cache=True, _nrt=False)
+def tmp_size(nf):
+    """Entries of the ``tmp`` vector every function here needs for n_f elastic coordinates."""
+    return 12 * nf + 96
+
+
+@numba.njit(cache=True, _nrt=False, inline="always")
+def _mat3(tmp, k):
+    """The k-th 3 × 3 block of ``tmp`` (a view)."""
+    return tmp[9 * k:9 * k + 9].reshape((3, 3))
+
+
+@numba.njit(cache=True, _nrt=False, inline="always")
+def directors(q, D):
+    """D (3, 3) ← the director parts of a coordinate (or velocity) vector as columns.
+
+    Like every function here that writes into its arguments, it returns nothing: a function compiled without
+    reference counting must not hand an array back to a caller that counts them (the caller would release
+    it once too often)."""
     for k in range(3):
         for c in range(3):
             D[c, k] = q[3 + 3 * k + c]
-    return D
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def contract_into(Nt, u, out):
     """out[i, k, e] = Σ_f N_ikef u_f with u_f = u[12 + f]: N_ik applied to the elastic part of u."""
     nf = Nt.shape[0]
@@ -60,71 +107,67 @@ def contract_into(Nt, u, out):
                 flat[r] += Nt[b, r] * ub
 
 
-@numba.njit(cache=True)
-def configuration(S0, Sbar, I0, P, q, Nq):
-    """(D, s, J, C, gJ) at q (module docstring); ``Nq`` the contraction of N with q (:func:`contract_into`)."""
+@numba.njit(cache=True, _nrt=False)
+def configuration(S0, Sbar, I0, P, q, Nq, cf):
+    """Write the :class:`Configuration` ``cf`` at q (module docstring); ``Nq`` the contraction of N with q
+    (:func:`contract_into`)."""
     nf = Sbar.shape[1]
-    D = directors(q)
-    s = S0.copy()
-    J = I0.copy()
-    C = np.empty((3, 3, nf))
-    gJ = np.empty((3, 3, nf))
+    D, s, J, C, gJ = cf
+    directors(q, D)
     for i in range(3):
+        acc = S0[i]
         for e in range(nf):
-            s[i] += Sbar[i, e] * q[12 + e]
+            acc += Sbar[i, e] * q[12 + e]
+        s[i] = acc
         for j in range(3):
-            acc = 0.0
+            acc = I0[i, j]
             for e in range(nf):
                 pij = P[i, j, e] + P[j, i, e]
                 acc += (pij + Nq[i, j, e]) * q[12 + e]
                 C[i, j, e] = P[i, j, e] + Nq[j, i, e]
                 gJ[i, j, e] = pij + Nq[i, j, e] + Nq[j, i, e]
-            J[i, j] += acc
-    return D, s, J, C, gJ
+            J[i, j] = acc
 
 
-@numba.njit(cache=True, inline="always")
-def _sbar_times(Sbar, u):
-    """S̄ u_y (3,)."""
+@numba.njit(cache=True, _nrt=False, inline="always")
+def _sbar_times(Sbar, u, out):
+    """out (3,) ← S̄ u_y."""
     nf = Sbar.shape[1]
-    out = np.zeros(3)
     for k in range(3):
+        acc = 0.0
         for e in range(nf):
-            out[k] += Sbar[k, e] * u[12 + e]
-    return out
+            acc += Sbar[k, e] * u[12 + e]
+        out[k] = acc
 
 
-@numba.njit(cache=True, inline="always")
-def _c_times(C, u):
-    """Σ_e C[i, k, e] u_y,e (3, 3)."""
+@numba.njit(cache=True, _nrt=False, inline="always")
+def _c_times(C, u, out):
+    """out (3, 3) ← Σ_e C[i, k, e] u_y,e."""
     nf = C.shape[2]
-    out = np.zeros((3, 3))
     for i in range(3):
         for k in range(3):
             acc = 0.0
             for e in range(nf):
                 acc += C[i, k, e] * u[12 + e]
             out[i, k] = acc
-    return out
 
 
-@numba.njit(cache=True)
-def mass_times(mass, Sbar, D, s, J, C, b, Nb, out):
-    """out += M(q) b at the configuration (D, s, J, C) (:func:`configuration`), without the matrix; ``Nb`` N
-    applied to b (:func:`contract_into`)."""
+@numba.njit(cache=True, _nrt=False)
+def mass_times(mass, Sbar, cf, b, Nb, out, tmp):
+    """out += M(q) b at the configuration ``cf`` (:func:`configuration`), without the matrix; ``Nb`` N applied
+    to b (:func:`contract_into`)."""
     nf = Sbar.shape[1]
-    Bm = directors(b)
-    Sb = _sbar_times(Sbar, b)
-    Cb = _c_times(C, b)
-    DtD = np.zeros((3, 3))
-    DtB = np.zeros((3, 3))
-    Dtx = np.zeros(3)
+    D, s, J, C = cf.D, cf.s, cf.J, cf.C
+    Bm, Cb, DtD, DtB = _mat3(tmp, 0), _mat3(tmp, 1), _mat3(tmp, 2), _mat3(tmp, 3)
+    Sb, Dtx = tmp[36:39], tmp[39:42]
+    directors(b, Bm)
+    _c_times(C, b, Cb)
+    _sbar_times(Sbar, b, Sb)
     for k in range(3):
-        for c in range(3):
-            Dtx[k] += D[c, k] * b[c]
-            for i in range(3):
-                DtD[k, i] += D[c, k] * D[c, i]
-                DtB[k, i] += D[c, k] * Bm[c, i]
+        Dtx[k] = D[0, k] * b[0] + D[1, k] * b[1] + D[2, k] * b[2]
+        for i in range(3):
+            DtD[k, i] = D[0, k] * D[0, i] + D[1, k] * D[1, i] + D[2, k] * D[2, i]
+            DtB[k, i] = D[0, k] * Bm[0, i] + D[1, k] * Bm[1, i] + D[2, k] * Bm[2, i]
     for c in range(3):
         acc = mass[0] * b[c]
         for i in range(3):
@@ -144,14 +187,21 @@ def mass_times(mass, Sbar, D, s, J, C, b, Nb, out):
         out[12 + e] += acc
 
 
-@numba.njit(cache=True)
-def form_gradient(Sbar, D, C, gJ, a, Na, b, Nb, scale, out):
-    """out += scale ∇_q aᵀM(q)b = scale B(q, a)ᵀ b at the configuration (D, C, gJ), without the matrix."""
+@numba.njit(cache=True, _nrt=False)
+def form_gradient(Sbar, cf, a, Na, b, Nb, scale, out, tmp):
+    """out += scale ∇_q aᵀM(q)b = scale B(q, a)ᵀ b at the configuration ``cf``, without the matrix."""
     nf = Sbar.shape[1]
-    A, Bm = directors(a), directors(b)
-    Sa, Sb = _sbar_times(Sbar, a), _sbar_times(Sbar, b)
-    Ca, Cb = _c_times(C, a), _c_times(C, b)
-    alpha = np.zeros((3, 3))                       # a_yᵀ N_kl b_y
+    D, C, gJ = cf.D, cf.C, cf.gJ
+    A, Bm, Ca, Cb = _mat3(tmp, 0), _mat3(tmp, 1), _mat3(tmp, 2), _mat3(tmp, 3)
+    alpha = _mat3(tmp, 4)                          # a_yᵀ N_kl b_y
+    ab, ad, bd = _mat3(tmp, 5), _mat3(tmp, 6), _mat3(tmp, 7)      # a_i · b_j, a_i · d_k, b_i · d_k
+    Sa, Sb, xb = tmp[72:75], tmp[75:78], tmp[78:81]
+    directors(a, A)
+    directors(b, Bm)
+    _c_times(C, a, Ca)
+    _c_times(C, b, Cb)
+    _sbar_times(Sbar, a, Sa)
+    _sbar_times(Sbar, b, Sb)
     for k in range(3):
         for ell in range(3):
             acc = 0.0
@@ -164,101 +214,126 @@ def form_gradient(Sbar, D, C, gJ, a, Na, b, Nb, scale, out):
             for i in range(3):
                 acc += A[c, i] * Cb[i, k] + Bm[c, i] * Ca[i, k] + D[c, i] * (alpha[k, i] + alpha[i, k])
             out[3 + 3 * k + c] += scale * acc
-    ab = np.zeros((3, 3))                          # a_i · b_j
-    ad = np.zeros((3, 3))                          # a_i · d_k
-    bd = np.zeros((3, 3))
     for i in range(3):
-        for j in range(3):
-            for c in range(3):
-                ab[i, j] += A[c, i] * Bm[c, j]
-                ad[i, j] += A[c, i] * D[c, j]
-                bd[i, j] += Bm[c, i] * D[c, j]
-    xb = np.zeros(3)                               # a_x · b_i + a_i · b_x
-    for i in range(3):
+        xb[i] = 0.0                                # a_x · b_i + a_i · b_x
         for c in range(3):
             xb[i] += a[c] * Bm[c, i] + A[c, i] * b[c]
-    for e in range(nf):
-        acc = 0.0
-        for i in range(3):
-            acc += Sbar[i, e] * xb[i]
-            for j in range(3):
-                acc += gJ[i, j, e] * ab[i, j] + ad[i, j] * Nb[i, j, e] + bd[i, j] * Na[i, j, e]
-        out[12 + e] += scale * acc
+        for j in range(3):
+            ab[i, j] = A[0, i] * Bm[0, j] + A[1, i] * Bm[1, j] + A[2, i] * Bm[2, j]
+            ad[i, j] = A[0, i] * D[0, j] + A[1, i] * D[1, j] + A[2, i] * D[2, j]
+            bd[i, j] = Bm[0, i] * D[0, j] + Bm[1, i] * D[1, j] + Bm[2, i] * D[2, j]
+    # contiguous inner loops over the elastic index (they vectorize)
+    oy = out[12:]
+    for i in range(3):
+        cx = scale * xb[i]
+        for e in range(nf):
+            oy[e] += cx * Sbar[i, e]
+        for j in range(3):
+            cg, cb, ca = scale * ab[i, j], scale * ad[i, j], scale * bd[i, j]
+            gJij, Nbij, Naij = gJ[i, j], Nb[i, j], Na[i, j]
+            for e in range(nf):
+                oy[e] += cg * gJij[e] + cb * Nbij[e] + ca * Naij[e]
 
 
-@numba.njit(cache=True)
-def _derivative_blocks(Sbar, D, C, gJ, w, Nw):
+@numba.njit(cache=True, _nrt=False, inline="always")
+def _derivative_blocks(Sbar, cf, w, Nw, tmp):
     """The blocks of DM(q)[w] in M's layout (:func:`_add_mass_shaped`): (S̄ w_y, Σ_e gJ w_e, its (x, y) block
-    X[c, e], its (d_i, y) blocks Y[c, i, e], the weight WdᵀD + DᵀWd of its elastic block)."""
+    X[c, e], its (d_i, y) blocks Y[c, i, e], the weight WdᵀD + DᵀWd of its elastic block), views of ``tmp``
+    (its first 12 n_f + 30 entries)."""
     nf = Sbar.shape[1]
-    Wd = directors(w)
-    Sw = _sbar_times(Sbar, w)
-    gJw = np.zeros((3, 3))
+    D, C, gJ = cf.D, cf.C, cf.gJ
+    Wd, gJw, Wt = _mat3(tmp, 0), _mat3(tmp, 1), _mat3(tmp, 2)
+    Sw = tmp[27:30]
+    directors(w, Wd)
+    _sbar_times(Sbar, w, Sw)
+    X = tmp[30:30 + 3 * nf].reshape((3, nf))
+    Y = tmp[30 + 3 * nf:30 + 12 * nf].reshape((3, 3, nf))
     for i in range(3):
         for j in range(3):
+            acc = 0.0
             for e in range(nf):
-                gJw[i, j] += gJ[i, j, e] * w[12 + e]
-    X = np.zeros((3, nf))
-    Y = np.zeros((3, 3, nf))
+                acc += gJ[i, j, e] * w[12 + e]
+            gJw[i, j] = acc
     for c in range(3):
         for e in range(nf):
-            acc = 0.0
-            for k in range(3):
-                acc += Wd[c, k] * Sbar[k, e]
-            X[c, e] = acc
+            X[c, e] = Wd[c, 0] * Sbar[0, e] + Wd[c, 1] * Sbar[1, e] + Wd[c, 2] * Sbar[2, e]
             for i in range(3):
                 acc = 0.0
                 for k in range(3):
                     acc += Wd[c, k] * C[i, k, e] + D[c, k] * Nw[k, i, e]
                 Y[c, i, e] = acc
-    Wt = np.zeros((3, 3))
     for i in range(3):
         for k in range(3):
+            acc = 0.0
             for c in range(3):
-                Wt[i, k] += Wd[c, i] * D[c, k] + D[c, i] * Wd[c, k]
+                acc += Wd[c, i] * D[c, k] + D[c, i] * Wd[c, k]
+            Wt[i, k] = acc
     return Sw, gJw, X, Y, Wt
 
 
-@numba.njit(cache=True)
-def derivative_times(Sbar, D, C, gJ, w, Nw, b, Nb, scale, out):
-    """out += scale DM(q)[w] b = scale B(q, b) w at the configuration (D, C, gJ), without the matrix."""
+@numba.njit(cache=True, _nrt=False)
+def derivative_times(Sbar, cf, w, Nw, b, Nb, scale, out, tmp):
+    """out += scale DM(q)[w] b = scale B(q, b) w at the configuration ``cf``, without the matrix.
+
+    The blocks of DM(q)[w] (:func:`_derivative_blocks`: X = W_d S̄, Y_i = W_d C_iᵀ + D N_iᵀw_y, ...) are never
+    formed: their products with b are contracted in the order that needs the fewest operations (S̄b, C b and
+    N w_y b first), a third of the work of forming them."""
     nf = Sbar.shape[1]
-    Bm = directors(b)
-    Sw, gJw, X, Y, Wt = _derivative_blocks(Sbar, D, C, gJ, w, Nw)
+    D, C, gJ = cf.D, cf.C, cf.gJ
+    Wd, Bm, gJw, Wt = _mat3(tmp, 0), _mat3(tmp, 1), _mat3(tmp, 2), _mat3(tmp, 3)
+    Cb, Nwb, WB, DB = _mat3(tmp, 4), _mat3(tmp, 5), _mat3(tmp, 6), _mat3(tmp, 7)
+    Sw, Sb, Wx = tmp[72:75], tmp[75:78], tmp[78:81]
+    directors(w, Wd)
+    directors(b, Bm)
+    _sbar_times(Sbar, w, Sw)
+    _sbar_times(Sbar, b, Sb)
+    _c_times(C, b, Cb)
+    for i in range(3):
+        for j in range(3):
+            acc, accn = 0.0, 0.0
+            for e in range(nf):
+                acc += gJ[i, j, e] * w[12 + e]
+                accn += Nw[i, j, e] * b[12 + e]
+            gJw[i, j] = acc
+            Nwb[i, j] = accn
+    for i in range(3):
+        Wx[i] = Wd[0, i] * b[0] + Wd[1, i] * b[1] + Wd[2, i] * b[2]
+        for k in range(3):
+            Wt[i, k] = (Wd[0, i] * D[0, k] + Wd[1, i] * D[1, k] + Wd[2, i] * D[2, k]
+                        + D[0, i] * Wd[0, k] + D[1, i] * Wd[1, k] + D[2, i] * Wd[2, k])
+            WB[k, i] = Wd[0, k] * Bm[0, i] + Wd[1, k] * Bm[1, i] + Wd[2, k] * Bm[2, i]
+            DB[k, i] = D[0, k] * Bm[0, i] + D[1, k] * Bm[1, i] + D[2, k] * Bm[2, i]
     for c in range(3):
         acc = 0.0
         for i in range(3):
-            acc += Sw[i] * Bm[c, i]
-        for e in range(nf):
-            acc += X[c, e] * b[12 + e]
+            acc += Sw[i] * Bm[c, i] + Wd[c, i] * Sb[i]
         out[c] += scale * acc
         for i in range(3):
             acc = Sw[i] * b[c]
             for j in range(3):
-                acc += gJw[i, j] * Bm[c, j]
-            for e in range(nf):
-                acc += Y[c, i, e] * b[12 + e]
+                acc += gJw[i, j] * Bm[c, j] + Wd[c, j] * Cb[i, j] + D[c, j] * Nwb[j, i]
             out[3 + 3 * i + c] += scale * acc
-    for e in range(nf):
-        acc = 0.0
-        for c in range(3):
-            acc += X[c, e] * b[c]
-            for i in range(3):
-                acc += Y[c, i, e] * Bm[c, i]
+    # contiguous inner loops over the elastic index (they vectorize)
+    oy = out[12:]
+    for k in range(3):
+        cx = scale * Wx[k]
+        for e in range(nf):
+            oy[e] += cx * Sbar[k, e]
         for i in range(3):
-            for k in range(3):
-                acc += Wt[i, k] * Nb[i, k, e]
-        out[12 + e] += scale * acc
+            cc, cn, cb = scale * WB[k, i], scale * DB[k, i], scale * Wt[i, k]
+            Cik, Nwki, Nbik = C[i, k], Nw[k, i], Nb[i, k]
+            for e in range(nf):
+                oy[e] += cc * Cik[e] + cn * Nwki[e] + cb * Nbik[e]
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, _nrt=False, inline="always")
 def _add_pair(out, i, j, c, ct, val):
     """out[i, j] += c val and out[j, i] += ct val."""
     out[i, j] += c * val
     out[j, i] += ct * val
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, _nrt=False, inline="always")
 def _add_director_block(S, c, out):
     """out[(d_i, d_k)] += c S_ik I₃: a 3 × 3 matrix of scalars on the directors' blocks."""
     for i in range(3):
@@ -267,7 +342,7 @@ def _add_director_block(S, c, out):
                 out[3 + 3 * i + cc, 3 + 3 * k + cc] += c * S[i, k]
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, _nrt=False, inline="always")
 def _add_director_elastic(Y, c, out):
     """out[(d_i c, y e)] and out[(y e, d_i c)] += c Y[c, i, e]: a symmetric coupling of directors and elastic
     coordinates."""
@@ -277,7 +352,7 @@ def _add_director_elastic(Y, c, out):
                 _add_pair(out, 3 + 3 * i + cc, 12 + e, c, c, Y[cc, i, e])
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, _nrt=False, inline="always")
 def _add_gram(A, B, c, ct, W):
     """W += c AᵀB + ct (AᵀB)ᵀ for two 3 × 3 matrices (an elastic block's weight, module docstring)."""
     for i in range(3):
@@ -287,7 +362,7 @@ def _add_gram(A, B, c, ct, W):
             W[k, i] += ct * t
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _add_mass_shaped(mass, s, J, X, Y, Wyy, c, out, W):
     """c times a matrix laid out as M(q) (module docstring), from its blocks: mass I on (x, x), s_i I on
     (x, d_i), J_ij I on (d_i, d_j), X on (x, y), Y[:, i] on (d_i, y), each with its transpose, and the weight
@@ -306,42 +381,41 @@ def _add_mass_shaped(mass, s, J, X, Y, Wyy, c, out, W):
             W[i, k] += c * Wyy[i, k]
 
 
-@numba.njit(cache=True)
-def add_mass(mass, Sbar, D, s, J, C, c, out, W):
-    """c M(q) at the configuration (D, s, J, C)."""
+@numba.njit(cache=True, _nrt=False)
+def add_mass(mass, Sbar, cf, c, out, W, tmp):
+    """c M(q) at the configuration ``cf``."""
     nf = Sbar.shape[1]
-    X = np.zeros((3, nf))
-    Y = np.zeros((3, 3, nf))
-    DtD = np.zeros((3, 3))
+    D, C = cf.D, cf.C
+    DtD = _mat3(tmp, 0)
+    X = tmp[9:9 + 3 * nf].reshape((3, nf))
+    Y = tmp[9 + 3 * nf:9 + 12 * nf].reshape((3, 3, nf))
     for cc in range(3):
         for e in range(nf):
-            for k in range(3):
-                X[cc, e] += D[cc, k] * Sbar[k, e]
-                for i in range(3):
-                    Y[cc, i, e] += D[cc, k] * C[i, k, e]
-        for i in range(3):
-            for k in range(3):
-                DtD[i, k] += D[cc, i] * D[cc, k]
-    _add_mass_shaped(mass[0], s, J, X, Y, DtD, c, out, W)
+            X[cc, e] = D[cc, 0] * Sbar[0, e] + D[cc, 1] * Sbar[1, e] + D[cc, 2] * Sbar[2, e]
+            for i in range(3):
+                Y[cc, i, e] = D[cc, 0] * C[i, 0, e] + D[cc, 1] * C[i, 1, e] + D[cc, 2] * C[i, 2, e]
+    for i in range(3):
+        for k in range(3):
+            DtD[i, k] = D[0, i] * D[0, k] + D[1, i] * D[1, k] + D[2, i] * D[2, k]
+    _add_mass_shaped(mass[0], cf.s, cf.J, X, Y, DtD, c, out, W)
 
 
-@numba.njit(cache=True)
-def add_jacobian(Sbar, D, C, gJ, a, Na, cb, ct, out, W):
-    """cb B(q, a) + ct B(q, a)ᵀ at the configuration (D, C, gJ), B(q, a) = ∂(M(q)a)/∂q; ``Na`` N applied to
-    a."""
+@numba.njit(cache=True, _nrt=False)
+def add_jacobian(Sbar, cf, a, Na, cb, ct, out, W, tmp):
+    """cb B(q, a) + ct B(q, a)ᵀ at the configuration ``cf``, B(q, a) = ∂(M(q)a)/∂q; ``Na`` N applied to a."""
     nf = Sbar.shape[1]
-    A = directors(a)
-    Sa = _sbar_times(Sbar, a)
-    Wa = _c_times(C, a)
+    D, C, gJ = cf.D, cf.C, cf.gJ
+    A, Wa, Sa = _mat3(tmp, 0), _mat3(tmp, 1), tmp[18:21]
+    directors(a, A)
+    _c_times(C, a, Wa)
+    _sbar_times(Sbar, a, Sa)
     for cc in range(3):
         for k in range(3):
             _add_pair(out, cc, 3 + 3 * k + cc, cb, ct, Sa[k])
             for i in range(3):
                 _add_pair(out, 3 + 3 * i + cc, 3 + 3 * k + cc, cb, ct, Wa[i, k])
         for e in range(nf):
-            acc = 0.0
-            for k in range(3):
-                acc += A[cc, k] * Sbar[k, e]
+            acc = A[cc, 0] * Sbar[0, e] + A[cc, 1] * Sbar[1, e] + A[cc, 2] * Sbar[2, e]
             _add_pair(out, cc, 12 + e, cb, ct, acc)
     for i in range(3):
         for e in range(nf):
@@ -357,57 +431,62 @@ def add_jacobian(Sbar, D, C, gJ, a, Na, cb, ct, out, W):
     _add_gram(D, A, cb, ct, W)
 
 
-@numba.njit(cache=True)
-def add_velocity_force_derivative(v, Nv, c, out):
+@numba.njit(cache=True, _nrt=False)
+def add_velocity_force_derivative(v, Nv, c, out, tmp):
     """c ∂Q_v/∂q = c (½ H(v, v) − (B(v, v) − B(0, v))) (``kinetics`` docstring). Of the two terms only a
     coupling of directors and elastic coordinates is left: their director blocks (½ S_H = α, α_ik = v_yᵀN_ik v_y,
     symmetric since N_ik = N_kiᵀ) and elastic blocks (weights VᵀV) cancel, and
     ∂Q_v/∂q [(d_k c, y e)] = ∂Q_v/∂q [(y e, d_k c)] = −2 Σ_j V_cj (N_kj v_y)_e."""
     nf = Nv.shape[2]
-    V = directors(v)
-    Y = np.zeros((3, 3, nf))
+    V = _mat3(tmp, 0)
+    directors(v, V)
+    Y = tmp[9:9 + 9 * nf].reshape((3, 3, nf))
     for k in range(3):
         for e in range(nf):
             for cc in range(3):
-                for j in range(3):
-                    Y[cc, k, e] -= 2.0 * V[cc, j] * Nv[k, j, e]
+                Y[cc, k, e] = -2.0 * (V[cc, 0] * Nv[k, 0, e] + V[cc, 1] * Nv[k, 1, e] + V[cc, 2] * Nv[k, 2, e])
     _add_director_elastic(Y, c, out)
 
 
-@numba.njit(cache=True)
-def add_mass_derivative(Sbar, D, C, gJ, w, Nw, c, out, W):
-    """c DM(q)[w] = c Σ_k w_k ∂M/∂q_k at the configuration (D, C, gJ) (M is quadratic: exact)."""
-    Sw, gJw, X, Y, Wt = _derivative_blocks(Sbar, D, C, gJ, w, Nw)
+@numba.njit(cache=True, _nrt=False)
+def add_mass_derivative(Sbar, cf, w, Nw, c, out, W, tmp):
+    """c DM(q)[w] = c Σ_k w_k ∂M/∂q_k at the configuration ``cf`` (M is quadratic: exact)."""
+    Sw, gJw, X, Y, Wt = _derivative_blocks(Sbar, cf, w, Nw, tmp)
     _add_mass_shaped(0.0, Sw, gJw, X, Y, Wt, c, out, W)
 
 
-@numba.njit(cache=True)
-def add_hessian(a, Na, b, Nb, c, out, W):
+@numba.njit(cache=True, _nrt=False)
+def add_hessian(a, Na, b, Nb, c, out, W, tmp):
     """c H(a, b) = c ∇²_q aᵀM(q)b (constant in q)."""
     nf = Na.shape[2]
-    A, Bm = directors(a), directors(b)
-    S = np.zeros((3, 3))
+    A, Bm, S = _mat3(tmp, 0), _mat3(tmp, 1), _mat3(tmp, 2)
+    directors(a, A)
+    directors(b, Bm)
     for k in range(3):
         for ell in range(3):
+            acc = 0.0
             for e in range(nf):
-                S[k, ell] += (Na[k, ell, e] + Na[ell, k, e]) * b[12 + e]
+                acc += (Na[k, ell, e] + Na[ell, k, e]) * b[12 + e]
+            S[k, ell] = acc
     _add_director_block(S, c, out)
-    Y = np.zeros((3, 3, nf))
+    Y = tmp[27:27 + 9 * nf].reshape((3, 3, nf))
     for k in range(3):
         for e in range(nf):
             for cc in range(3):
+                acc = 0.0
                 for i in range(3):
-                    Y[cc, k, e] += A[cc, i] * Nb[i, k, e] + Bm[cc, i] * Na[i, k, e]
+                    acc += A[cc, i] * Nb[i, k, e] + Bm[cc, i] * Na[i, k, e]
+                Y[cc, k, e] = acc
     _add_director_elastic(Y, c, out)
     _add_gram(A, Bm, c, c, W)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def add_elastic_block(N, W, out):
     """out[y, y] += Σ_ik W_ik N_ik: the elastic blocks of every term added with ``W`` (module docstring); ``N``
     raveled, (9 n_f²,)."""
     nf = out.shape[0] - 12
-    N3 = N.reshape(9, nf, nf)
+    N3 = N.reshape((9, nf, nf))
     for r in range(9):
         w = W[r // 3, r % 3]
         if w != 0.0:

@@ -32,7 +32,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-__all__ = ["pack_quartic", "quartic_energy", "quartic_discrete_gradient"]
+__all__ = ["pack_quartic", "quartic_work_size", "quartic_energy", "quartic_energy_into", "quartic_discrete_gradient",
+           "quartic_discrete_gradient_into"]
 
 _FAST = {"reassoc", "contract"}
 
@@ -72,13 +73,22 @@ def pack_quartic(K3, K4):
     return tuple(np.ascontiguousarray(a, dtype=float) for a in (k3p, k3q, k3a, k3b, k4a, k4s, k4w))
 
 
-@numba.njit(cache=True, fastmath=_FAST)
-def quartic_energy(k3p, k4a, q, off):
-    """½ K3_ijk η_i η_j η_k + ⅛ K4_ijkl η_i η_j η_k η_l for η = q[off:], J (the quadratic part is not included)."""
+@numba.njit(cache=True, _nrt=False)
+def quartic_work_size(m):
+    """Entries of the ``work`` vector :func:`quartic_energy_into` and :func:`quartic_discrete_gradient_into`
+    need for m coordinates."""
+    ns, nw = m * (m + 1) // 2, m * (m - 1) // 2
+    return 2 * m + 3 * ns + nw + m * m
+
+
+@numba.njit(cache=True, fastmath=_FAST, _nrt=False)
+def quartic_energy_into(k3p, k4a, q, off, work):
+    """½ K3_ijk η_i η_j η_k + ⅛ K4_ijkl η_i η_j η_k η_l for η = q[off:], J (the quadratic part is not included);
+    its temporaries in ``work`` (:func:`quartic_work_size` entries), nothing allocated."""
     m = k3p.shape[0]
     ns = k4a.shape[0]
-    E = np.empty(ns)                                 # η_j η_l, j ≤ l
-    wr = np.empty(ns)                                # 2 off the diagonal: the pairs (j, l) and (l, j)
+    E = work[:ns]                                    # η_j η_l, j ≤ l
+    wr = work[ns:2 * ns]                             # 2 off the diagonal: the pairs (j, l) and (l, j)
     p = 0
     for j in range(m):
         for l in range(j, m):
@@ -101,21 +111,29 @@ def quartic_energy(k3p, k4a, q, off):
 
 
 @numba.njit(cache=True, fastmath=_FAST)
-def quartic_discrete_gradient(k3p, k3q, k3a, k3b, k4a, k4s, k4w, q0, q1, off):
-    """(g, ∂g/∂η1) of the cubic and quartic parts (module docstring) for η_i = q_i[off:]; (m,), (m, m).
+def quartic_energy(k3p, k4a, q, off):
+    """:func:`quartic_energy_into` with its temporaries allocated here."""
+    return quartic_energy_into(k3p, k4a, q, off, np.empty(quartic_work_size(k3p.shape[0])))
+
+
+@numba.njit(cache=True, fastmath=_FAST, _nrt=False)
+def quartic_discrete_gradient_into(k3p, k3q, k3a, k3b, k4a, k4s, k4w, q0, q1, off, g, dg, work):
+    """g (m,) and dg = ∂g/∂η1 (m, m) ← the discrete gradient of the cubic and quartic parts (module docstring)
+    for η_i = q_i[off:]; its temporaries in ``work`` (:func:`quartic_work_size` entries), nothing allocated.
 
     The arrays are those of :func:`pack_quartic`."""
     m = k3p.shape[0]
     ns, nw = k4a.shape[0], k4w.shape[0]
-    e1 = np.empty(m)
-    em = np.empty(m)
+    e1 = work[:m]
+    em = work[m:2 * m]
+    P = work[2 * m:2 * m + ns]          # (η0η0ᵀ + η1η1ᵀ)/2, η̄η̄ᵀ, S on the pairs j ≤ l; W on j < l
+    E = work[2 * m + ns:2 * m + 2 * ns]
+    S = work[2 * m + 2 * ns:2 * m + 3 * ns]
+    W = work[2 * m + 3 * ns:2 * m + 3 * ns + nw]
+    A = work[2 * m + 3 * ns + nw:2 * m + 3 * ns + nw + m * m].reshape((m, m))
     for i in range(m):
         e1[i] = q1[off + i]
         em[i] = 0.5 * (q0[off + i] + e1[i])
-    P = np.empty(ns)            # (η0η0ᵀ + η1η1ᵀ)/2, η̄η̄ᵀ, S on the pairs j ≤ l; W on j < l
-    E = np.empty(ns)
-    S = np.empty(ns)
-    W = np.empty(nw)
     p, w = 0, 0
     for j in range(m):
         for l in range(j, m):
@@ -126,8 +144,6 @@ def quartic_discrete_gradient(k3p, k3q, k3a, k3b, k4a, k4s, k4w, q0, q1, off):
                 W[w] = 0.5 * (em[j] * e1[l] - e1[j] * em[l])
                 w += 1
             p += 1
-    A = np.empty((m, m))
-    dg = np.empty((m, m))
     r = 0
     for i in range(m):                               # A and ½ B_S, symmetric: rows i ≤ k
         for k in range(i, m):
@@ -149,7 +165,6 @@ def quartic_discrete_gradient(k3p, k3q, k3a, k3b, k4a, k4s, k4w, q0, q1, off):
             dg[i, n] += 0.5 * s
             dg[n, i] -= 0.5 * s
             r += 1
-    g = np.empty(m)
     for i in range(m):
         s3p, s3q, sa = 0.0, 0.0, 0.0
         for p in range(ns):
@@ -164,4 +179,17 @@ def quartic_discrete_gradient(k3p, k3q, k3a, k3b, k4a, k4s, k4w, q0, q1, off):
             for k in range(m):
                 t += k3a[r, k] * e1[k] + k3b[r, k] * em[k]
             dg[i, n] += 0.5 * t + 0.25 * A[i, n]
+
+
+@numba.njit(cache=True, fastmath=_FAST)
+def quartic_discrete_gradient(k3p, k3q, k3a, k3b, k4a, k4s, k4w, q0, q1, off):
+    """(g, ∂g/∂η1) of the cubic and quartic parts (module docstring) for η_i = q_i[off:]; (m,), (m, m)
+    (:func:`quartic_discrete_gradient_into` with its arrays allocated here).
+
+    The arrays are those of :func:`pack_quartic`."""
+    m = k3p.shape[0]
+    g = np.empty(m)
+    dg = np.empty((m, m))
+    quartic_discrete_gradient_into(k3p, k3q, k3a, k3b, k4a, k4s, k4w, q0, q1, off, g, dg,
+                                   np.empty(quartic_work_size(m)))
     return g, dg

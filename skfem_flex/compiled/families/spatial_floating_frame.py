@@ -27,10 +27,9 @@ body's ``compiled_kernel_data()``); this family adds its results where the task 
 from __future__ import annotations
 
 import numba
-import numpy as np
 
-from ...bodies.floating_spatial.kernel import (EM, ENERGY, MOMENTUM, NEWMARK, QuarticTerms, SpatialBodyData,
-                                               SpatialFrameKernelData, body_terms)
+from ...bodies.floating_spatial.kernel import (EM, ENERGY, MOMENTUM, NEWMARK, BodyWork, QuarticTerms,
+                                               SpatialBodyData, SpatialFrameKernelData, body_terms_into, body_work)
 from ..abi import context_of, f1, f2, f3, family_of, fvec, i1
 from ..registry import compiled_kernel
 from ..storage import add_qq, storage_of
@@ -45,10 +44,11 @@ FORMS = ("spatial floating frame", "spatial floating frame gravity")
 #: vectors (about half of the work): the loop then checks an update's residual alone (:func:`..loop.run_steps`, ``lazy``)
 RESIDUAL_ONLY = True
 
-#: fields per body: those of SpatialFrameKernelData, then those of QuarticTerms, after the family's one (the
-#: bodies' offsets)
+#: fields per body: those of SpatialFrameKernelData, then those of QuarticTerms, then the body's BodyWork (its
+#: results and temporaries: the kernel allocates nothing), after the family's one (the bodies' offsets)
 _NFRAME = len(SpatialFrameKernelData._fields)
-_NKD = _NFRAME + len(QuarticTerms._fields)
+_NQT = _NFRAME + len(QuarticTerms._fields)
+_NKD = _NQT + len(BodyWork._fields)
 
 
 def pack(items, packer):
@@ -73,7 +73,7 @@ def pack(items, packer):
         kd = data.frame
         if id(body) in gravity:
             kd = kd._replace(g=kd.g + gravity[id(body)])
-        packed.append(((kd, data.quartic), off, 12 + kd.Sbar.shape[1]))
+        packed.append(((kd, data.quartic, body_work(kd, data.quartic)), off, 12 + kd.Sbar.shape[1]))
     return body_family_pack("SpatialFloatingFrameData", packed)
 
 
@@ -93,6 +93,14 @@ def _quartic(fam, k):
 
 
 @numba.njit(cache=True, inline="always")
+def _work(fam, k):
+    """The body's BodyWork from the pools (its order)."""
+    return BodyWork(f1(fam, k), f1(fam, k + 1), f1(fam, k + 2), f2(fam, k + 3), f2(fam, k + 4), f2(fam, k + 5),
+                    f3(fam, k + 6), f3(fam, k + 7), f2(fam, k + 8), f3(fam, k + 9), f3(fam, k + 10), f3(fam, k + 11),
+                    f2(fam, k + 12), f3(fam, k + 13), f1(fam, k + 14), f1(fam, k + 15), f1(fam, k + 16))
+
+
+@numba.njit(cache=True, inline="always")
 def _bodies(ctx, fam):
     """Every body's part of the context's task (module docstring)."""
     n, task = ctx.n, ctx.task
@@ -102,18 +110,21 @@ def _bodies(ctx, fam):
     out = fvec(ctx.out, 7)
     rp, rgk, rgp, floor = fvec(ctx.p, n), fvec(ctx.gk, n), fvec(ctx.gp, n), fvec(ctx.floor, n)
     for b in range(offs.size):
-        kd, qt = _body(fam, 1 + _NKD * b), _quartic(fam, 1 + _NKD * b + _NFRAME)
+        k0 = 1 + _NKD * b
+        kd, qt, wk = _body(fam, k0), _quartic(fam, k0 + _NFRAME), _work(fam, k0 + _NQT)
         o, nb = offs[b], 12 + kd.Sbar.shape[1]
-        sl = slice(o, o + nb)
-        q1, v1 = fvec(ctx.q1, n)[sl].copy(), fvec(ctx.v1, n)[sl].copy()
+        q1, v1 = fvec(ctx.q1 + 8 * o, nb), fvec(ctx.v1 + 8 * o, nb)
         if mode == ENERGY or mode == MOMENTUM:  # only q₁ and v₁ are set for these tasks
             q0, v0, a1, qa, qb = q1, v1, v1, q1, q1
         else:
-            q0, v0, a1 = fvec(ctx.q0, n)[sl].copy(), fvec(ctx.v0, n)[sl].copy(), fvec(ctx.a1, n)[sl].copy()
-            qa, qb = fvec(ctx.qa, n)[sl].copy(), fvec(ctx.qb, n)[sl].copy()
+            q0, v0, a1 = fvec(ctx.q0 + 8 * o, nb), fvec(ctx.v0 + 8 * o, nb), fvec(ctx.a1 + 8 * o, nb)
+            qa, qb = fvec(ctx.qa + 8 * o, nb), fvec(ctx.qb + 8 * o, nb)
         residual = ctx.fresh == 0                 # an update's check: its matrix is not used
-        weights = np.array([ctx.w_p, ctx.w_gk, ctx.dq1, fvec(ctx.dv1, n)[o], ctx.da1])
-        p, gk, gp, M1, K, dgp_dq, V = body_terms(kd, qt, mode, q0, q1, v0, v1, a1, qa, qb, weights, residual)
+        weights = wk.weights
+        weights[0], weights[1], weights[2], weights[3], weights[4] = (ctx.w_p, ctx.w_gk, ctx.dq1,
+                                                                      fvec(ctx.dv1, n)[o], ctx.da1)
+        V = body_terms_into(kd, qt, wk, mode, q0, q1, v0, v1, a1, qa, qb, weights, residual)
+        p = wk.p
         if task == TASK_ENERGY:
             out[0] += V
             continue
@@ -128,22 +139,27 @@ def _bodies(ctx, fam):
                 out[5] += x2 * p[3 * k] - x0 * p[3 * k + 2]
                 out[6] += x0 * p[3 * k + 1] - x1 * p[3 * k]
             continue
-        st = storage_of(ctx)
-        th = ctx.w_gp * ctx.c_dg * ctx.dq1
+        gk, gp = wk.gk, wk.gp
         for i in range(nb):
             rp[o + i] += p[i]
             rgk[o + i] += gk[i]
             rgp[o + i] += gp[i]
-            fl = 0.0
-            for j in range(nb):
-                tp = th * dgp_dq[i, j]
-                if not residual:
+        if not residual:
+            # the Newton block and the potential's round-off floor (neither wanted by a residual-only check)
+            K, dgp = wk.block, wk.dgp
+            st = storage_of(ctx)
+            th = ctx.w_gp * ctx.c_dg * ctx.dq1
+            for i in range(nb):
+                fl = 0.0
+                for j in range(nb):
+                    tp = th * dgp[i, j]
                     val = K[i, j] + tp
                     if val != 0.0:
                         add_qq(ctx, st, o + i, o + j, val)
-                fl += abs(tp) * (abs(qa[j]) + abs(qb[j]))
-            floor[o + i] += fl
+                    fl += abs(tp) * (abs(qa[j]) + abs(qb[j]))
+                floor[o + i] += fl
         if mode == NEWMARK:
+            M1 = wk.M1
             mterms, terms = fvec(ctx.mterms, n), fvec(ctx.terms, n)
             for i in range(nb):
                 s = 0.0
@@ -162,4 +178,4 @@ def _kernel(ctx_p, fam_p):
 
 def kernel():
     """The compiled kernel (from the cache, or compiled now)."""
-    return compiled_kernel(_kernel, "the spatial floating-frame family", nrt=True)
+    return compiled_kernel(_kernel, "the spatial floating-frame family")
