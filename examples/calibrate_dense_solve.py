@@ -1,4 +1,5 @@
-"""The time of a dense LAPACK solve against its size: the measurement behind the dense solver's cost model.
+"""The time of the linear solves of a Newton step against their size: the measurements behind the solvers'
+cost models.
 
 Times the compiled dense solve of the loop (:func:`skfem_flex.compiled.solvers.lapack_solve`: LAPACK's getrf and
 getrs called by address, on a copy of the matrix, as each Newton solve does) and the written-out LU used below
@@ -6,11 +7,16 @@ getrs called by address, on a copy of the matrix, as each Newton solve does) and
 :func:`skfem_flex.schemes.stepper.modeled_solve_seconds` (``DENSE_SOLVE_SECONDS``, ``DENSE_SOLVE_EXPONENT``),
 which decides whether the static-pivot sparse LU replaces a scene's dense solver.
 
+A second table times the static-pivot sparse LU (:func:`skfem_flex.numerics.sparse_lu.static_lu_solve`, its
+solution's check left out) on the Newton matrix of the first step of a few scenes (the reduced rotating beam
+of the exudyn comparison, the spatial slider-crank, chains of rigid bars, the Bricard linkage) beside its
+model (:func:`skfem_flex.numerics.sparse_lu.modeled_seconds`) and the scene's own solver's model.
+
 Usage::
 
     python examples/calibrate_dense_solve.py [--repeat 20000]
 
-Quick mode (``SKFEM_FLEX_EXAMPLE_QUICK=1``, used by the tests): 500 solves per size.
+Quick mode (``SKFEM_FLEX_EXAMPLE_QUICK=1``, used by the tests): 500 solves per size, two scenes.
 """
 import argparse
 import os
@@ -18,9 +24,13 @@ import time
 
 import numba
 import numpy as np
+import scipy.sparse
 
+import skfem_flex as sf
 from skfem_flex.compiled.solvers import SMALL_DENSE, lapack_solve, lapack_work, small_lu_solve
-from skfem_flex.schemes.stepper import modeled_solve_seconds
+from skfem_flex.numerics.sparse_lu import modeled_seconds, static_lu_plan, static_lu_solve
+from skfem_flex.schemes import make_scheme
+from skfem_flex.schemes.stepper import Stepper, modeled_solve_seconds
 
 QUICK = os.environ.get("SKFEM_FLEX_EXAMPLE_QUICK") == "1"
 SIZES = (12, 20, 24, 28, 33, 40, 50, 64, 80, 100)
@@ -58,6 +68,53 @@ def seconds_per_solve(n, repeat, rng):
     return times[1] - times[0], times[2] - times[0]
 
 
+@numba.njit(cache=True)
+def _static_solves(vals, rhs, x, plan, lu, w, mark, z, repeat):
+    for _ in range(repeat):
+        static_lu_solve(vals, rhs, x, plan.prow, plan.qcol, plan.ptr, plan.idx, plan.diag, plan.src, lu, w, mark, z)
+
+
+def _scenes():
+    """(name, scene, Δt) of the static LU's table."""
+    from skfem_flex.apps import peer_ffrf_beam
+    cases = [("reduced rotating beam", lambda: peer_ffrf_beam.scene(probe=False), 1e-2),
+             ("spatial_slider_crank", sf.scenes.spatial_slider_crank, 1e-3)]
+    if not QUICK:
+        cases += [(f"rigid_chain({k})", lambda k=k: sf.scenes.rigid_chain(k), 1e-3) for k in (2, 3, 7, 20)]
+        cases += [("bricard", sf.scenes.bricard, 1e-3)]
+    return cases
+
+
+def static_lu_row(scene, dt, repeat):
+    """(unknowns, the scene's solver, its modeled s, static LU measured s, static LU modeled s) on the Newton
+    matrix of the scene's first trapezoidal step."""
+    scheme = make_scheme("trapezoidal")
+    start = sf.simulate(scene, t_end=dt, dt=dt, scheme=scheme)     # the consistent initial state
+    q, v = start.q[0], start.v[0]
+    stepper = Stepper(scene, scheme)
+    acc, lam, reaction = stepper.start(0.0, q, v)
+    stepper.load(scheme.make_state(0.0, q, v, acc=acc, pseudo=acc.copy(), lam=lam, prescribed_force=reaction))
+    pk = stepper.packed
+    pattern = pk.pattern.tocsr()
+    pattern.sort_indices()
+    matrix = stepper.evaluate(0.0, dt)[1]
+    dense = not scipy.sparse.issparse(matrix)
+    plan = static_lu_plan(pattern, matrix, dense)
+    if dense:
+        vals = np.ascontiguousarray(matrix).ravel()
+    else:
+        csr = scipy.sparse.csr_matrix(matrix)
+        vals = np.array([csr[i, j] for i in range(pk.nx) for j in pattern.indices[pattern.indptr[i]:pattern.indptr[i + 1]]])
+    n = pk.nx
+    rhs, x = np.random.default_rng(0).standard_normal(n), np.zeros(n)
+    work = (np.zeros(plan.idx.size), np.zeros(n), np.full(n, -1, dtype=np.int64), np.zeros(n))
+    _static_solves(vals, rhs, x, plan, *work, 2)
+    start = time.perf_counter()
+    _static_solves(vals, rhs, x, plan, *work, repeat)
+    seconds = (time.perf_counter() - start) / repeat
+    return n, stepper.solver_name, modeled_solve_seconds(n, pk.plan, dense), seconds, modeled_seconds(plan)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--repeat", type=int, default=500 if QUICK else 20000)
@@ -69,6 +126,13 @@ def main():
     for n in SIZES:
         lapack, small = seconds_per_solve(n, args.repeat, rng)
         print(f"| {n} | {1e6 * lapack:.2f} | {1e6 * small:.2f} | {1e6 * modeled_solve_seconds(n, None, True):.2f} |")
+    print()
+    print("static-pivot sparse LU on a scene's Newton matrix, µs per solve (its check left out)")
+    print("| scene | unknowns | the scene's solver | its model | static LU | static LU model |")
+    print("|---|---|---|---|---|---|")
+    for name, make, dt in _scenes():
+        n, solver, own, seconds, model = static_lu_row(make(), dt, max(args.repeat // 4, 100))
+        print(f"| {name} | {n} | {solver} | {1e6 * own:.2f} | {1e6 * seconds:.2f} | {1e6 * model:.2f} |")
 
 
 if __name__ == "__main__":
