@@ -76,12 +76,6 @@ def tmp_size(nf):
 
 
 @numba.njit(cache=True, _nrt=False, inline="always")
-def _mat3(tmp, k):
-    """The k-th 3 × 3 block of ``tmp`` (a view)."""
-    return tmp[9 * k:9 * k + 9].reshape((3, 3))
-
-
-@numba.njit(cache=True, _nrt=False, inline="always")
 def directors(q, D):
     """D (3, 3) ← the director parts of a coordinate (or velocity) vector as columns.
 
@@ -158,7 +152,7 @@ def mass_times(mass, Sbar, cf, b, Nb, out, tmp):
     to b (:func:`contract_into`)."""
     nf = Sbar.shape[1]
     D, s, J, C = cf.D, cf.s, cf.J, cf.C
-    Bm, Cb, DtD, DtB = _mat3(tmp, 0), _mat3(tmp, 1), _mat3(tmp, 2), _mat3(tmp, 3)
+    Bm, Cb, DtD, DtB = tmp[0:9].reshape((3, 3)), tmp[9:18].reshape((3, 3)), tmp[18:27].reshape((3, 3)), tmp[27:36].reshape((3, 3))
     Sb, Dtx = tmp[36:39], tmp[39:42]
     directors(b, Bm)
     _c_times(C, b, Cb)
@@ -192,9 +186,9 @@ def form_gradient(Sbar, cf, a, Na, b, Nb, scale, out, tmp):
     """out += scale ∇_q aᵀM(q)b = scale B(q, a)ᵀ b at the configuration ``cf``, without the matrix."""
     nf = Sbar.shape[1]
     D, C, gJ = cf.D, cf.C, cf.gJ
-    A, Bm, Ca, Cb = _mat3(tmp, 0), _mat3(tmp, 1), _mat3(tmp, 2), _mat3(tmp, 3)
-    alpha = _mat3(tmp, 4)                          # a_yᵀ N_kl b_y
-    ab, ad, bd = _mat3(tmp, 5), _mat3(tmp, 6), _mat3(tmp, 7)      # a_i · b_j, a_i · d_k, b_i · d_k
+    A, Bm, Ca, Cb = tmp[0:9].reshape((3, 3)), tmp[9:18].reshape((3, 3)), tmp[18:27].reshape((3, 3)), tmp[27:36].reshape((3, 3))
+    alpha = tmp[36:45].reshape((3, 3))                          # a_yᵀ N_kl b_y
+    ab, ad, bd = tmp[45:54].reshape((3, 3)), tmp[54:63].reshape((3, 3)), tmp[63:72].reshape((3, 3))      # a_i · b_j, a_i · d_k, b_i · d_k
     Sa, Sb, xb = tmp[72:75], tmp[75:78], tmp[78:81]
     directors(a, A)
     directors(b, Bm)
@@ -242,7 +236,7 @@ def _derivative_blocks(Sbar, cf, w, Nw, tmp):
     (its first 12 n_f + 30 entries)."""
     nf = Sbar.shape[1]
     D, C, gJ = cf.D, cf.C, cf.gJ
-    Wd, gJw, Wt = _mat3(tmp, 0), _mat3(tmp, 1), _mat3(tmp, 2)
+    Wd, gJw, Wt = tmp[0:9].reshape((3, 3)), tmp[9:18].reshape((3, 3)), tmp[18:27].reshape((3, 3))
     Sw = tmp[27:30]
     directors(w, Wd)
     _sbar_times(Sbar, w, Sw)
@@ -280,8 +274,8 @@ def derivative_times(Sbar, cf, w, Nw, b, Nb, scale, out, tmp):
     N w_y b first), a third of the work of forming them."""
     nf = Sbar.shape[1]
     D, C, gJ = cf.D, cf.C, cf.gJ
-    Wd, Bm, gJw, Wt = _mat3(tmp, 0), _mat3(tmp, 1), _mat3(tmp, 2), _mat3(tmp, 3)
-    Cb, Nwb, WB, DB = _mat3(tmp, 4), _mat3(tmp, 5), _mat3(tmp, 6), _mat3(tmp, 7)
+    Wd, Bm, gJw, Wt = tmp[0:9].reshape((3, 3)), tmp[9:18].reshape((3, 3)), tmp[18:27].reshape((3, 3)), tmp[27:36].reshape((3, 3))
+    Cb, Nwb, WB, DB = tmp[36:45].reshape((3, 3)), tmp[45:54].reshape((3, 3)), tmp[54:63].reshape((3, 3)), tmp[63:72].reshape((3, 3))
     Sw, Sb, Wx = tmp[72:75], tmp[75:78], tmp[78:81]
     directors(w, Wd)
     directors(b, Bm)
@@ -386,7 +380,7 @@ def add_mass(mass, Sbar, cf, c, out, W, tmp):
     """c M(q) at the configuration ``cf``."""
     nf = Sbar.shape[1]
     D, C = cf.D, cf.C
-    DtD = _mat3(tmp, 0)
+    DtD = tmp[0:9].reshape((3, 3))
     X = tmp[9:9 + 3 * nf].reshape((3, nf))
     Y = tmp[9 + 3 * nf:9 + 12 * nf].reshape((3, 3, nf))
     for cc in range(3):
@@ -405,7 +399,7 @@ def add_jacobian(Sbar, cf, a, Na, cb, ct, out, W, tmp):
     """cb B(q, a) + ct B(q, a)ᵀ at the configuration ``cf``, B(q, a) = ∂(M(q)a)/∂q; ``Na`` N applied to a."""
     nf = Sbar.shape[1]
     D, C, gJ = cf.D, cf.C, cf.gJ
-    A, Wa, Sa = _mat3(tmp, 0), _mat3(tmp, 1), tmp[18:21]
+    A, Wa, Sa = tmp[0:9].reshape((3, 3)), tmp[9:18].reshape((3, 3)), tmp[18:21]
     directors(a, A)
     _c_times(C, a, Wa)
     _sbar_times(Sbar, a, Sa)
@@ -438,7 +432,7 @@ def add_velocity_force_derivative(v, Nv, c, out, tmp):
     symmetric since N_ik = N_kiᵀ) and elastic blocks (weights VᵀV) cancel, and
     ∂Q_v/∂q [(d_k c, y e)] = ∂Q_v/∂q [(y e, d_k c)] = −2 Σ_j V_cj (N_kj v_y)_e."""
     nf = Nv.shape[2]
-    V = _mat3(tmp, 0)
+    V = tmp[0:9].reshape((3, 3))
     directors(v, V)
     Y = tmp[9:9 + 9 * nf].reshape((3, 3, nf))
     for k in range(3):
@@ -459,7 +453,7 @@ def add_mass_derivative(Sbar, cf, w, Nw, c, out, W, tmp):
 def add_hessian(a, Na, b, Nb, c, out, W, tmp):
     """c H(a, b) = c ∇²_q aᵀM(q)b (constant in q)."""
     nf = Na.shape[2]
-    A, Bm, S = _mat3(tmp, 0), _mat3(tmp, 1), _mat3(tmp, 2)
+    A, Bm, S = tmp[0:9].reshape((3, 3)), tmp[9:18].reshape((3, 3)), tmp[18:27].reshape((3, 3))
     directors(a, A)
     directors(b, Bm)
     for k in range(3):

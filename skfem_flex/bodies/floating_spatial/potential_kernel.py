@@ -38,7 +38,7 @@ def has_gravity(kd):
     return kd.g[0] != 0.0 or kd.g[1] != 0.0 or kd.g[2] != 0.0
 
 
-@numba.njit(cache=True, _nrt=False, inline="always")
+@numba.njit(cache=True, _nrt=False)
 def axial_strain(kd, y, up, eps):
     """up (3, n_points) ← u', eps (n_points,) ← ε of the Green–Lagrange axis at y."""
     npts, nf = kd.A.shape[1], kd.A.shape[2]
@@ -52,7 +52,7 @@ def axial_strain(kd, y, up, eps):
         eps[p] = up[2, p] + 0.5 * (up[0, p] ** 2 + up[1, p] ** 2 + up[2, p] ** 2)
 
 
-@numba.njit(cache=True, _nrt=False, inline="always")
+@numba.njit(cache=True, _nrt=False)
 def strain_energy_into(kd, qt, y, work):
     """V(y), J (:func:`strain_energy`), its temporaries in ``work``."""
     nf = kd.K.shape[0]
@@ -81,7 +81,7 @@ def strain_energy(kd, qt, y):
     return strain_energy_into(kd, qt, y, np.empty(max(8 * kd.A.shape[1], quartic_work_size(nf))))
 
 
-@numba.njit(cache=True, _nrt=False, inline="always")
+@numba.njit(cache=True, _nrt=False)
 def strain_terms_into(kd, qt, y0, y1, g, jac, off, jacobian, work):
     """V(y1), with g[off + a] += the exact discrete gradient from y0 to y1 and, with ``jacobian``,
     jac[off + a, off + b] += ∂g/∂y1 (:func:`strain_terms`); its temporaries in ``work``."""
@@ -148,7 +148,7 @@ def strain_terms(kd, qt, y0, y1):
     return energy, g, jac
 
 
-@numba.njit(cache=True, _nrt=False, inline="always")
+@numba.njit(cache=True, _nrt=False)
 def gravity_into(kd, q, D, grad, H, c, jacobian):
     """V_g(q) of V_g = −g·(m x + D(S₀ + S̄ y)), with grad ← ∇V_g(q) and, with ``jacobian``, H += c ∇²V_g
     (constant: the directors' coupling with y); ``D`` (3, 3) is written with q's directors."""
