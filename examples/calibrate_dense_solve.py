@@ -7,10 +7,12 @@ getrs called by address, on a copy of the matrix, as each Newton solve does) and
 :func:`skfem_flex.schemes.stepper.modeled_solve_seconds` (``DENSE_SOLVE_SECONDS``, ``DENSE_SOLVE_EXPONENT``),
 which decides whether the static-pivot sparse LU replaces a scene's dense solver.
 
-A second table times the static-pivot sparse LU (:func:`skfem_flex.numerics.sparse_lu.static_lu_solve`, its
-solution's check left out) on the Newton matrix of the first step of a few scenes (the reduced rotating beam
-of the exudyn comparison, the spatial slider-crank, chains of rigid bars, the Bricard linkage) beside its
-model (:func:`skfem_flex.numerics.sparse_lu.modeled_seconds`) and the scene's own solver's model.
+A second table times, on the Newton matrix of the first step of a few scenes (the reduced rotating beam of
+the exudyn comparison, the spatial slider-crank, chains of rigid bars, the Bricard linkage, four planar beams
+in the floating frame), the scene's own solver (dense or band, its compiled kernel as the loop calls it) and
+the static-pivot sparse LU (:func:`skfem_flex.numerics.sparse_lu.static_lu_solve`, its solution's check left
+out), each beside its model (:func:`~skfem_flex.schemes.stepper.modeled_solve_seconds`,
+:func:`skfem_flex.numerics.sparse_lu.modeled_seconds`).
 
 Usage::
 
@@ -27,6 +29,7 @@ import numpy as np
 import scipy.sparse
 
 import skfem_flex as sf
+from skfem_flex.compiled.abi import call, fvec
 from skfem_flex.compiled.solvers import SMALL_DENSE, lapack_solve, lapack_work, small_lu_solve
 from skfem_flex.numerics.sparse_lu import modeled_seconds, static_lu_plan, static_lu_solve
 from skfem_flex.schemes import make_scheme
@@ -81,17 +84,44 @@ def _scenes():
              ("spatial_slider_crank", sf.scenes.spatial_slider_crank, 1e-3)]
     if not QUICK:
         cases += [(f"rigid_chain({k})", lambda k=k: sf.scenes.rigid_chain(k), 1e-3) for k in (2, 3, 7, 20)]
-        cases += [("bricard", sf.scenes.bricard, 1e-3)]
+        cases += [("bricard", sf.scenes.bricard, 1e-3), ("flying_beam", sf.scenes.flying_beam, 0.05),
+                  ("rotating_beam", sf.scenes.rotating_beam, 0.01), ("spin_up_beam", sf.scenes.spin_up_beam, 0.02),
+                  ("spin_up_pinned", sf.scenes.spin_up_pinned, 0.01)]
     return cases
 
 
+@numba.njit(cache=True)
+def _own_solves(ctx, solver, saved, repeat, solve):
+    """``repeat`` copies of the saved Newton matrix into the context's, each solved by the scene's solver
+    kernel when ``solve`` (its solve destroys the matrix)."""
+    c = ctx[0]
+    mat = fvec(c.mat, saved.size)
+    for _ in range(repeat):
+        for i in range(saved.size):
+            mat[i] = saved[i]
+        if solve:
+            call(solver[0].kernel, c.self, solver.ctypes.data)
+
+
+def own_solver_seconds(stepper, repeat):
+    """Seconds per solve of the stepper's own solver on its evaluated Newton matrix (the copy excluded)."""
+    saved = stepper.ws.mat.copy()
+    times = []
+    for solve in (False, True):
+        _own_solves(stepper.ws.ctx, stepper.solver, saved, 2, solve)
+        start = time.perf_counter()
+        _own_solves(stepper.ws.ctx, stepper.solver, saved, repeat, solve)
+        times.append((time.perf_counter() - start) / repeat)
+    return times[1] - times[0]
+
+
 def static_lu_row(scene, dt, repeat):
-    """(unknowns, the scene's solver, its modeled s, static LU measured s, static LU modeled s) on the Newton
-    matrix of the scene's first trapezoidal step."""
+    """(unknowns, the scene's solver, its measured s, its modeled s, static LU measured s, static LU modeled s)
+    on the Newton matrix of the scene's first trapezoidal step (the scene's solver as before any switch)."""
     scheme = make_scheme("trapezoidal")
     start = sf.simulate(scene, t_end=dt, dt=dt, scheme=scheme)     # the consistent initial state
     q, v = start.q[0], start.v[0]
-    stepper = Stepper(scene, scheme)
+    stepper = Stepper(scene, scheme)          # its solver before plan_sparse_lu
     acc, lam, reaction = stepper.start(0.0, q, v)
     stepper.load(scheme.make_state(0.0, q, v, acc=acc, pseudo=acc.copy(), lam=lam, prescribed_force=reaction))
     pk = stepper.packed
@@ -112,7 +142,9 @@ def static_lu_row(scene, dt, repeat):
     start = time.perf_counter()
     _static_solves(vals, rhs, x, plan, *work, repeat)
     seconds = (time.perf_counter() - start) / repeat
-    return n, stepper.solver_name, modeled_solve_seconds(n, pk.plan, dense), seconds, modeled_seconds(plan)
+    stepper.evaluate(0.0, dt)
+    own = own_solver_seconds(stepper, repeat)
+    return n, stepper.solver_name, own, modeled_solve_seconds(n, pk.plan, dense), seconds, modeled_seconds(plan)
 
 
 def main():
@@ -127,12 +159,14 @@ def main():
         lapack, small = seconds_per_solve(n, args.repeat, rng)
         print(f"| {n} | {1e6 * lapack:.2f} | {1e6 * small:.2f} | {1e6 * modeled_solve_seconds(n, None, True):.2f} |")
     print()
-    print("static-pivot sparse LU on a scene's Newton matrix, µs per solve (its check left out)")
-    print("| scene | unknowns | the scene's solver | its model | static LU | static LU model |")
-    print("|---|---|---|---|---|---|")
+    print("a scene's Newton matrix: its own solver and the static-pivot sparse LU (its check left out), "
+          "µs per solve")
+    print("| scene | unknowns | the scene's solver | its time | its model | static LU | static LU model |")
+    print("|---|---|---|---|---|---|---|")
     for name, make, dt in _scenes():
-        n, solver, own, seconds, model = static_lu_row(make(), dt, max(args.repeat // 4, 100))
-        print(f"| {name} | {n} | {solver} | {1e6 * own:.2f} | {1e6 * seconds:.2f} | {1e6 * model:.2f} |")
+        n, solver, own, own_model, seconds, model = static_lu_row(make(), dt, max(args.repeat // 4, 100))
+        print(f"| {name} | {n} | {solver} | {1e6 * own:.2f} | {1e6 * own_model:.2f} | {1e6 * seconds:.2f} "
+              f"| {1e6 * model:.2f} |")
 
 
 if __name__ == "__main__":

@@ -104,7 +104,7 @@ def test_calibrate_dense_solve():
     rows = re.findall(r"^\| (\d+) \| ([0-9.]+) \| ([0-9.]+) \| ([0-9.]+) \|$", out, re.M)
     assert [int(r[0]) for r in rows] == [12, 20, 24, 28, 33, 40, 50, 64, 80, 100]
     assert all(float(v) > 0 for r in rows for v in r[1:])
-    scenes = re.findall(r"^\| ([a-z_ ]+) \| (\d+) \| [a-zA-Z ()]+ \|", out, re.M)
+    scenes = re.findall(r"^\| ([a-z_ ]+) \| (\d+) \| [a-zA-Z ()]+ \| [0-9.]+ \|", out, re.M)
     assert [name for name, _ in scenes] == ["reduced rotating beam", "spatial_slider_crank"]
 
 

@@ -61,9 +61,11 @@ _STATIC_LU_FALLBACK = {"dense": 0, "bordered band": 1, "bordered band (CSR)": 2}
 STATIC_LU_GAIN = 0.85
 
 
-#: modeled time of a band solve per multiply-add of its work model (band_plans.solve_work), s, and per call
-#: (measured on the catalogue's Newton matrices, one core)
-SECONDS_PER_SOLVE_WORK, SECONDS_PER_SOLVE = 1e-10, 2e-6
+#: modeled time of a band solve per multiply-add of its work model (band_plans.solve_work), s, and per call: a
+#: fit to the Newton matrices of eight scenes (24 to 460 unknowns; within 25 % of each, measured by
+#: ``python examples/calibrate_dense_solve.py``; the per-call 2e-6 s of before overestimated the small bands of
+#: the planar beams 1.6 to 2 times)
+SECONDS_PER_SOLVE_WORK, SECONDS_PER_SOLVE = 1e-10, 9e-7
 #: modeled time of a dense LAPACK solve (getrf and getrs, with the copy of its right-hand side) of n unknowns:
 #: DENSE_SOLVE_SECONDS (n / SMALL_DENSE)^DENSE_SOLVE_EXPONENT, s. At these sizes LAPACK's time grows far slower
 #: than n³ (its unblocked kernels and call overhead): measured by ``python examples/calibrate_dense_solve.py``
