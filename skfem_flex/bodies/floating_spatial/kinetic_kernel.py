@@ -181,6 +181,23 @@ def mass_times(mass, Sbar, cf, b, Nb, out, tmp):
         out[12 + e] += acc
 
 
+@numba.njit(cache=True, _nrt=False, inline="always")
+def _add_elastic_products(oy, scale, x, Sbar, W1, T1, W2, T2, W3, T3):
+    """oy += scale (Σ_i x_i S̄_i + Σ_ij (W1_ij T1_ij + W2_ij T2_ij + W3_ij T3_ij)): the elastic rows of a
+    product with M's derivatives, three (3, 3, n_f) tensors weighted by 3 × 3 matrices; the inner loops run
+    over the contiguous elastic index (they vectorize)."""
+    nf = oy.size
+    for i in range(3):
+        cx = scale * x[i]
+        for e in range(nf):
+            oy[e] += cx * Sbar[i, e]
+        for j in range(3):
+            c1, c2, c3 = scale * W1[i, j], scale * W2[i, j], scale * W3[i, j]
+            t1, t2, t3 = T1[i, j], T2[i, j], T3[i, j]
+            for e in range(nf):
+                oy[e] += c1 * t1[e] + c2 * t2[e] + c3 * t3[e]
+
+
 @numba.njit(cache=True, _nrt=False)
 def form_gradient(Sbar, cf, a, Na, b, Nb, scale, out, tmp):
     """out += scale ∇_q aᵀM(q)b = scale B(q, a)ᵀ b at the configuration ``cf``, without the matrix."""
@@ -216,17 +233,7 @@ def form_gradient(Sbar, cf, a, Na, b, Nb, scale, out, tmp):
             ab[i, j] = A[0, i] * Bm[0, j] + A[1, i] * Bm[1, j] + A[2, i] * Bm[2, j]
             ad[i, j] = A[0, i] * D[0, j] + A[1, i] * D[1, j] + A[2, i] * D[2, j]
             bd[i, j] = Bm[0, i] * D[0, j] + Bm[1, i] * D[1, j] + Bm[2, i] * D[2, j]
-    # contiguous inner loops over the elastic index (they vectorize)
-    oy = out[12:]
-    for i in range(3):
-        cx = scale * xb[i]
-        for e in range(nf):
-            oy[e] += cx * Sbar[i, e]
-        for j in range(3):
-            cg, cb, ca = scale * ab[i, j], scale * ad[i, j], scale * bd[i, j]
-            gJij, Nbij, Naij = gJ[i, j], Nb[i, j], Na[i, j]
-            for e in range(nf):
-                oy[e] += cg * gJij[e] + cb * Nbij[e] + ca * Naij[e]
+    _add_elastic_products(out[12:], scale, xb, Sbar, ab, gJ, ad, Nb, bd, Na)
 
 
 @numba.njit(cache=True, _nrt=False, inline="always")
@@ -295,7 +302,7 @@ def derivative_times(Sbar, cf, w, Nw, b, Nb, scale, out, tmp):
         for k in range(3):
             Wt[i, k] = (Wd[0, i] * D[0, k] + Wd[1, i] * D[1, k] + Wd[2, i] * D[2, k]
                         + D[0, i] * Wd[0, k] + D[1, i] * Wd[1, k] + D[2, i] * Wd[2, k])
-            WB[k, i] = Wd[0, k] * Bm[0, i] + Wd[1, k] * Bm[1, i] + Wd[2, k] * Bm[2, i]
+            WB[i, k] = Wd[0, k] * Bm[0, i] + Wd[1, k] * Bm[1, i] + Wd[2, k] * Bm[2, i]
             DB[k, i] = D[0, k] * Bm[0, i] + D[1, k] * Bm[1, i] + D[2, k] * Bm[2, i]
     for c in range(3):
         acc = 0.0
@@ -307,17 +314,7 @@ def derivative_times(Sbar, cf, w, Nw, b, Nb, scale, out, tmp):
             for j in range(3):
                 acc += gJw[i, j] * Bm[c, j] + Wd[c, j] * Cb[i, j] + D[c, j] * Nwb[j, i]
             out[3 + 3 * i + c] += scale * acc
-    # contiguous inner loops over the elastic index (they vectorize)
-    oy = out[12:]
-    for k in range(3):
-        cx = scale * Wx[k]
-        for e in range(nf):
-            oy[e] += cx * Sbar[k, e]
-        for i in range(3):
-            cc, cn, cb = scale * WB[k, i], scale * DB[k, i], scale * Wt[i, k]
-            Cik, Nwki, Nbik = C[i, k], Nw[k, i], Nb[i, k]
-            for e in range(nf):
-                oy[e] += cc * Cik[e] + cn * Nwki[e] + cb * Nbik[e]
+    _add_elastic_products(out[12:], scale, Wx, Sbar, WB, C, DB, Nw, Wt, Nb)
 
 
 @numba.njit(cache=True, _nrt=False, inline="always")
