@@ -23,6 +23,7 @@ __all__ = ["strain_work_size", "has_gravity", "axial_strain", "strain_energy_int
            "strain_terms_into", "strain_terms", "gravity_into", "gravity_terms"]
 
 
+@numba.njit(cache=True, _nrt=False)
 def strain_work_size(nf, npts, quartic):
     """Entries of the strain energy's temporaries: the axis' u' and ε at y₀ and y₁, two rows of n_f; the quartic
     terms' g and ∂g/∂y and their own temporaries."""
@@ -78,7 +79,7 @@ def strain_energy(kd, qt, y):
     """V(y), J: ½ yᵀK y plus the quartic terms (``qt``) or the Green–Lagrange axis ½ Σ w ε² (module
     docstring)."""
     nf = kd.K.shape[0]
-    return strain_energy_into(kd, qt, y, np.empty(max(8 * kd.A.shape[1], quartic_work_size(nf))))
+    return strain_energy_into(kd, qt, y, np.empty(strain_work_size(nf, kd.A.shape[1], qt.quartic[0] != 0)))
 
 
 @numba.njit(cache=True, _nrt=False)
@@ -143,7 +144,7 @@ def strain_terms(kd, qt, y0, y1):
     nf = kd.K.shape[0]
     g = np.zeros(nf)
     jac = np.zeros((nf, nf))
-    work = np.empty(8 * kd.A.shape[1] + 2 * nf + nf + nf * nf + quartic_work_size(nf))
+    work = np.empty(strain_work_size(nf, kd.A.shape[1], qt.quartic[0] != 0))
     energy = strain_terms_into(kd, qt, y0, y1, g, jac, 0, True, work)
     return energy, g, jac
 
