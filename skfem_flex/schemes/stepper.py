@@ -57,7 +57,8 @@ _SOLVERS = {"dense": solvers.dense_solver, "bordered band": solvers.bordered_ban
 #: the solvers the static-pivot LU can replace, with the kind its kernel falls back to
 _STATIC_LU_FALLBACK = {"dense": 0, "bordered band": 1, "bordered band (CSR)": 2}
 #: the static-pivot LU replaces the scene's solver when its modeled time is below this share of that solver's
-#: (the models of both are within about 15 % of measurement: examples/calibrate_dense_solve.py)
+#: (the dense and static-LU models are within about 15 % of measured solves, the band's within 25 %:
+#: examples/calibrate_dense_solve.py)
 STATIC_LU_GAIN = 0.85
 
 

@@ -7,7 +7,7 @@ The arithmetic is the bodies' compiled kernel (:mod:`skfem_flex.bodies.floating_
 body's ``compiled_kernel_data()``); this family adds its results where the task wants them
 (:mod:`skfem_flex.compiled.tasks`):
 
-* TASK_EVAL: p, g_k and g_p of :func:`~skfem_flex.bodies.floating_spatial.kernel.body_terms` into the
+* TASK_EVAL: p, g_k and g_p of :func:`~skfem_flex.bodies.floating_spatial.kernel.body_terms_into` into the
   residual's parts and, into the body's dense block of the Newton matrix,
 
   .. math::
@@ -16,9 +16,9 @@ body's ``compiled_kernel_data()``); this family adds its results where the task 
       + w_{gp} c_{dg}\,dq_1\, ∂_{q_b} g_p ,
 
   with d = dv₁ (energy–momentum: p = M(q₁)v₁) or da₁ (Newmark: p = M(q₁)a₁), its kinetic part formed by
-  ``body_terms`` with the task's weights folded in (its block K; dv₁ is the same for every coordinate of a
-  body, which has no angle coordinate); the potential's round-off
-  floor |w_gp c_dg dq₁ ∂g_p/∂q_b| (|q_a| + |q_b|) into ``floor`` and, for the Newmark family,
+  ``body_terms_into`` with the task's weights folded in (its block K; dv₁ is the same for every coordinate of
+  a body, which has no angle coordinate); the potential's round-off floor |w_gp c_dg dq₁ ∂g_p/∂q_b|
+  (|q_a| + |q_b|) into ``floor`` (neither block nor floor in a residual-only evaluation) and, for the Newmark family,
   Σ_j |M_ij| terms_j into ``mterms``;
 * TASK_MOMENTUM: p = M(q₁)v₁ into ``p``, the linear momentum (the x rows of p) into ``out[1:4]`` and the
   angular momentum about the origin Σ_k q_k × p_k over x and the three directors into ``out[4:7]``;
