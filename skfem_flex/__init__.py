@@ -33,7 +33,7 @@ from .scene_initial import (InconsistentInitialConditionsError, RedundantConstra
 from .elements.forces import ForceElement, Gravity, NonlinearSpring
 from .elements.forces import (SpatialDamper, SpatialDistributedLoad, SpatialMoment, SpatialPointForce, SpatialSpring,
                               SpatialTorsionalDamper, SpatialTorsionalSpring, distributed_moments)
-from .elements.motion import MotionLaw, Prescribed, spin_up_law
+from .elements.motion import MotionLaw, Prescribed, driven_frame, spin_up_law
 from .scene import Scene
 from .schemes import EnergyMomentum, GeneralizedAlpha, Newmark, NewtonSettings, Trapezoidal
 from .errors import ConvergenceError, DivergenceError, Interrupted, OutputError, SimulationError

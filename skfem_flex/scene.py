@@ -145,11 +145,21 @@ class Scene:
 
         self.forces = tuple(f.on(self.bodies) if isinstance(f, Gravity) and f.bodies is None else f
                             for f in forces)
+        self.prescribed = tuple(prescribed)
+        pres = []
+        for p in self.prescribed:
+            if not isinstance(p, Prescribed):
+                raise ValueError(f"prescribed entries must be Prescribed, got {p!r}")
+            pres.append(self.index(p.body, p.coordinate))
+        if len(set(pres)) != len(pres):
+            raise ValueError("a coordinate is prescribed twice")
+        self.prescribed_index = np.array(pres, dtype=int)
+        self.free_index = np.setdiff1d(np.arange(self.n), self.prescribed_index)
         # spatial rigid bodies and the nodes of spatial beams are held rigid by their directors'
-        # constraints, bodies turned by quaternions at |e| = 1, added first
-        self.constraints = tuple(
-            Rigidity(b, triad, name=f"{b.name}: rigidity" + (f" of node {k}" if len(b.director_triads) > 1 else ""))
-            for b in self.bodies for k, triad in enumerate(getattr(b, "director_triads", ()))) + tuple(
+        # constraints (less what prescribed directors hold), bodies turned by quaternions at |e| = 1, added first
+        start = {i: p.law(0.0)[0] for p, i in zip(self.prescribed, pres)}
+        self.constraints = tuple(r for b in self.bodies for r in Rigidity.of_body(b, {
+            i - self._offset[id(b)]: x for i, x in start.items() if 0 <= i - self._offset[id(b)] < b.n_dofs})) + tuple(
             UnitQuaternion(b, o) for b in self.bodies for o in getattr(b, "unit_quaternions", ())) + tuple(constraints)
         self._force_idx = [self._indices(f.bodies, f"force {getattr(f, 'name', f)!r}") for f in self.forces]
         layout, row = [], 0
@@ -164,16 +174,6 @@ class Scene:
         self._constraint_layout = tuple(layout)
         self.n_constraints = row
 
-        self.prescribed = tuple(prescribed)
-        pres = []
-        for p in self.prescribed:
-            if not isinstance(p, Prescribed):
-                raise ValueError(f"prescribed entries must be Prescribed, got {p!r}")
-            pres.append(self.index(p.body, p.coordinate))
-        if len(set(pres)) != len(pres):
-            raise ValueError("a coordinate is prescribed twice")
-        self.prescribed_index = np.array(pres, dtype=int)
-        self.free_index = np.setdiff1d(np.arange(self.n), self.prescribed_index)
 
         self.probes = dict(probes or {})
         for k, fn in self.probes.items():

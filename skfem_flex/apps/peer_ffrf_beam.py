@@ -52,7 +52,8 @@ R the nodes' rigid fields (tested): Φ_t spans none. The nodes lie on a line, so
 axis moves none of them: that rotation has no inertia, in exudyn's body as in ours with ρI = 0; the hinge
 holds it in both.
 
-**Drive.** Ours: ``Revolute3D`` at the root about z and a ``RotationDriver`` at the constant rate Ω. exudyn's:
+**Drive.** Ours: ``Revolute3D`` at the root about z and a ``RotationDriver`` at the constant rate Ω, or
+(``hub="driven"``) the frame's motion prescribed, the spatial form of a driven hub angle. exudyn's:
 the reference node a ``NodeRigidBodyRxyz`` (its frame is then Rz(ψ) with the third angle ψ alone), held by
 ``CoordinateConstraint`` on the position and the first two angles, and ψ̇ = Ω by a velocity-level
 ``CoordinateConstraint``: no Python user function runs in exudyn's solve. Both start with the frame at
@@ -68,7 +69,7 @@ import scipy.sparse
 
 from .peer import exudyn_modules, peer_available, simulation_settings, solve_recorded, version
 
-__all__ = ["peer_available", "version", "ROTATING_BEAM", "hub_beam", "beam_data", "tip_map", "scene", "rotating_beam"]
+__all__ = ["peer_available", "version", "ROTATING_BEAM", "HUBS", "hub_beam", "beam_data", "tip_map", "scene", "rotating_beam"]
 
 #: the scene (module docstring): hub rate (rad/s), beam data (m, N, N m², kg/m), mesh, basis and the initial
 #: tip deflection of each perturbing mode (m)
@@ -141,28 +142,45 @@ def tip_map(data):
     return data["H"] @ body.shape_at(body.s_tip)[0]
 
 
-def scene(data=None, probe=True, **parameters):
-    """Our side: the reduced beam of :func:`beam_data` (``data``, or built from ``parameters``) on the hub
-    hinge with the constant-rate driver, started spinning at Ω. Probe ``"tip"`` (module docstring; none with
-    ``probe=False``: :func:`tip_map` gives it from the recorded coordinates, without a Python call per
-    recorded step)."""
+#: how :func:`scene` holds the hub: a hinge and a rate driver (constraint rows), or the frame's motion
+#: prescribed (:func:`~skfem_flex.elements.motion.driven_frame`)
+HUBS = ("joints", "driven")
+
+
+def scene(data=None, probe=True, hub="joints", **parameters):
+    """Our side: the reduced beam of :func:`beam_data` (``data``, or built from ``parameters``) started spinning
+    at Ω about z. Probe ``"tip"`` (module docstring; none with ``probe=False``: :func:`tip_map` gives it from
+    the recorded coordinates, without a Python call per recorded step).
+
+    ``hub="joints"``: a ``Revolute3D`` at the root about z and a ``RotationDriver`` at the constant rate Ω
+    (12 constraint rows with the frame's rigidity: 33 Newton unknowns). ``hub="driven"``: the frame's origin
+    and directors prescribed, turning about z at Ω (:func:`~skfem_flex.elements.motion.driven_frame`, the
+    spatial form of a prescribed hub angle): no rows, the 9 elastic coordinates are the only unknowns. The
+    two are one motion (``tests/test_driven_frame.py``)."""
     from ..bodies.floating_spatial.body import FloatingBeam3D
     from ..elements.constraints.spatial_joints import Revolute3D, RotationDriver
-    from ..elements.motion import MotionLaw
+    from ..elements.motion import MotionLaw, driven_frame
     from ..scene import Scene
     from ..scenes.spatial_rotors import hub_frame_displacement
 
+    if hub not in HUBS:
+        raise ValueError(f"hub must be one of {HUBS}, got {hub!r}")
     data = beam_data(**parameters) if data is None else data
     p, proto = data["parameters"], data["body"]
     body = FloatingBeam3D(proto.beam, "clamped", "linear", orientation=data["H"], elastic=data["eta"],
                           basis=data["basis"], name="beam")
     om, z = float(p["omega"]), np.array([0.0, 0.0, 1.0])
     body.v0[3:12] = np.cross(om * z, data["H"].T).ravel()
-    joints = [Revolute3D(body.point(0.0), axis=z, name="hub hinge"),
-              RotationDriver(body, None, z, MotionLaw.constant_rate(om), name="hub drive")]
-    return Scene([body], constraints=joints, name="ffrf_rotating_beam",
+    rate = MotionLaw.constant_rate(om)
+    joints, prescribed = [], []
+    if hub == "joints":
+        joints = [Revolute3D(body.point(0.0), axis=z, name="hub hinge"),
+                  RotationDriver(body, None, z, rate, name="hub drive")]
+    else:
+        prescribed = driven_frame(body, z, rate)
+    return Scene([body], constraints=joints, prescribed=prescribed, name="ffrf_rotating_beam",
                  probes={"tip": hub_frame_displacement(body, body.point(body.s_tip), body.beam.length)} if probe else {},
-                 parameters=dict(p))
+                 parameters=dict(p, hub=hub))
 
 
 def exudyn_body(exu, mbs, data):

@@ -25,6 +25,7 @@ import numpy as np
 import scipy.sparse as sps
 
 from ..bodies.base import COMPILED_SIZE_LIMIT, DENSE_LIMIT
+from ..elements.motion import MotionLaw
 from ..numerics.band_plans import DENSE_BORDERED_GAIN, MAX_BANDWIDTH, MAX_BORDER, MIN_DENSE_BORDERED, dense_bordered_plan, plan_work, reordered_band_plan, solve_work
 from .abi import Fields
 from .families import family_for
@@ -427,7 +428,9 @@ def time_table(columns, times, hs, scheme_mid):
         at = np.concatenate([[t0], ends if (when == "end" or not scheme_mid) else starts + 0.5 * hs])
         key = (id(fun), when)
         vals = cache.get(key)
-        if vals is None:
-            vals = cache[key] = [np.atleast_1d(np.asarray(fun(float(t)), dtype=float)) for t in at]
-        table[:, j] = [v[comp] for v in vals]
+        if vals is None and isinstance(fun, MotionLaw):
+            vals = cache[key] = fun.table(at)          # (3, times): a vectorized law in three calls
+        elif vals is None:
+            vals = cache[key] = np.array([np.atleast_1d(np.asarray(fun(float(t)), dtype=float)) for t in at]).T
+        table[:, j] = vals[comp]
     return table

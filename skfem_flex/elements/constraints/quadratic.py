@@ -415,6 +415,40 @@ class Rigidity(QuadraticConstraint):
                 c[k] = -0.5
         super().__init__([body], H, np.zeros((6, 9)), c, name=name or f"{body.name}: rigidity",
                          columns=columns)
+        self.pairs, self.triad = pairs, offs
+
+    @classmethod
+    def of_body(cls, body, prescribed=None):
+        """The rigidity of each of ``body``'s director triads (``director_triads``), without the equations whose
+        six coordinates are all prescribed (``prescribed``: {local index: value at t = 0} of the body's
+        coordinates that follow motion laws).
+
+        A frame driven by its laws (:func:`~skfem_flex.elements.motion.driven_frame`) is kept orthonormal by
+        them: its equations would be rows without an unknown, which no multiplier can enforce and which make
+        the Newton matrix singular. The laws must hold them at the start (checked here) and at every time
+        (the caller's promise; ``driven_frame``'s laws do).
+
+        Raises
+        ------
+        ValueError
+            If the prescribed coordinates of a triad do not satisfy its equations at the body's initial state.
+        """
+        start = {int(k): float(x) for k, x in (prescribed or {}).items()}
+        out = []
+        triads = tuple(getattr(body, "director_triads", ()))
+        for k, triad in enumerate(triads):
+            name = f"{body.name}: rigidity" + (f" of node {k}" if len(triads) > 1 else "")
+            r = cls(body, triad, name=name)
+            held = [e for e, (i, j) in enumerate(r.pairs)
+                    if all(o + a in start for o in (r.triad[i], r.triad[j]) for a in range(3))]
+            d = np.array([start.get(int(col), body.q0[col]) for col in r.columns])
+            bad = [e for e in held if abs(0.5 * d @ r.H[e] @ d + r.c[e]) > 1e-9]
+            if bad:
+                raise ValueError(f"the prescribed directors of {name!r} are not orthonormal at the start: equation(s) "
+                                 f"{bad} of (d1·d1, d2·d2, d3·d3, d1·d2, d1·d3, d2·d3) miss by more than 1e-9")
+            if len(held) < 6:
+                out.append(r.without_equations(held) if held else r)
+        return out
 
 
 class UnitQuaternion(QuadraticConstraint):
