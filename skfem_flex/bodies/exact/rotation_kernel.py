@@ -44,20 +44,28 @@ respect to q₁ is G_mᵀ B G₁ + ½ Σ_k r_k ∇²z_k (G = ∇z; ∇²z_k cons
 B = Σ_j (½ h C_j D_j ⊗ ∇ε_j(z₁) + h C_j ε̄_j ∂D_j/∂z₁). At q₀ = q₁ these are the gradient and half the
 Hessian.
 
-The scalar functions (arctan √y / √y, and the coefficients of exp(ŵ), sin t/t and (1 − cos t)/t²) are
-summed as series near zero, where their closed forms cancel; a straight element is the common case.
+The scalar functions and the turns exp(±ψ̂/2) x are those of :mod:`.rotation_turn`.
+
+Nothing here allocates in the compiled evaluation: results and temporaries live in a :class:`RotationWork`
+made once per beam (:func:`rotation_work`, packed with its data by the family), the ``*_into`` functions write
+into it, and everything is compiled without numba's reference counting (``_nrt=False``). Why: under reference
+counting each array handed to a call or sliced pays an atomic increment and decrement, a third of the
+evaluation's time here (as in :mod:`skfem_flex.bodies.floating_spatial.kinetic_kernel`, whose rule applies:
+a function compiled with ``_nrt=False`` returns scalars or nothing, never an array). The allocating public
+functions (the Python path, tests) are thin wrappers that make a new work and copy its results out.
 """
 from __future__ import annotations
 
 from collections import namedtuple
+from typing import NamedTuple
 
 import numba
 import numpy as np
 
-from .director_kernel import scatter_element
+from .rotation_turn import atan_ratio, turn
 
-__all__ = ["RotationKernelData", "pack", "element_strains", "first_turned", "potential_energy",
-           "discrete_gradient_terms"]
+__all__ = ["RotationKernelData", "RotationWork", "rotation_work", "pack", "element_strains", "first_turned",
+           "potential_energy", "potential_energy_into", "discrete_gradient_terms", "discrete_gradient_terms_into"]
 
 RotationKernelData = namedtuple("RotationKernelData", ["n", "ed", "h", "C", "e_ref", "pat_ptr", "pat_idx",
                                                        "map_el"])
@@ -66,158 +74,135 @@ RotationKernelData = namedtuple("RotationKernelData", ["n", "ed", "h", "C", "e_r
 NLOC = 24
 #: the invariants z = (a, c, u, v) of an element
 NZ = 10
-# below these arguments the scalar functions are summed as series: their closed forms cancel
-_SERIES_BELOW = 0.1
 
 
-def _series(coefficients):
-    """The coefficients of a power series Σ c_n xⁿ and of its first and second derivatives, as a (3, N) table."""
-    c = np.asarray(coefficients, dtype=float)
-    n = np.arange(c.size, dtype=float)
-    out = np.zeros((3, c.size))
-    out[0] = c
-    out[1, :-1] = (n * c)[1:]
-    out[2, :-2] = (n * (n - 1) * c)[2:]
-    return out
+def _gradient_pattern():
+    """The rows k with ∇z_k nonzero in each element coordinate (ascending, at most 6; :func:`_invariants`):
+    φ_a and φ_b enter u and v, d^a_i enters a_k (k ≠ i), c and u_i, d^b_i enters a_k (k ≠ i), c and v_i.
+    The products with ∇z run over these only (∇z is 55 % zeros); the sums keep their order."""
+    rows, count = np.zeros((NLOC, 6), dtype=np.int64), np.zeros(NLOC, dtype=np.int64)
+    for c in range(3):
+        for b, nz in [(c, range(4, 10)), (12 + c, range(4, 10))] + [
+                (3 + 3 * i + c, [k for k in range(3) if k != i] + [3, 4 + i]) for i in range(3)] + [
+                (15 + 3 * i + c, [k for k in range(3) if k != i] + [3, 7 + i]) for i in range(3)]:
+            nz = list(nz)
+            rows[b, :len(nz)], count[b] = nz, len(nz)
+    return rows, count
 
 
-_FACTORIAL = np.cumprod(np.concatenate([[1.0], np.arange(1.0, 31.0)]))
-#: arctan(√y)/√y = Σ (−y)ⁿ/(2n + 1); sin t/t and (1 − cos t)/t² in τ = t²: Σ (−τ)ⁿ/(2n + 1)!, Σ (−τ)ⁿ/(2n + 2)!
-_ATAN_SERIES = _series([(-1.0) ** n / (2 * n + 1) for n in range(27)])
-_SIN_SERIES = _series([(-1.0) ** n / _FACTORIAL[2 * n + 1] for n in range(15)])
-_COS_SERIES = _series([(-1.0) ** n / _FACTORIAL[2 * n + 2] for n in range(15)])
+_G_ROWS, _G_COUNT = _gradient_pattern()
 
 
-@numba.njit(cache=True, inline="always")
-def _terms(x, most):
-    """How many terms of a series in x (0 ≤ x < 1, coefficients at most 1) reach round-off: the first n with
-    xⁿ below 1e-17, at most ``most``."""
-    n, p = 1, x
-    while p > 1e-17 and n < most:
-        p *= x
-        n += 1
-    return n
+def _gradient_blocks():
+    """The first columns of the nonzero 3-column blocks of each row of ∇z (ascending, at most 6): a_k in
+    d^a_i, d^a_j, d^b_i, d^b_j ({i, j, k} = {0, 1, 2}), c in every director, u_i in φ_a, d^a_i, φ_b, v_i in
+    φ_a, φ_b, d^b_i."""
+    starts, count = np.zeros((NZ, 6), dtype=np.int64), np.zeros(NZ, dtype=np.int64)
+    rows = [sorted([3 + 3 * ((k + 2) % 3), 3 + 3 * ((k + 1) % 3), 15 + 3 * ((k + 2) % 3), 15 + 3 * ((k + 1) % 3)])
+            for k in range(3)]
+    rows += [[3, 6, 9, 15, 18, 21]] + [[0, 3 + 3 * i, 12] for i in range(3)] + [[0, 12, 15 + 3 * i] for i in range(3)]
+    for k, r in enumerate(rows):
+        starts[k, :len(r)], count[k] = r, len(r)
+    return starts, count
 
 
-@numba.njit(cache=True, inline="always")
-def _horner(table, row, x, n):
-    """Σ_{k<n} table[row, k] x^k, by Horner's rule."""
-    s = 0.0
-    for k in range(n - 1, -1, -1):
-        s = s * x + table[row, k]
-    return s
+_G_BLOCKS, _G_NBLOCKS = _gradient_blocks()
 
 
-@numba.njit(cache=True, inline="always")
-def _atan_ratio(y):
-    """A(y) = arctan(√y)/√y and its first two derivatives in y (y ≥ 0)."""
-    if y < _SERIES_BELOW:
-        # the terms past n fall below round-off; the derivatives' series, two terms shorter, need two more
-        n = min(_terms(y, 25) + 2, 25)
-        return (_horner(_ATAN_SERIES, 0, y, n), _horner(_ATAN_SERIES, 1, y, n),
-                _horner(_ATAN_SERIES, 2, y, n))
-    r = np.sqrt(y)
-    a = np.arctan(r) / r
-    da = (1.0 / (1.0 + y) - a) / (2.0 * y)
-    dda = (-1.0 / (1.0 + y) ** 2 - 3.0 * da) / (2.0 * y)
-    return a, da, dda
+class RotationWork(NamedTuple):
+    """The arrays of one beam's evaluation (its results and temporaries), made once by :func:`rotation_work`
+    and packed with the beam's data, so that the ``*_into`` functions allocate nothing (module docstring).
+    Every array is written before it is read; what an evaluation does not form keeps stale values.
+
+    Attributes
+    ----------
+    g, floor : ndarray (n,)
+        Results: the discrete gradient and its round-off floor.
+    data : ndarray (nnz,)
+        Result: ∂g/∂q_b on the beam's CSR pattern.
+    qe : ndarray (3, 24)
+        An element's coordinates at q_a, q_b and their mean.
+    z : ndarray (3, 10)
+        z(q_a), z(q_b) and z̄ = (z(q_a) + z(q_b))/2.
+    zm, dz : ndarray (10,)
+        z(q_m) and Δz = z(q_b) − z(q_a).
+    G : ndarray (2, 10, 24)
+        ∇z at q_b and at q_m.
+    eps, J : ndarray (3, 6), (3, 6, 10)
+        ε and ∂ε/∂z at the rows of ``z``.
+    H : ndarray (6, 10, 10)
+        ∂²ε/∂z² at z̄.
+    B : ndarray (10, 10)
+        The module docstring's B.
+    vec : ndarray (3, 10)
+        r, ∂c_j/∂z₁ (c_j Gonzalez's correction of ε_j) and Σ_j s_j ∂c_j/∂z₁.
+    hD : ndarray (6, 10)
+        ½ h C_j D_j.
+    sj : ndarray (6,)
+        ½ s_j.
+    T : ndarray (10, 24)
+        B ∇z(q_b).
+    ke : ndarray (24, 24)
+        An element's block of ∂g/∂q_b.
+    strain : ndarray (6,)
+        One element's strains (:func:`element_strains`).
+    psi, dpsi, ddpsi, w, y, yw, yx, yww1, yww2, ywx1, ywx2, W, X, cr : ndarray
+        Those of :func:`_jets`: ψ (3,) and its derivatives (3, 4), (3, 4, 4) in (a, c); ±ψ/2; the turned u
+        and v (2, 3) and their first (2, 3, 3) and second (3, 3, 3) derivatives (:func:`.rotation_turn.turn`);
+        its work arrays.
+    """
+
+    g: np.ndarray
+    floor: np.ndarray
+    data: np.ndarray
+    qe: np.ndarray
+    z: np.ndarray
+    zm: np.ndarray
+    dz: np.ndarray
+    G: np.ndarray
+    eps: np.ndarray
+    J: np.ndarray
+    H: np.ndarray
+    B: np.ndarray
+    vec: np.ndarray
+    hD: np.ndarray
+    sj: np.ndarray
+    T: np.ndarray
+    ke: np.ndarray
+    strain: np.ndarray
+    psi: np.ndarray
+    dpsi: np.ndarray
+    ddpsi: np.ndarray
+    w: np.ndarray
+    y: np.ndarray
+    yw: np.ndarray
+    yx: np.ndarray
+    yww1: np.ndarray
+    yww2: np.ndarray
+    ywx1: np.ndarray
+    ywx2: np.ndarray
+    W: np.ndarray
+    X: np.ndarray
+    cr: np.ndarray
 
 
-@numba.njit(cache=True, inline="always")
-def _rodrigues(tau):
-    """exp(ŵ) = γ I + α ŵ + β w wᵀ with τ = w·w: (γ, α, β) and their first and second derivatives in τ."""
-    if tau < _SERIES_BELOW:
-        n = min(_terms(tau, 13) + 2, 13)
-        al, dal, ddal = (_horner(_SIN_SERIES, 0, tau, n), _horner(_SIN_SERIES, 1, tau, n),
-                         _horner(_SIN_SERIES, 2, tau, n))
-        be, dbe, ddbe = (_horner(_COS_SERIES, 0, tau, n), _horner(_COS_SERIES, 1, tau, n),
-                         _horner(_COS_SERIES, 2, tau, n))
-        ga = 1.0 - be * tau
-        return ga, al, be, -0.5 * al, dal, dbe, -0.5 * dal, ddal, ddbe
-    t = np.sqrt(tau)
-    ga, al = np.cos(t), np.sin(t) / t
-    be = (1.0 - ga) / tau
-    dga = -0.5 * al
-    dal = (ga - al) / (2.0 * tau)
-    dbe = (0.5 * al - be) / tau
-    ddga = -0.5 * dal
-    ddal = (dga - 3.0 * dal) / (2.0 * tau)
-    ddbe = (0.5 * dal - 2.0 * dbe) / tau
-    return ga, al, be, dga, dal, dbe, ddga, ddal, ddbe
-
-
-#: the permutation symbol ε_ijk
-_EPS = np.zeros((3, 3, 3))
-_EPS[0, 1, 2] = _EPS[1, 2, 0] = _EPS[2, 0, 1] = 1.0
-_EPS[0, 2, 1] = _EPS[2, 1, 0] = _EPS[1, 0, 2] = -1.0
-
-
-@numba.njit(cache=True, inline="always")
-def _skew(x, out):
-    """out = x̂, the matrix of x × ·."""
-    out[0, 0], out[0, 1], out[0, 2] = 0.0, -x[2], x[1]
-    out[1, 0], out[1, 1], out[1, 2] = x[2], 0.0, -x[0]
-    out[2, 0], out[2, 1], out[2, 2] = -x[1], x[0], 0.0
-
-
-@numba.njit(cache=True, inline="always")
-def _turn(w, x, level, y, yw, yx, yww, ywx, W, X, cr):
-    """y = exp(ŵ) x = γ x + α w × x + β (w·x) w and (``level`` ≥ 1) its derivatives ∂y/∂w, ∂y/∂x and
-    (``level`` 2) ∂²y/∂w², ∂²y/∂w∂x (y_i, [i, l], [i, m], [i, l, m], [i, l, m]), written into the given
-    arrays (W, X, cr: work arrays)."""
-    tau = w[0] * w[0] + w[1] * w[1] + w[2] * w[2]
-    ga, al, be, dga, dal, dbe, ddga, ddal, ddbe = _rodrigues(tau)
-    wx = w[0] * x[0] + w[1] * x[1] + w[2] * x[2]
-    _skew(w, W)
-    _skew(x, X)
-    cr[0] = w[1] * x[2] - w[2] * x[1]
-    cr[1] = w[2] * x[0] - w[0] * x[2]
-    cr[2] = w[0] * x[1] - w[1] * x[0]
-    for i in range(3):
-        y[i] = ga * x[i] + al * cr[i] + be * wx * w[i]
-    if level == 0:
-        return
-    for i in range(3):
-        for m in range(3):
-            dim = 1.0 if i == m else 0.0
-            yx[i, m] = ga * dim + al * W[i, m] + be * w[i] * w[m]
-            # ∂(w × x)/∂w = −x̂
-            yw[i, m] = (2.0 * dga * w[m] * x[i] + 2.0 * dal * w[m] * cr[i] - al * X[i, m]
-                        + 2.0 * dbe * wx * w[i] * w[m] + be * w[i] * x[m] + be * wx * dim)
-    if level < 2:
-        return
-    for i in range(3):
-        for l in range(3):
-            dil = 1.0 if i == l else 0.0
-            for m in range(3):
-                dim = 1.0 if i == m else 0.0
-                dlm = 1.0 if l == m else 0.0
-                yww[i, l, m] = (2.0 * dga * dlm * x[i] + 4.0 * ddga * w[l] * w[m] * x[i]
-                                + 2.0 * dal * dlm * cr[i] + 4.0 * ddal * w[l] * w[m] * cr[i]
-                                - 2.0 * dal * (w[l] * X[i, m] + w[m] * X[i, l])
-                                + 2.0 * dbe * (x[m] * w[i] * w[l] + w[m] * w[i] * x[l])
-                                + 2.0 * dbe * wx * (dim * w[l] + dil * w[m] + w[i] * dlm)
-                                + 4.0 * ddbe * wx * w[i] * w[l] * w[m]
-                                + be * (dim * x[l] + dil * x[m]))
-                # ∂(−α x̂_il)/∂x_m = −α ε_iml = α ε_ilm, and ε_ilm = −(ê_m)_il
-                ywx[i, l, m] = (2.0 * dga * w[l] * dim + 2.0 * dal * w[l] * W[i, m] + al * _EPS[i, l, m]
-                                + 2.0 * dbe * w[m] * w[i] * w[l] + be * w[i] * dlm + be * w[m] * dil)
-
-
-@numba.njit(cache=True)
-def _workspace():
-    """The work arrays of :func:`_jets` (allocated once per kernel call, not per element)."""
-    return (np.empty(3), np.empty((3, 4)), np.empty((3, 4, 4)), np.empty(3), np.empty(3), np.empty(3),
-            np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3)), np.empty((3, 3, 3)),
-            np.empty((3, 3, 3)), np.empty((3, 3, 3)), np.empty((3, 3, 3)), np.empty((3, 3)), np.empty((3, 3)),
-            np.empty(3))
+def rotation_work(kd):
+    """A zeroed :class:`RotationWork` for the beam of ``kd`` (:class:`RotationKernelData`)."""
+    n, nnz = int(np.asarray(kd.n).ravel()[0]), int(np.asarray(kd.pat_idx).size)
+    z = np.zeros
+    return RotationWork(z(n), z(n), z(nnz), z((3, NLOC)), z((3, NZ)), z(NZ), z(NZ), z((2, NZ, NLOC)), z((3, 6)),
+                        z((3, 6, NZ)), z((6, NZ, NZ)), z((NZ, NZ)), z((3, NZ)), z((6, NZ)), z(6), z((NZ, NLOC)), z((NLOC, NLOC)), z(6), z(3), z((3, 4)),
+                        z((3, 4, 4)), z(3), z((2, 3)), z((2, 3, 3)), z((2, 3, 3)), z((3, 3, 3)), z((3, 3, 3)),
+                        z((3, 3, 3)), z((3, 3, 3)), z((3, 3)), z((3, 3)), z(3))
 
 
 def _jets_py(z, h, level, eps, J, H, wk):
     """The strains ε(z) (without reference values) and, by ``level`` (0, 1, 2), J = ∂ε/∂z (6, 10) and
-    H = ∂²ε/∂z² (6, 10, 10), into the given arrays (``wk``: :func:`_workspace`); False (and nothing
-    written) where 1 + c ≤ 1e-12 or z is not finite."""
-    psi, dpsi, ddpsi, w, y1, y2, yw1, yx1, yw2, yx2, yww1, ywx1, yww2, ywx2, W, X, cr = wk
+    H = ∂²ε/∂z² (6, 10, 10), into the given arrays (temporaries from ``wk``, a :class:`RotationWork`); False
+    (and nothing written) where 1 + c ≤ 1e-12 or z is not finite."""
+    psi, dpsi, ddpsi, w = wk.psi, wk.dpsi, wk.ddpsi, wk.w
+    y1, y2, yw1, yw2, yx1, yx2 = wk.y[0], wk.y[1], wk.yw[0], wk.yw[1], wk.yx[0], wk.yx[1]
+    yww1, yww2, ywx1, ywx2, W, X, cr = wk.yww1, wk.yww2, wk.ywx1, wk.ywx2, wk.W, wk.X, wk.cr
     a = z[0:3]
     c = z[3]
     for k in range(NZ):
@@ -227,7 +212,7 @@ def _jets_py(z, h, level, eps, J, H, wk):
         return False
     sig = a[0] * a[0] + a[1] * a[1] + a[2] * a[2]
     p = 1.0 / (1.0 + c)
-    A, dA, ddA = _atan_ratio(sig * p * p)
+    A, dA, ddA = atan_ratio(sig * p * p)
     F = 2.0 * p * A
     Fs = 2.0 * p ** 3 * dA
     Fc = -2.0 * p * p * A - 4.0 * sig * p ** 4 * dA
@@ -240,10 +225,10 @@ def _jets_py(z, h, level, eps, J, H, wk):
     # the turned u and v: y₁ = exp(−ψ̂/2) u, y₂ = exp(ψ̂/2) v
     for k in range(3):
         w[k] = -0.5 * psi[k]
-    _turn(w, z[4:7], level, y1, yw1, yx1, yww1, ywx1, W, X, cr)
+    turn(w, z[4:7], level, y1, yw1, yx1, yww1, ywx1, W, X, cr)
     for k in range(3):
         w[k] = 0.5 * psi[k]
-    _turn(w, z[7:10], level, y2, yw2, yx2, yww2, ywx2, W, X, cr)
+    turn(w, z[7:10], level, y2, yw2, yx2, yww2, ywx2, W, X, cr)
     if level == 0:
         for i in range(3):
             eps[i] = 0.5 * (y1[i] + y2[i])
@@ -302,18 +287,19 @@ def _jets_py(z, h, level, eps, J, H, wk):
     return True
 
 
-#: :func:`_jets_py` compiled into its one call site in :func:`discrete_gradient_terms` (the per-element calls
-#: with their work arrays cost as much as the arithmetic), and as a called function for the strains alone
-_jets = numba.njit(cache=True, inline="always")(_jets_py)
-_jets_called = numba.njit(cache=True)(_jets_py)
+#: :func:`_jets_py` compiled into its one call site in :func:`discrete_gradient_terms_into` (a call per element
+#: with its work arrays costs as much as the arithmetic), and as a called function for the strains alone
+_jets = numba.njit(cache=True, _nrt=False, inline="always")(_jets_py)
+_jets_called = numba.njit(cache=True, _nrt=False)(_jets_py)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _invariants(qe, h, z, G, gradient):
     """z = (a, c, u, v) (10,) and, with ``gradient``, ∇z (10, 24) of the element coordinates ``qe`` (module
     docstring): a = axial ½(Q − Qᵀ), c = ½(tr Q − 1) with Q_ij = d^a_i · d^b_j, u_i = d^a_i · Δφ/h,
     v_i = d^b_i · Δφ/h."""
-    dphi = qe[12:15] - qe[0:3]
+    # Δφ, as three numbers (an array difference would allocate)
+    dp0, dp1, dp2 = qe[12] - qe[0], qe[13] - qe[1], qe[14] - qe[2]
     # a_k = ½ (Q_ij − Q_ji) for (k, i, j) = (0, 2, 1), (1, 0, 2), (2, 1, 0)
     for k in range(3):
         i, j = (k + 2) % 3, (k + 1) % 3
@@ -326,11 +312,11 @@ def _invariants(qe, h, z, G, gradient):
         dai = qe[3 + 3 * i:6 + 3 * i]
         dbi = qe[15 + 3 * i:18 + 3 * i]
         z[3] += 0.5 * (dai[0] * dbi[0] + dai[1] * dbi[1] + dai[2] * dbi[2])
-        z[4 + i] = (dai[0] * dphi[0] + dai[1] * dphi[1] + dai[2] * dphi[2]) / h
-        z[7 + i] = (dbi[0] * dphi[0] + dbi[1] * dphi[1] + dbi[2] * dphi[2]) / h
+        z[4 + i] = (dai[0] * dp0 + dai[1] * dp1 + dai[2] * dp2) / h
+        z[7 + i] = (dbi[0] * dp0 + dbi[1] * dp1 + dbi[2] * dp2) / h
     if not gradient:
         return
-    G[:, :] = 0.0
+    # only the entries of the pattern _G_ROWS are written (and read): the others stay as they are (zero)
     for k in range(3):
         i, j = (k + 2) % 3, (k + 1) % 3
         for c in range(3):
@@ -343,15 +329,16 @@ def _invariants(qe, h, z, G, gradient):
             dai, dbi = qe[3 + 3 * i + c], qe[15 + 3 * i + c]
             G[3, 3 + 3 * i + c] = 0.5 * dbi
             G[3, 15 + 3 * i + c] = 0.5 * dai
-            G[4 + i, 3 + 3 * i + c] = dphi[c] / h
+            dpc = qe[12 + c] - qe[c]
+            G[4 + i, 3 + 3 * i + c] = dpc / h
             G[4 + i, 12 + c] = dai / h
             G[4 + i, c] = -dai / h
-            G[7 + i, 15 + 3 * i + c] = dphi[c] / h
+            G[7 + i, 15 + 3 * i + c] = dpc / h
             G[7 + i, 12 + c] = dbi / h
             G[7 + i, c] = -dbi / h
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def _add_invariant_hessians(ke, r, scale, h):
     """ke += scale Σ_k r_k ∇²z_k (each ∇²z_k a few identity blocks)."""
     for k in range(3):
@@ -394,77 +381,90 @@ def pack(ed, h, stiffness, q_reference, n_dofs):
     return kd._replace(e_ref=np.ascontiguousarray(eref.ravel()))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
+def _element_strain(kd, wk, q, e):
+    """wk.strain ← e = ε(z(q)) − ε_ref of element ``e``; False (nothing written) where it has turned half a
+    turn."""
+    qe, z = wk.qe[0], wk.z[0]
+    for a in range(NLOC):
+        qe[a] = q[kd.ed[e, a]]
+    _invariants(qe, kd.h[e], z, wk.G[0], False)
+    if not _jets_called(z, kd.h[e], 0, wk.strain, wk.J[0], wk.H, wk):
+        return False
+    for j in range(6):
+        wk.strain[j] -= kd.e_ref[6 * e + j]
+    return True
+
+
+@numba.njit(cache=True, _nrt=False)
+def _strains_into(kd, wk, q, out):
+    """out (n_el, 6) ← the strains of every element (:func:`element_strains`)."""
+    for e in range(kd.ed.shape[0]):
+        ok = _element_strain(kd, wk, q, e)
+        for j in range(6):
+            out[e, j] = wk.strain[j] if ok else np.nan
+
+
 def element_strains(kd, q):
     """e = ε(z(q)) − ε_ref of every element, (n_el, 6); NaN in the rows of elements turned half a turn."""
-    ne = kd.ed.shape[0]
-    out = np.empty((ne, 6))
-    qe, z, G = np.empty(NLOC), np.empty(NZ), np.empty((NZ, NLOC))
-    eps, J, H = np.empty(6), np.empty((6, NZ)), np.empty((1, 1, 1))
-    wk = _workspace()
-    for e in range(ne):
-        for a in range(NLOC):
-            qe[a] = q[kd.ed[e, a]]
-        _invariants(qe, kd.h[e], z, G, False)
-        ok = _jets_called(z, kd.h[e], 0, eps, J, H, wk)
-        for j in range(6):
-            out[e, j] = eps[j] - kd.e_ref[6 * e + j] if ok else np.nan
+    out = np.empty((kd.ed.shape[0], 6))
+    _strains_into(kd, rotation_work(kd), np.ascontiguousarray(q, dtype=float), out)
     return out
 
 
-@numba.njit(cache=True)
 def first_turned(kd, q):
     """The first element whose relative rotation has reached half a turn at q (or is not finite), or −1."""
-    e = element_strains(kd, q)
-    for k in range(e.shape[0]):
-        if not np.isfinite(e[k, 0]):
-            return k
-    return -1
+    bad = np.flatnonzero(~np.isfinite(element_strains(kd, q)[:, 0]))
+    return int(bad[0]) if bad.size else -1
 
 
-@numba.njit(cache=True)
-def potential_energy(kd, q):
-    """V(q) = ½ Σ_e h_e Σ_j C_j e_j², J (NaN where an element has turned half a turn)."""
-    e = element_strains(kd, q)
+@numba.njit(cache=True, _nrt=False)
+def potential_energy_into(kd, wk, q):
+    """V(q) = ½ Σ_e h_e Σ_j C_j e_j², J (NaN where an element has turned half a turn); temporaries in ``wk``."""
     v = 0.0
-    for k in range(e.shape[0]):
+    for e in range(kd.ed.shape[0]):
+        if not _element_strain(kd, wk, q, e):
+            return np.nan
         for j in range(6):
-            v += 0.5 * kd.h[k] * kd.C[j] * e[k, j] * e[k, j]
+            v += 0.5 * kd.h[e] * kd.C[j] * wk.strain[j] * wk.strain[j]
     return v
 
 
-@numba.njit(cache=True)
-def discrete_gradient_terms(kd, qa, qb, residual):
-    """(ok, g (n,), data (nnz,) of ∂g/∂q_b on the CSR pattern, floor (n,)): the module docstring's discrete
-    gradient and its derivative; the floor is Σ_b abs(∂g_a/∂q_b) (abs(q_a,b) + abs(q_b,b)), the round-off
-    size of g. At q_a = q_b: the gradient and half the Hessian. ``ok`` is False if an element of q_a, q_b
-    or their mean has turned half a turn (:func:`first_turned` names it). ``residual``: g alone (the same
-    numbers), data empty and floor zero: the strains' second derivatives and the element matrices, most of
-    the work, are skipped."""
-    n = kd.n[0]
+def potential_energy(kd, q):
+    """V(q) (:func:`potential_energy_into` on a new work)."""
+    return potential_energy_into(kd, rotation_work(kd), np.ascontiguousarray(q, dtype=float))
+
+
+@numba.njit(cache=True, _nrt=False)
+def discrete_gradient_terms_into(kd, wk, qa, qb, residual):
+    """The module docstring's discrete gradient and its derivative into ``wk`` (:class:`RotationWork`):
+    g, the CSR data of ∂g/∂q_b and the floor Σ_b abs(∂g_a/∂q_b) (abs(q_a,b) + abs(q_b,b)), the round-off size
+    of g. At q_a = q_b: the gradient and half the Hessian. Returns False if an element of q_a, q_b or their
+    mean has turned half a turn (:func:`first_turned` names it). ``residual``: g alone (the same numbers), the
+    floor zero and the data left stale: the strains' second derivatives and the element matrices, most of the
+    work, are skipped."""
     ne = kd.ed.shape[0]
-    mp = kd.map_el.reshape(ne, NLOC, NLOC)
-    g = np.zeros(n)
-    data = np.zeros(0 if residual else kd.pat_idx.size)
-    floor = np.zeros(n)
-    q0, q1, qm = np.empty(NLOC), np.empty(NLOC), np.empty(NLOC)
-    zs, dz, zm = np.empty((3, NZ)), np.empty(NZ), np.empty(NZ)   # z at q_a, q_b, and their mean
+    g, data, floor = wk.g, wk.data, wk.floor
+    g[:] = 0.0
+    floor[:] = 0.0
+    if not residual:
+        data[:] = 0.0
+    q0, q1, qm = wk.qe[0], wk.qe[1], wk.qe[2]
+    zs, dz, zm = wk.z, wk.dz, wk.zm              # z at q_a, q_b, and their mean; z(q_m)
     z0, z1, zb = zs[0], zs[1], zs[2]
-    G0, G1, Gm = np.empty((NZ, NLOC)), np.empty((NZ, NLOC)), np.empty((NZ, NLOC))
-    epss, Js = np.empty((3, 6)), np.empty((3, 6, NZ))
+    G1, Gm = wk.G[0], wk.G[1]
+    epss, Js, Hb = wk.eps, wk.J, wk.H
     eps0, eps1 = epss[0], epss[1]
     J1, Jb = Js[1], Js[2]
-    Hb, none = np.empty((6, NZ, NZ)), np.empty((1, 1, 1))
-    B, r, D, dc = np.empty((NZ, NZ)), np.empty(NZ), np.empty(NZ), np.empty(NZ)
-    T, ke = np.empty((NZ, NLOC)), np.empty((NLOC, NLOC))
-    wk = _workspace()
+    B, T = wk.B, wk.T
+    r, dc, sdc, sh, hD = wk.vec[0], wk.vec[1], wk.vec[2], wk.sj, wk.hD
     for e in range(ne):
         h = kd.h[e]
         for a in range(NLOC):
             q0[a] = qa[kd.ed[e, a]]
             q1[a] = qb[kd.ed[e, a]]
             qm[a] = 0.5 * (q0[a] + q1[a])
-        _invariants(q0, h, z0, G0, False)
+        _invariants(q0, h, z0, G1, False)
         _invariants(q1, h, z1, G1, not residual)
         _invariants(qm, h, zm, Gm, True)                  # ∇z is linear in q: Gm is its mid-point value
         nd, nb = 0.0, 0.0
@@ -475,15 +475,18 @@ def discrete_gradient_terms(kd, qa, qb, residual):
             nb += zb[k] * zb[k]
         for s in range(3):          # values at q_a; with J at q_b and J, H at the mean (less for the residual)
             level = s - 1 if residual and s > 0 else (0 if s == 0 else s)
-            if not _jets(zs[s], h, level, epss[s], Js[s], Hb if s == 2 else none, wk):
-                return False, g, data, floor
-        B[:, :] = 0.0
-        r[:] = 0.0
+            if not _jets(zs[s], h, level, epss[s], Js[s], Hb, wk):
+                return False
+        for k in range(NZ):
+            r[k] = 0.0
+            sdc[k] = 0.0
+        scj = 0.0
         for j in range(6):
             s = h * kd.C[j] * (0.5 * (eps0[j] + eps1[j]) - kd.e_ref[6 * e + j])
             # Gonzalez's discrete derivative of ε_j in z and its derivative in z₁
             cj = 0.0
-            dc[:] = 0.0
+            for k in range(NZ):
+                dc[k] = 0.0
             # below |Δz| = 1e-5 |z̄| the correction is round-off divided by |Δz|² (and its energy O(|Δz|³)):
             # left out there
             if nd > 1e-10 * max(1.0, nb):
@@ -496,40 +499,82 @@ def discrete_gradient_terms(kd, qa, qb, residual):
                     for k in range(NZ):
                         hd += Hb[j, l, k] * dz[k]
                     dc[l] = (J1[j, l] - Jb[j, l] - 0.5 * hd - 2.0 * cj * dz[l]) / nd
-            for k in range(NZ):
-                D[k] = Jb[j, k] + cj * dz[k]
-                r[k] += s * D[k]
-            if residual:
-                continue
             hc = 0.5 * h * kd.C[j]
             for k in range(NZ):
+                D = Jb[j, k] + cj * dz[k]
+                r[k] += s * D
+                hD[j, k] = hc * D
+                sdc[k] += s * dc[k]
+            sh[j] = 0.5 * s
+            scj += s * cj
+        if not residual:
+            # B = Σ_j (½ h C_j D_j ⊗ ∇ε_j(z₁) + s_j (½ ∇²ε_j(z̄) + Δz ⊗ ∂c_j/∂z₁ + c_j I)), s_j = h C_j ε̄_j
+            # over the nonzeros only: the curvatures (j ≥ 3) depend on (a, c) alone (z_0..3), and no strain
+            # has a second derivative in (u, v) twice
+            for k in range(NZ):
                 for l in range(NZ):
-                    B[k, l] += hc * D[k] * J1[j, l] + s * (0.5 * Hb[j, k, l] + dz[k] * dc[l])
-                B[k, k] += s * cj
-        if residual:
-            for a in range(NLOC):
-                ga = 0.0
-                for k in range(NZ):
-                    ga += Gm[k, a] * r[k]
-                g[kd.ed[e, a]] += ga
-            continue
-        # ke = G_mᵀ B G₁ + ½ Σ_k r_k ∇²z_k, g = G_mᵀ r
-        for k in range(NZ):
-            for b in range(NLOC):
-                t = 0.0
-                for l in range(NZ):
-                    t += B[k, l] * G1[l, b]
-                T[k, b] = t
+                    t = dz[k] * sdc[l]
+                    for j in range(3 if l >= 4 else 6):
+                        t += hD[j, k] * J1[j, l]
+                    for j in range(0 if k >= 4 and l >= 4 else (3 if k >= 4 or l >= 4 else 6)):
+                        t += sh[j] * Hb[j, k, l]
+                    B[k, l] = t
+                B[k, k] += scj
+        # g = G_mᵀ r over the nonzero rows of each column of G_m
         for a in range(NLOC):
             ga = 0.0
-            for k in range(NZ):
+            for t in range(_G_COUNT[a]):
+                k = _G_ROWS[a, t]
                 ga += Gm[k, a] * r[k]
             g[kd.ed[e, a]] += ga
+        if residual:
+            continue
+        # T = B G₁, its rows as sums of the nonzero blocks of the rows of G₁
+        for k in range(NZ):
             for b in range(NLOC):
-                t = 0.0
-                for k in range(NZ):
-                    t += Gm[k, a] * T[k, b]
-                ke[a, b] = t
-        _add_invariant_hessians(ke, r, 0.5, h)
-        scatter_element(ke, mp[e], kd.ed[e], q0, q1, data, floor)
-    return True, g, data, floor
+                T[k, b] = 0.0
+            for l in range(NZ):
+                c = B[k, l]
+                for u in range(_G_NBLOCKS[l]):
+                    b = _G_BLOCKS[l, u]
+                    T[k, b] += c * G1[l, b]
+                    T[k, b + 1] += c * G1[l, b + 1]
+                    T[k, b + 2] += c * G1[l, b + 2]
+        _element_matrix(kd, wk, e, Gm, T, r, q0, q1, h)
+    return True
+
+
+@numba.njit(cache=True, _nrt=False, inline="always")
+def _element_matrix(kd, wk, e, Gm, T, r, q0, q1, h):
+    """Element e's ke = G_mᵀ T + ½ Σ_k r_k ∇²z_k into wk.data (slots ``kd.map_el``) and its round-off size
+    Σ_b abs(ke_ab) (abs(q0_b) + abs(q1_b)) into wk.floor."""
+    ke = wk.ke
+    # row a of G_mᵀ T: the rows of T at the nonzeros of column a of G_m (innermost loop along a row: vectorized)
+    for a in range(NLOC):
+        for b in range(NLOC):
+            ke[a, b] = 0.0
+        for u in range(_G_COUNT[a]):
+            k = _G_ROWS[a, u]
+            c = Gm[k, a]
+            for b in range(NLOC):
+                ke[a, b] += c * T[k, b]
+    _add_invariant_hessians(ke, r, 0.5, h)
+    data, floor, mp, qs = wk.data, wk.floor, kd.map_el, wk.qe[2]
+    for b in range(NLOC):
+        qs[b] = abs(q0[b]) + abs(q1[b])          # the mean is not needed any more
+    base = e * NLOC * NLOC
+    for a in range(NLOC):
+        fa = 0.0
+        for b in range(NLOC):
+            data[mp[base + NLOC * a + b]] += ke[a, b]
+            fa += abs(ke[a, b]) * qs[b]
+        floor[kd.ed[e, a]] += fa
+
+
+def discrete_gradient_terms(kd, qa, qb, residual):
+    """(ok, g (n,), data (nnz,) of ∂g/∂q_b on the CSR pattern, floor (n,)): :func:`discrete_gradient_terms_into`
+    on a new work, its results copied out; ``residual``: data empty and floor zero."""
+    wk = rotation_work(kd)
+    ok = discrete_gradient_terms_into(kd, wk, np.ascontiguousarray(qa, dtype=float),
+                                      np.ascontiguousarray(qb, dtype=float), residual)
+    return bool(ok), wk.g.copy(), np.zeros(0) if residual else wk.data.copy(), wk.floor.copy()
