@@ -157,7 +157,7 @@ class Scene:
         self.free_index = np.setdiff1d(np.arange(self.n), self.prescribed_index)
         # spatial rigid bodies and the nodes of spatial beams are held rigid by their directors'
         # constraints (less what prescribed directors hold), bodies turned by quaternions at |e| = 1, added first
-        start = {i: p.law(0.0)[0] for p, i in zip(self.prescribed, pres)}
+        start = dict(zip(pres, self.prescribed_state(0.0)[0]))
         self.constraints = tuple(r for b in self.bodies for r in Rigidity.of_body(b, {
             i - self._offset[id(b)]: x for i, x in start.items() if 0 <= i - self._offset[id(b)] < b.n_dofs})) + tuple(
             UnitQuaternion(b, o) for b in self.bodies for o in getattr(b, "unit_quaternions", ())) + tuple(constraints)

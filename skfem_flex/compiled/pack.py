@@ -25,7 +25,6 @@ import numpy as np
 import scipy.sparse as sps
 
 from ..bodies.base import COMPILED_SIZE_LIMIT, DENSE_LIMIT
-from ..elements.motion import MotionLaw
 from ..numerics.band_plans import DENSE_BORDERED_GAIN, MAX_BANDWIDTH, MAX_BORDER, MIN_DENSE_BORDERED, dense_bordered_plan, plan_work, reordered_band_plan, solve_work
 from .abi import Fields
 from .families import family_for
@@ -80,9 +79,18 @@ class Packer:
         return self.maps.support(k)
 
     def column(self, fun, component, when):
-        """Index of the time-table column for ``fun(t)[component]`` evaluated ``when`` ("end" | "force")."""
+        """Index of the time-table column for ``fun(t)[component]`` evaluated ``when`` ("end" | "force"). A ``fun``
+        with a ``table(times)`` method (a :class:`~skfem_flex.elements.motion.MotionLaw`) is tabulated by it,
+        (components, times) in one call (:func:`time_table`)."""
         self.columns.append((when, fun, component))
         return len(self.columns) - 1
+
+    def law_columns(self, law, when="end"):
+        """Index of the first of the three columns x, ẋ, ẍ of a motion law ``law(t) = (x, ẋ, ẍ)``."""
+        first = self.column(law, 0, when)
+        self.column(law, 1, when)
+        self.column(law, 2, when)
+        return first
 
 
 @dataclass
@@ -303,9 +311,7 @@ def _pack(scene, python_only=False):
     pres_cols = []
     for p in scene.prescribed:
         law = p.law
-        pres_cols.append(packer.column(law, 0, "end"))
-        packer.column(law, 1, "end")
-        packer.column(law, 2, "end")
+        pres_cols.append(packer.law_columns(law))
     # probes made of position maps are recorded by the loop; the others are called in Python
     probe_names, probe_maps = [], []
     for name, fn in scene.probes.items():
@@ -428,9 +434,9 @@ def time_table(columns, times, hs, scheme_mid):
         at = np.concatenate([[t0], ends if (when == "end" or not scheme_mid) else starts + 0.5 * hs])
         key = (id(fun), when)
         vals = cache.get(key)
-        if vals is None and isinstance(fun, MotionLaw):
-            vals = cache[key] = fun.table(at)          # (3, times): a vectorized law in three calls
-        elif vals is None:
-            vals = cache[key] = np.array([np.atleast_1d(np.asarray(fun(float(t)), dtype=float)) for t in at]).T
+        if vals is None:
+            tabulate = getattr(fun, "table", None)   # (components, times) in one call (Packer.column)
+            vals = cache[key] = (tabulate(at) if tabulate is not None else
+                                 np.array([np.atleast_1d(np.asarray(fun(float(t)), dtype=float)) for t in at]).T)
         table[:, j] = vals[comp]
     return table

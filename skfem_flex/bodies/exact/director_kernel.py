@@ -141,10 +141,12 @@ def discrete_gradient_terms(kd, qa, qb, residual):
     return g, data, floor
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def scatter_element(ke, positions, coords, q0, q1, data, floor):
     """Add an element's tangent ``ke`` into the body's CSR ``data`` (``positions[a, b]``: each entry's slot) and
-    its round-off size Σ_b abs(ke_ab) (abs(q0_b) + abs(q1_b)) into ``floor`` at the element's ``coords``."""
+    its round-off size Σ_b abs(ke_ab) (abs(q0_b) + abs(q1_b)) into ``floor`` at the element's ``coords``. Both
+    exact-beam kernels use it; compiled without reference counting (it returns nothing), so the rotation
+    kernel's allocation-free evaluation calls it too."""
     nloc = ke.shape[0]
     for a in range(nloc):
         fa = 0.0

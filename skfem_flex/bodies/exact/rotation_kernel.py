@@ -62,6 +62,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
+from .director_kernel import scatter_element
 from .rotation_turn import atan_ratio, turn
 
 __all__ = ["RotationKernelData", "RotationWork", "rotation_work", "pack", "element_strains", "first_turned",
@@ -76,27 +77,11 @@ NLOC = 24
 NZ = 10
 
 
-def _gradient_pattern():
-    """The rows k with ∇z_k nonzero in each element coordinate (ascending, at most 6; :func:`_invariants`):
-    φ_a and φ_b enter u and v, d^a_i enters a_k (k ≠ i), c and u_i, d^b_i enters a_k (k ≠ i), c and v_i.
-    The products with ∇z run over these only (∇z is 55 % zeros); the sums keep their order."""
-    rows, count = np.zeros((NLOC, 6), dtype=np.int64), np.zeros(NLOC, dtype=np.int64)
-    for c in range(3):
-        for b, nz in [(c, range(4, 10)), (12 + c, range(4, 10))] + [
-                (3 + 3 * i + c, [k for k in range(3) if k != i] + [3, 4 + i]) for i in range(3)] + [
-                (15 + 3 * i + c, [k for k in range(3) if k != i] + [3, 7 + i]) for i in range(3)]:
-            nz = list(nz)
-            rows[b, :len(nz)], count[b] = nz, len(nz)
-    return rows, count
-
-
-_G_ROWS, _G_COUNT = _gradient_pattern()
-
-
 def _gradient_blocks():
-    """The first columns of the nonzero 3-column blocks of each row of ∇z (ascending, at most 6): a_k in
-    d^a_i, d^a_j, d^b_i, d^b_j ({i, j, k} = {0, 1, 2}), c in every director, u_i in φ_a, d^a_i, φ_b, v_i in
-    φ_a, φ_b, d^b_i."""
+    """The first columns of the nonzero 3-column blocks of each row of ∇z (:func:`_invariants`; ascending, at
+    most 6): a_k in d^a_i, d^a_j, d^b_i, d^b_j ({i, j, k} = {0, 1, 2}), c in every director, u_i in φ_a, d^a_i,
+    φ_b, v_i in φ_a, φ_b, d^b_i. The products with ∇z run over these only (∇z is 55 % zeros); the sums keep
+    their order."""
     starts, count = np.zeros((NZ, 6), dtype=np.int64), np.zeros(NZ, dtype=np.int64)
     rows = [sorted([3 + 3 * ((k + 2) % 3), 3 + 3 * ((k + 1) % 3), 15 + 3 * ((k + 2) % 3), 15 + 3 * ((k + 1) % 3)])
             for k in range(3)]
@@ -106,7 +91,19 @@ def _gradient_blocks():
     return starts, count
 
 
+def _gradient_rows(starts, count):
+    """The same pattern by columns: the rows k (ascending, at most 6) where column b of ∇z can be nonzero."""
+    rows, n = np.zeros((NLOC, 6), dtype=np.int64), np.zeros(NLOC, dtype=np.int64)
+    for k in range(NZ):
+        for b0 in starts[k, :count[k]]:
+            for b in range(b0, b0 + 3):
+                rows[b, n[b]] = k
+                n[b] += 1
+    return rows, n
+
+
 _G_BLOCKS, _G_NBLOCKS = _gradient_blocks()
+_G_ROWS, _G_COUNT = _gradient_rows(_G_BLOCKS, _G_NBLOCKS)
 
 
 class RotationWork(NamedTuple):
@@ -559,16 +556,9 @@ def _element_matrix(kd, wk, e, Gm, T, r, q0, q1, h):
             for b in range(NLOC):
                 ke[a, b] += c * T[k, b]
     _add_invariant_hessians(ke, r, 0.5, h)
-    data, floor, mp, qs = wk.data, wk.floor, kd.map_el, wk.qe[2]
-    for b in range(NLOC):
-        qs[b] = abs(q0[b]) + abs(q1[b])          # the mean is not needed any more
     base = e * NLOC * NLOC
-    for a in range(NLOC):
-        fa = 0.0
-        for b in range(NLOC):
-            data[mp[base + NLOC * a + b]] += ke[a, b]
-            fa += abs(ke[a, b]) * qs[b]
-        floor[kd.ed[e, a]] += fa
+    scatter_element(ke, kd.map_el[base:base + NLOC * NLOC].reshape((NLOC, NLOC)), kd.ed[e], q0, q1, wk.data,
+                    wk.floor)
 
 
 def discrete_gradient_terms(kd, qa, qb, residual):

@@ -43,9 +43,7 @@ def pack(items, packer):
         nz = np.flatnonzero(grad)
         col = -1
         if law is not None:
-            col = packer.column(law.position, 0, "end")
-            packer.column(law.velocity, 0, "end")
-            packer.column(law.acceleration, 0, "end")
+            col = packer.law_columns(law)
         rows.append((row, len(idx), len(idx) + nz.size, col))
         idx.extend(np.asarray(cidx)[nz])
         coef.extend(grad[nz])

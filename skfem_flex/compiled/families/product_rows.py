@@ -88,9 +88,7 @@ def pack(items, packer):
             col = -1
             law = laws[k]
             if law is not None:
-                col = packer.column(law.position, 0, "end")
-                packer.column(law.velocity, 0, "end")
-                packer.column(law.acceleration, 0, "end")
+                col = packer.law_columns(law)
             p0, l0 = len(terms.pi), len(terms.li)
             terms.add(idx, slot, base, b[k])
             t0 = len(prods)

@@ -119,9 +119,7 @@ def pack(items, packer):
             col = -1
             law = laws[k]
             if law is not None:
-                col = packer.column(law.position, 0, "end")
-                packer.column(law.velocity, 0, "end")
-                packer.column(law.acceleration, 0, "end")
+                col = packer.law_columns(law)
             rows.append((first + k, len(terms.pi), len(terms.pi) + hi.size, len(terms.li), len(terms.li) + bi.size,
                          len(terms.cols), col))
             terms.add(idx, slot, form, b[k])

@@ -49,9 +49,7 @@ def pack(items, packer):
         fx, fy = form_terms(Hx, bx), form_terms(Hy, by)
         touched = np.unique(np.concatenate([fx[0], fx[1], fx[3], fy[0], fy[1], fy[3]])).astype(np.int64)
         slot = {int(t): s for s, t in enumerate(touched)}
-        col = packer.column(law, 0, "end")
-        packer.column(law, 1, "end")
-        packer.column(law, 2, "end")
+        col = packer.law_columns(law)
         p0, l0 = len(terms.pi), len(terms.li)
         terms.add(idx, slot, fx, bx)
         terms.add(idx, slot, fy, by)
